@@ -1,0 +1,3 @@
+"""preform: fibre-architecture-aware drape simulation of reinforcement fabrics."""
+
+__version__ = "0.1.0"
