@@ -1,3 +1,36 @@
-"""preform: fibre-architecture-aware drape simulation of reinforcement fabrics."""
+"""preform: fibre-architecture-aware drape simulation of reinforcement fabrics.
+
+The public API; everything else is reached through its module.
+"""
 
 __version__ = "0.1.0"
+
+from preform.material import FabricBase, Location  # noqa: E402
+from preform.pipeline.step import CaseContext, Step  # noqa: E402
+from preform.plugin_manager import PluginHost, default_host, hookimpl  # noqa: E402
+from preform.registry import Registry, RegistrationError  # noqa: E402
+from preform.shear.law import ShearLaw, force_per_length_N_per_mm  # noqa: E402
+
+
+def load_library(*args, **kwargs):  # type: ignore[no-untyped-def]
+    """Load and validate the materials library (see ``preform.library.load_library``)."""
+    from preform.library import load_library as _load
+
+    return _load(*args, **kwargs)
+
+
+__all__ = [
+    "CaseContext",
+    "FabricBase",
+    "Location",
+    "PluginHost",
+    "Registry",
+    "RegistrationError",
+    "ShearLaw",
+    "Step",
+    "__version__",
+    "default_host",
+    "force_per_length_N_per_mm",
+    "hookimpl",
+    "load_library",
+]

@@ -1,0 +1,3 @@
+from preform.cli import main
+
+main()

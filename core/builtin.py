@@ -1,0 +1,25 @@
+"""preform's own core plugin: generic shear laws and the fabric-independent pipeline steps.
+
+Registered through the ``preform`` entry-point group like any third-party plugin.
+"""
+
+from __future__ import annotations
+
+from preform.plugin_manager import hookimpl
+from preform.registry import ExporterRegistrar, StepRegistrar
+
+
+@hookimpl
+def preform_register_steps(register: StepRegistrar) -> None:
+    from preform.pipeline.core_steps import STEPS
+
+    for step in STEPS:
+        register.add(step)
+
+
+@hookimpl
+def preform_register_exporters(register: ExporterRegistrar) -> None:
+    from preform.pipeline.core_steps import EXPORTERS
+
+    for step in EXPORTERS:
+        register.add(step)

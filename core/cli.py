@@ -1,0 +1,246 @@
+"""The ``preform`` command line. Plugins add commands through ``preform_register_commands``."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from preform import __version__
+
+LIBRARY_OPTION_HELP = (
+    "Extra library file or directory (repeatable); added to the bundled library and "
+    "PREFORM_LIBRARY."
+)
+
+
+def _echo_json(obj: Any) -> None:
+    from preform.pipeline.runner import _clean_json
+
+    click.echo(json.dumps(_clean_json(obj), indent=2, sort_keys=False, default=str))
+
+
+def _host() -> Any:
+    from preform.plugin_manager import default_host
+
+    return default_host()
+
+
+def _fail(lines: list[Any], code: int = 2) -> None:
+    for line in lines:
+        click.echo(str(line), err=True)
+    sys.exit(code)
+
+
+def load_library_or_exit(paths: tuple[str, ...], *, bundled: bool = True) -> Any:
+    """Load the library; print every located error and exit 2 on failure."""
+    from preform.library import LibraryError, load_library
+
+    try:
+        return load_library(paths, bundled=bundled, registry=_host().registry)
+    except LibraryError as exc:
+        _fail([*exc.errors, f"{len(exc.errors)} error(s); nothing was run."])
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="preform")
+def cli() -> None:
+    """preform: fabric-architecture-aware drape simulation for composite preforms."""
+
+
+# -- plugins --------------------------------------------------------------------------------
+@cli.group()
+def plugins() -> None:
+    """Inspect loaded plugins."""
+
+
+@plugins.command("list")
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def plugins_list(as_json: bool) -> None:
+    """Each plugin, its version, what it registered, and its error if it failed."""
+    host = _host()
+    records = [r.as_json() for r in host.records.values()]
+    if as_json:
+        _echo_json(records)
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title="preform plugins")
+    for col in ("name", "version", "registered", "error"):
+        table.add_column(col)
+    for r in records:
+        reg = "; ".join(f"{k}: {', '.join(v)}" for k, v in r["registered"].items())
+        table.add_row(r["name"], r["version"] or "-", reg or "-", r["error"] or "")
+    Console().print(table)
+
+
+# -- materials ------------------------------------------------------------------------------
+@cli.group()
+def materials() -> None:
+    """List, show and validate fabrics of the materials library."""
+
+
+@materials.command("list")
+@click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
+@click.option("--json", "as_json", is_flag=True)
+def materials_list(libraries: tuple[str, ...], as_json: bool) -> None:
+    """The fabrics of the library."""
+    lib = load_library_or_exit(libraries)
+    rows = [
+        {"name": f.name, "architecture": f.architecture, "source": f.source,
+         "origin": str(lib.origins[f.name])}
+        for f in lib
+    ]
+    if as_json:
+        _echo_json(rows)
+        return
+    for row in rows:
+        click.echo(f"{row['name']:<24} {row['architecture']:<12} {row['origin']}")
+    for warning in lib.warnings:
+        click.echo(f"warning: {warning}", err=True)
+
+
+def fabric_document(fabric: Any) -> dict[str, Any]:
+    """A fabric as shown by ``materials show``: YAML units, plus derived properties."""
+    data: dict[str, Any] = fabric.model_dump(mode="json", exclude_none=True)
+    try:
+        derived = fabric.derived()
+    except Exception as exc:
+        derived = {"error": f"{type(exc).__name__}: {exc}"}
+    if derived:
+        data["derived"] = derived
+    return data
+
+
+@materials.command("show")
+@click.argument("name")
+@click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
+@click.option("--json", "as_json", is_flag=True)
+def materials_show(name: str, libraries: tuple[str, ...], as_json: bool) -> None:
+    """One fabric's validated parameters (in the YAML's units) and derived properties."""
+    lib = load_library_or_exit(libraries)
+    try:
+        fabric = lib.fabric(name)
+    except KeyError as exc:
+        _fail([exc.args[0]])
+    doc = fabric_document(fabric)
+    if as_json:
+        _echo_json(doc)
+        return
+    import yaml
+
+    click.echo(f"# {lib.origins[name]}")
+    click.echo(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True).rstrip())
+
+
+@materials.command("validate")
+@click.argument("paths", nargs=-1, required=True, type=click.Path())
+def materials_validate(paths: tuple[str, ...]) -> None:
+    """Validate library files or directories; every error at once as FILE:LINE:COL."""
+    from preform.library import validate_files
+
+    fabrics, errors, warnings = validate_files([Path(p) for p in paths], _host().registry)
+    for w in warnings:
+        click.echo(f"warning: {w}", err=True)
+    if errors:
+        _fail([*errors, f"{len(errors)} error(s) in {len(paths)} path(s)."], code=1)
+    click.echo(f"ok: {len(fabrics)} fabric(s) valid")
+
+
+# -- schema ---------------------------------------------------------------------------------
+@cli.command()
+@click.option("--scene", "for_scene", is_flag=True, help="Schema of a scene file instead.")
+def schema(for_scene: bool) -> None:
+    """JSON Schema of a library file (or of a scene), for editors."""
+    from preform.schema import library_schema, scene_schema
+
+    registry = _host().registry
+    _echo_json(scene_schema(registry) if for_scene else library_schema(registry))
+
+
+# -- pipeline -------------------------------------------------------------------------------
+@cli.group()
+def pipeline() -> None:
+    """Run scenes over materials libraries."""
+
+
+@pipeline.command("run")
+@click.argument("libraries", nargs=-1, type=click.Path())
+@click.option("--scene", "scenes", multiple=True,
+              help="Scene file, or the name of a bundled scene (repeatable). Default: the "
+                   "bundled default scene.")
+@click.option("--materials", "materials_glob", default=None,
+              help="Only fabrics whose name matches this glob.")
+@click.option("--out", "out_dir", default="preform-results", type=click.Path(),
+              show_default=True, help="Results directory.")
+@click.option("--engine", type=click.Choice(["serial", "process", "dask"]), default="process",
+              show_default=True)
+@click.option("--scheduler", default=None, help="Dask scheduler address (engine dask).")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes (default: all cores).")
+@click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
+@click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
+def pipeline_run(libraries: tuple[str, ...], scenes: tuple[str, ...],
+                 materials_glob: str | None, out_dir: str, engine: str, scheduler: str | None,
+                 workers: int | None, force: bool, explain: bool) -> None:
+    """Run every (material, scene) case. LIBRARY paths replace the bundled library when given."""
+    from preform.pipeline.planner import explain as explain_plan
+    from preform.pipeline.runner import input_files_record, make_cases, run_cases
+    from preform.pipeline.scene import SceneError, default_scene_path, load_scene, \
+        resolve_scene_path
+
+    host = _host()
+    lib = load_library_or_exit(libraries, bundled=not libraries)
+    scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
+    loaded = []
+    problems: list[Any] = []
+    for path in scene_paths:
+        try:
+            loaded.append(load_scene(path, host.registry))
+        except SceneError as exc:
+            problems += exc.errors
+    if problems:
+        _fail([*problems, f"{len(problems)} error(s) in scene(s); nothing was run."])
+    if explain:
+        for scene, _ in loaded:
+            click.echo(f"scene {scene.name}: outputs {', '.join(scene.outputs)}")
+            for line in explain_plan(scene, host.registry):
+                click.echo(f"  {line}")
+        return
+    out = Path(out_dir)
+    cases = make_cases(lib, loaded, out, host, materials_glob)
+    if not cases:
+        _fail(["no (material, scene) case matches; check --materials and the scenes' "
+               "materials globs"], code=1)
+    inputs = {"libraries": input_files_record(lib.files),
+              "scenes": input_files_record(scene_paths)}
+    from rich.progress import Progress
+
+    with Progress(transient=False, disable=not sys.stderr.isatty()) as progress:
+        task = progress.add_task("cases", total=len(cases))
+        report = run_cases(cases, out, host, engine=engine, workers=workers,
+                           scheduler=scheduler, force=force, inputs=inputs,
+                           on_done=lambda r: progress.advance(task))
+    counts: dict[str, int] = {}
+    for r in report.results:
+        counts[r.status] = counts.get(r.status, 0) + 1
+    click.echo(f"{len(report.results)} case(s) -> {out}/: "
+               + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))
+    for r in report.failed:
+        click.echo(f"FAILED {r.case_id}: {r.error}", err=True)
+    if report.failed:
+        sys.exit(1)
+
+
+def build_cli() -> click.Group:
+    """The command group with every plugin's commands added."""
+    _host().register_commands(cli)
+    return cli
+
+
+def main() -> None:
+    build_cli()(prog_name="preform")

@@ -1,0 +1,74 @@
+"""Every hook a preform plugin can implement. The docstrings here are the reference.
+
+Hooks *register*; they do not compute. Each ``preform_register_*`` hook receives a typed
+registrar and calls ``register.add(...)`` once per thing it provides; preform then calls the
+registered objects directly. That keeps errors attributable to a plugin, keeps everything
+picklable for worker processes, and lets each registry entry carry its plugin's name and version.
+
+A plugin is a module (or object) with functions decorated by ``preform.hookimpl`` and named
+exactly as below; a misspelled name is an error that fails that plugin. Plugins are found through
+the ``preform`` entry-point group.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import pluggy
+
+if TYPE_CHECKING:
+    import click
+
+    from preform.material import FabricBase
+    from preform.registry import (
+        ArchitectureRegistrar,
+        ExporterRegistrar,
+        ShearLawRegistrar,
+        StepRegistrar,
+        SurfaceRegistrar,
+    )
+
+hookspec = pluggy.HookspecMarker("preform")
+
+
+@hookspec
+def preform_register_architectures(register: ArchitectureRegistrar) -> None:
+    """Register fabric architectures: ``register.add(Model)`` for each pydantic model deriving
+    from ``preform.FabricBase`` whose ``architecture`` field is a ``Literal`` of its tag."""
+
+
+@hookspec
+def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
+    """Register shear laws: ``register.add(name, Params, build)``. ``Params`` is a pydantic
+    model with ``law: Literal[name]``; ``build(params, fabric)`` returns a ``ShearLaw``."""
+
+
+@hookspec
+def preform_register_surfaces(register: SurfaceRegistrar) -> None:
+    """Register tool surfaces: ``register.add(name, Params, build)``. ``Params`` is a pydantic
+    model with ``surface: Literal[name]`` and dimensions in mm; ``build(params, base_dir)``
+    returns a ``preform.drape.surface.Surface`` in metres (``base_dir`` resolves file paths
+    given in a scene)."""
+
+
+@hookspec
+def preform_register_steps(register: StepRegistrar) -> None:
+    """Register pipeline steps: ``register.add(Step(...))`` with what each provides and
+    requires, and a version that is recorded with every result."""
+
+
+@hookspec
+def preform_register_exporters(register: ExporterRegistrar) -> None:
+    """Register exporters: steps that turn computed products into files of a case folder
+    (``register.add(Step(...))`` with ``writes_files=True``)."""
+
+
+@hookspec
+def preform_register_commands(cli: click.Group) -> None:
+    """Add click commands to the ``preform`` command group."""
+
+
+@hookspec
+def preform_check_material(material: FabricBase) -> list[Any] | None:
+    """Lint a validated fabric: return warnings, each a message or a ``(location, message)``
+    pair where location is a path inside the entry. All plugins' warnings are collected."""

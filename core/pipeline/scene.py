@@ -1,0 +1,225 @@
+"""Scenes: what to drape onto what, and which outputs to produce. YAML, validated like fabrics.
+
+Lengths are millimetres and angles degrees in a scene (the unit is in every field name); steps
+convert to SI when they build their objects. The ``tool`` block is validated against the
+registered surfaces, like a fabric's ``architecture``.
+"""
+
+from __future__ import annotations
+
+import difflib
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from preform.registry import Registry
+from preform.validation import located_errors
+from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
+
+_STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class PlySection(BaseModel):
+    """The fabric ply: its node spacing and its outline in the flat."""
+
+    model_config = _STRICT
+    node_spacing_mm: float = Field(gt=0, description="Pin-jointed net node spacing d [mm].")
+    size_mm: tuple[float, float] | None = Field(
+        default=None, description="Rectangular ply size [mm] along the two fibre families."
+    )
+    outline_mm: list[tuple[float, float]] | None = Field(
+        default=None,
+        description="Polygonal ply outline in the flat [mm], in the fibre (u, v) frame with the "
+        "start node at the origin; replaces size_mm.",
+    )
+    offset_mm: tuple[float, float] = Field(
+        default=(0.0, 0.0),
+        description="Position of the start node in the ply, from the ply centre [mm] (u, v).",
+    )
+
+    @field_validator("size_mm")
+    @classmethod
+    def _positive(cls, v: tuple[float, float] | None) -> tuple[float, float] | None:
+        if v is not None and (v[0] <= 0 or v[1] <= 0):
+            raise ValueError("ply size must be positive in both directions")
+        return v
+
+    @field_validator("outline_mm")
+    @classmethod
+    def _polygon(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
+        if v is not None and len(v) < 3:
+            raise ValueError("a ply outline needs at least 3 vertices")
+        return v
+
+
+class StartSection(BaseModel):
+    """Where and how the two generator fibre paths start."""
+
+    model_config = _STRICT
+    point_mm: tuple[float, float] = Field(
+        default=(0.0, 0.0), description="Start point in plan (x, y) [mm], put on the tool."
+    )
+    orientation_deg: float = Field(
+        default=0.0, description="Plan direction of the first generator [deg from the x axis]."
+    )
+    generator_angle_deg: float = Field(
+        default=90.0,
+        gt=0.0,
+        lt=180.0,
+        description="Angle between the two generators at the start point [deg]. The fabric's "
+        "reference direction bisects the first generator and the reversed second one, so "
+        "angles below 90 shear the generators in the negative (for warp-knits: "
+        "perpendicular-to-stitch) sense.",
+    )
+    generators: Literal["geodesic", "plan", "polyline"] = Field(
+        default="geodesic",
+        description="Generator paths: geodesics on the tool, straight lines in plan, or the "
+        "plan polylines given in generator_polylines_mm.",
+    )
+    generator_polylines_mm: tuple[list[tuple[float, float]], list[tuple[float, float]]] | None = (
+        Field(
+            default=None,
+            description="With generators: polyline, the two generator paths in plan [mm], each "
+            "starting at the start point.",
+        )
+    )
+
+
+class RangeDeg(BaseModel):
+    """A closed range of angles [deg] to search."""
+
+    model_config = _STRICT
+    min: float
+    max: float
+    step: float | None = Field(default=None, gt=0, description="Scan step [deg].")
+
+
+class SearchSection(BaseModel):
+    """The minimum-energy search over generator choices."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, allow_inf_nan=False)
+    generator_angle_deg: RangeDeg | None = None
+
+
+class ShearSection(BaseModel):
+    """Angles at which shear curves are tabulated."""
+
+    model_config = _STRICT
+    angles_deg: RangeDeg = Field(default_factory=lambda: RangeDeg(min=0, max=60, step=1))
+
+
+class Scene(BaseModel):
+    """A validated scene."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    name: str = Field(min_length=1, description="Name of the scene; names the results folder.")
+    description: str = ""
+    tool: Any = Field(
+        default=None, description="Tool surface: {surface: NAME, ...dimensions in mm}."
+    )
+    ply: PlySection | None = None
+    start: StartSection | None = None
+    search: SearchSection | None = None
+    shear: ShearSection | None = None
+    fidelity: Literal["draft", "standard", "fine"] | None = None
+    materials: str | None = Field(
+        default=None, description="Glob of fabric names this scene applies to (default all)."
+    )
+    outputs: list[str] = Field(min_length=1, description="Products and files to produce.")
+    #: Directory of the scene file (resolves relative tool mesh paths); not from YAML.
+    base_dir: str = Field(default=".", exclude=True)
+
+
+class SceneError(Exception):
+    def __init__(self, errors: list[SourceError]) -> None:
+        self.errors = errors
+        super().__init__("\n".join(str(e) for e in errors))
+
+
+def bundled_scene_dir() -> Path:
+    return Path(str(resources.files("preform.materials") / "scenes"))
+
+
+def default_scene_path() -> Path:
+    return bundled_scene_dir() / "default.yaml"
+
+
+def resolve_scene_path(spec: str) -> Path:
+    """A scene file path, or the name of a bundled scene (``hemisphere``)."""
+    path = Path(spec)
+    if path.exists() or path.suffix in (".yaml", ".yml"):
+        return path
+    bundled = bundled_scene_dir() / f"{spec}.yaml"
+    return bundled if bundled.exists() else path
+
+
+def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
+    """Validate one scene document; raises SceneError with located errors."""
+    errors: list[SourceError] = []
+
+    def err(path: tuple[str | int, ...], label: str, message: str) -> SourceError:
+        line, column = doc.locate(path)
+        return SourceError(doc.file, line, column, label, message)
+
+    if not isinstance(data, dict):
+        raise SceneError([err((), "", "a scene must be a mapping")])
+    try:
+        scene = Scene.model_validate(
+            {**data, "base_dir": str(Path(doc.file).resolve().parent)}
+        )
+    except ValidationError as exc:
+        raise SceneError(located_errors(doc, (), data, exc, Scene)) from None
+    tool = data.get("tool")
+    if tool is not None:
+        known = registry.names("surfaces")
+        name = tool.get("surface") if isinstance(tool, dict) else None
+        if name not in known:
+            close = difflib.get_close_matches(str(name), known, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            where = ("tool", "surface") if isinstance(tool, dict) and "surface" in tool else (
+                "tool",)
+            errors.append(err(where, "tool.surface", f"unknown surface {name!r}{hint}; "
+                              f"registered surfaces: {', '.join(known) or 'none'}"))
+        else:
+            params = registry.surface_type(str(name)).params
+            try:
+                scene = scene.model_copy(update={"tool": params.model_validate(tool)})
+            except ValidationError as exc:
+                errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
+    from preform.pipeline.planner import PlanError, plan
+
+    try:
+        plan(scene, registry)
+    except PlanError as exc:
+        for index, message in exc.problems:
+            where: tuple[str | int, ...] = ("outputs", index) if index is not None else ()
+            errors.append(err(where, f"outputs[{index}]" if index is not None else "",
+                              message))
+    if errors:
+        raise SceneError(errors)
+    return scene
+
+
+def load_scene(path: str | Path, registry: Registry) -> tuple[Scene, dict[str, Any]]:
+    """Load a scene file (one document); returns the scene and its raw data."""
+    try:
+        docs = load_yaml(path)
+    except YamlSourceError as exc:
+        raise SceneError(exc.errors) from None
+    if len(docs) != 1:
+        line, column = docs[1].locate(()) if len(docs) > 1 else (1, 1)
+        raise SceneError([SourceError(str(path), line, column, "",
+                                      "a scene file holds exactly one YAML document")])
+    return validate_scene_data(docs[0], docs[0].data, registry), docs[0].data
+
+
+def scene_from_data(data: dict[str, Any], base_dir: str, registry: Registry) -> Scene:
+    """Rebuild a scene from data that already validated (worker processes)."""
+    scene = Scene.model_validate({**data, "base_dir": base_dir})
+    tool = data.get("tool")
+    if isinstance(tool, dict):
+        params = registry.surface_type(str(tool.get("surface"))).params
+        scene = scene.model_copy(update={"tool": params.model_validate(tool)})
+    return scene

@@ -1,0 +1,57 @@
+"""A pipeline step: a named computation with what it provides, what it requires, a version."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from preform.material import FabricBase
+    from preform.pipeline.scene import Scene
+    from preform.registry import Registry
+
+
+@dataclass
+class CaseContext:
+    """What a step sees while one (material, scene) case runs."""
+
+    fabric: FabricBase
+    scene: Scene
+    registry: Registry
+    #: The case's output folder; file-writing steps write here (atomically).
+    case_dir: Path
+    #: Products computed so far, by name.
+    products: dict[str, Any] = field(default_factory=dict)
+    #: Scalar results of the case (go to summary.json and a row of results.csv).
+    summary: dict[str, Any] = field(default_factory=dict)
+    #: Files written by the case, relative to case_dir.
+    files: list[str] = field(default_factory=list)
+
+
+#: A step's body: reads ``ctx.products`` (its requirements), returns what it provides.
+StepFunction = Callable[[CaseContext], Mapping[str, Any]]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One registered computation.
+
+    ``run`` must be a module-level function (picklable). It returns a mapping with a value for
+    every name in ``provides``; a file-writing step (``writes_files``) returns the relative paths
+    it wrote as the value of its product.
+    """
+
+    name: str
+    provides: tuple[str, ...]
+    requires: tuple[str, ...]
+    version: str
+    run: StepFunction
+    description: str = ""
+    writes_files: bool = False
+    #: Scene sections the step needs (checked when a scene is planned: "tool", "ply", ...).
+    scene_sections: tuple[str, ...] = ()
+    #: Extra requirements that depend on the scene (a module-level function of the scene),
+    #: e.g. the drape needs the search's optimum when the scene searches.
+    extra_requires: Callable[[Scene], tuple[str, ...]] | None = None

@@ -1,0 +1,99 @@
+"""Turn pydantic validation errors into located ``SourceError``s (file:line:col: path: message).
+
+Shared by the materials library and scenes, so both report problems the same way.
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from preform.material import Location
+from preform.yamlsource import Document, SourceError
+
+# Parts of a pydantic error location that name a validator or a type, not a key in the data.
+_PYDANTIC_NOISE = {"list", "dict", "str", "float", "int", "bool", "literal", "json-or-python"}
+
+
+def data_path(data: Any, loc: tuple[Any, ...]) -> Location:
+    """The part of a pydantic error location that exists in the data.
+
+    Pydantic puts union tags and validator names into ``loc``; they are not in the YAML, so they
+    are dropped by walking the data alongside the location. A missing key is kept (so the
+    message names the field) and ends the walk.
+    """
+    path: list[str | int] = []
+    node = data
+    for part in loc:
+        if isinstance(node, dict) and part in node:
+            path.append(part)
+            node = node[part]
+        elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+            path.append(part)
+            node = node[part]
+        elif (
+            isinstance(node, dict)
+            and isinstance(part, str)
+            and part not in _PYDANTIC_NOISE
+            and not part.startswith(("function-", "tagged-union", "union["))
+            and part not in _union_tags(node)
+        ):
+            path.append(part)
+            break
+    return tuple(path)
+
+
+def _union_tags(node: dict[str, Any]) -> set[str]:
+    """Values of the mapping that pydantic may use as discriminator tags in a location."""
+    return {v for v in node.values() if isinstance(v, str)}
+
+
+def format_path(path: Location) -> str:
+    """``("weave", "matrix", 2, 0)`` → ``weave.matrix[2][0]``."""
+    out = ""
+    for part in path:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+def _message(err: Any, model: type[BaseModel] | None) -> str:
+    kind = err.get("type", "")
+    if kind == "extra_forbidden":
+        field = err["loc"][-1] if err.get("loc") else "?"
+        allowed = sorted(model.model_fields) if model is not None else []
+        hint = difflib.get_close_matches(str(field), allowed, n=1)
+        msg = f"unknown field {field!r}"
+        if hint:
+            msg += f"; did you mean {hint[0]!r}?"
+        elif allowed:
+            msg += f"; allowed fields: {', '.join(allowed)}"
+        return msg
+    if kind == "missing":
+        return "required field is missing"
+    msg = str(err.get("msg", "invalid value"))
+    return msg.removeprefix("Value error, ")
+
+
+def located_errors(
+    doc: Document,
+    base: Location,
+    data: Any,
+    exc: ValidationError,
+    model: type[BaseModel] | None,
+    prefix: str = "",
+) -> list[SourceError]:
+    """One ``SourceError`` per pydantic error, located in ``doc`` under ``base``."""
+    out = []
+    for err in exc.errors():
+        sub = data_path(data, tuple(err.get("loc", ())))
+        label = f"{prefix}.{format_path(sub)}" if prefix and sub else prefix or format_path(sub)
+        # an unknown field is shown at its key (the thing to delete); a bad value at the value
+        at_key = err.get("type") == "extra_forbidden"
+        line, column = doc.locate(base + sub) if at_key else doc.locate_value(base + sub)
+        out.append(SourceError(doc.file, line, column, label, _message(err, model)))
+    return out
