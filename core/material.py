@@ -26,7 +26,7 @@ class FabricBase(BaseModel):
     and override the hooks below that their architecture can answer.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     name: str = Field(min_length=1, description="Unique name of the fabric across the library.")
     architecture: str = Field(description="Registered architecture that validates this entry.")
