@@ -3,6 +3,8 @@
 The public API; everything else is reached through its module.
 """
 
+from typing import Any
+
 __version__ = "0.1.0"
 
 from preform.material import FabricBase, Location  # noqa: E402
@@ -12,7 +14,7 @@ from preform.registry import Registry, RegistrationError  # noqa: E402
 from preform.shear.law import ShearLaw, force_per_length_N_per_mm  # noqa: E402
 
 
-def load_library(*args, **kwargs):  # type: ignore[no-untyped-def]
+def load_library(*args: Any, **kwargs: Any) -> Any:
     """Load and validate the materials library (see ``preform.library.load_library``)."""
     from preform.library import load_library as _load
 

@@ -6,7 +6,15 @@ Registered through the ``preform`` entry-point group like any third-party plugin
 from __future__ import annotations
 
 from preform.plugin_manager import hookimpl
-from preform.registry import ExporterRegistrar, StepRegistrar
+from preform.registry import ExporterRegistrar, ShearLawRegistrar, StepRegistrar
+
+
+@hookimpl
+def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
+    from preform.shear.laws import SHEAR_LAWS
+
+    for name, params, build in SHEAR_LAWS:
+        register.add(name, params, build)
 
 
 @hookimpl

@@ -151,6 +151,50 @@ def materials_validate(paths: tuple[str, ...]) -> None:
     click.echo(f"ok: {len(fabrics)} fabric(s) valid")
 
 
+# -- view ---------------------------------------------------------------------------------
+def _repeats(_ctx: Any, _param: Any, value: str) -> tuple[int, int]:
+    try:
+        n1, n2 = (int(v) for v in value.lower().split("x"))
+    except ValueError:
+        raise click.BadParameter(f"expected NxM (e.g. 2x2), got {value!r}") from None
+    if n1 < 1 or n2 < 1 or n1 * n2 > 400:
+        raise click.BadParameter("repeats must be between 1x1 and 20x20")
+    return n1, n2
+
+
+@cli.command()
+@click.argument("name")
+@click.option("--repeats", default="2x2", callback=_repeats, show_default=True,
+              help="Unit cells to draw along each direction, NxM.")
+@click.option("--out", "png", type=click.Path(), default=None,
+              help="PNG file (default NAME.png).")
+@click.option("--vtu", type=click.Path(), default=None,
+              help="Also write the tow paths as a VTK .vtu file for ParaView.")
+@click.option("--colour-by", type=click.Choice(["level", "type"]), default="level",
+              show_default=True)
+@click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
+def view(name: str, repeats: tuple[int, int], png: str | None, vtu: str | None,
+         colour_by: str, libraries: tuple[str, ...]) -> None:
+    """A 3D picture of a fabric's unit cell (tows as ribbons), and optionally a VTU file."""
+    from preform.export.fig_unit_cell import unit_cell_figure
+    from preform.export.vtu import write_unit_cell_vtu
+
+    lib = load_library_or_exit(libraries)
+    try:
+        fabric = lib.fabric(name)
+    except KeyError as exc:
+        _fail([exc.args[0]])
+    cell = fabric.unit_cell()
+    if cell is None:
+        _fail([f"architecture {fabric.architecture!r} has no unit-cell model to view"])
+    out = Path(png or f"{name}.png")
+    unit_cell_figure(cell, out, colour_by=colour_by, repeats=repeats, title=name)
+    click.echo(f"wrote {out}")
+    if vtu:
+        write_unit_cell_vtu(cell.tiled(*repeats), Path(vtu))
+        click.echo(f"wrote {vtu}")
+
+
 # -- schema ---------------------------------------------------------------------------------
 @cli.command()
 @click.option("--scene", "for_scene", is_flag=True, help="Schema of a scene file instead.")

@@ -36,9 +36,7 @@ def atomic_open(
 ) -> Iterator[IO]:  # type: ignore[type-arg]
     """Open a temporary file beside ``path`` for writing; rename it over ``path`` on success."""
     binary = "b" in mode
-    with atomic_path(path) as tmp, open(
-        tmp, mode, encoding=None if binary else encoding
-    ) as handle:
+    with atomic_path(path) as tmp, open(tmp, mode, encoding=None if binary else encoding) as handle:
         yield handle
         handle.flush()
         os.fsync(handle.fileno())

@@ -67,14 +67,14 @@ def write_shear_curve_json(ctx: CaseContext) -> dict[str, Any]:
 
 
 def write_shear_curve_png(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.figures import shear_curve_figure
+    from preform.export.fig_curves import shear_curve_figure
 
     shear_curve_figure(ctx.products["shear_curve"], ctx.case_dir / "shear_curve.png")
     return {"shear_curve_png": "shear_curve.png"}
 
 
 def write_unit_cell_png(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.figures import unit_cell_figure
+    from preform.export.fig_unit_cell import unit_cell_figure
 
     unit_cell_figure(ctx.products["unit_cell"], ctx.case_dir / "unit_cell.png",
                      title=ctx.fabric.name, repeats=(2, 2))

@@ -1,0 +1,146 @@
+"""The fibre pattern of a draped net: tows seen from above and the net in 3D coloured by shear
+(the paper's Fig. 11)."""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, cast
+
+import numpy as np
+from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.export.figures import new_figure, save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d.axes3d import Axes3D
+
+#: Colours of the two fibre families in the top view.
+U_COLOUR = "#1f3b73"
+V_COLOUR = "#9a2a1f"
+
+
+def fibre_lines(result: DrapeResult, family: str, every: int = 1) -> list[int]:
+    """Indices of the fibre lines of ``family`` ("u": lines of constant j running along i;
+    "v": constant i) drawn at spacing ``every``, always including the generator line."""
+    if every < 1:
+        raise ValueError(f"tow_every must be at least 1, got {every}")
+    ni, nj = result.shape
+    i0, j0 = result.start_index
+    count, through = (nj, j0) if family == "u" else (ni, i0)
+    return [k for k in range(count) if (k - through) % every == 0]
+
+
+def _polyline_xy(result: DrapeResult, family: str, lines: list[int]) -> np.ndarray:
+    """Top-view (x, y) [mm] of the chosen fibre lines, one array with NaN rows between lines and
+    at every unplaced node, so matplotlib breaks the line there."""
+    placed = np.asarray(result.status == NodeStatus.PLACED)
+    xy = np.where(placed[..., None], 1e3 * np.asarray(result.nodes, dtype=float)[..., :2], np.nan)
+    gap = np.full((1, 2), np.nan)
+    parts: list[np.ndarray] = []
+    for k in lines:
+        parts.append(xy[:, k] if family == "u" else xy[k, :])
+        parts.append(gap)
+    return np.concatenate(parts) if parts else np.empty((0, 2))
+
+
+def _top_view(ax: Axes, result: DrapeResult, tow_every: int) -> None:
+    i0, j0 = result.start_index
+    for family, colour, generator in (("u", U_COLOUR, j0), ("v", V_COLOUR, i0)):
+        xy = _polyline_xy(result, family, fibre_lines(result, family, tow_every))
+        ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=0.7, label=f"{family} fibres")
+        line = _polyline_xy(result, family, [generator])
+        ax.plot(line[:, 0], line[:, 1], color=colour, lw=2.2, label=f"{family} generator")
+    start = np.asarray(result.nodes, dtype=float)[i0, j0]
+    if result.status[i0, j0] == NodeStatus.PLACED:
+        ax.plot(1e3 * start[0], 1e3 * start[1], "o", color="k", ms=5, label="start node")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title("Fibre pattern, top view (bold: generators)")
+    ax.legend(loc="upper right", fontsize="small")
+
+
+def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyField | None) -> None:
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import CenteredNorm
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    valid = np.asarray(result.cell_status == CellStatus.VALID)
+    ci, cj = np.nonzero(valid)
+    nodes_mm = 1e3 * np.asarray(result.nodes, dtype=float)
+    quads = np.stack(
+        [nodes_mm[ci, cj], nodes_mm[ci + 1, cj], nodes_mm[ci + 1, cj + 1], nodes_mm[ci, cj + 1]],
+        axis=1,
+    )
+    shear_deg = np.degrees(np.asarray(result.shear, dtype=float)[ci, cj])
+    # Symmetric colour range centred on zero so positive and negative shear read alike.
+    half_range = max(float(np.max(np.abs(shear_deg))) if shear_deg.size else 0.0, 1.0)
+    norm = CenteredNorm(vcenter=0.0, halfrange=half_range)
+    cmap = colormaps["RdBu_r"]
+    if len(quads):
+        edge = np.tile([0.3, 0.3, 0.3, 0.6], (len(quads), 1))
+        widths = np.full(len(quads), 0.15)
+        if energy is not None:
+            # Cells past locking get a black outline: that is where wrinkles are expected.
+            locked = np.asarray(energy.past_locking, dtype=bool)[ci, cj]
+            edge[locked] = (0.0, 0.0, 0.0, 1.0)
+            widths[locked] = 0.8
+        ax.add_collection3d(
+            Poly3DCollection(
+                quads, facecolors=cmap(norm(shear_deg)), edgecolors=edge, linewidths=widths
+            )
+        )
+        pts = quads.reshape(-1, 3)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        # A flat net has no z extent: give every axis a little room so the limits are not singular.
+        pad = 0.01 * float(np.max(hi - lo)) + 1e-9
+        lo, hi = lo - pad, hi + pad
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_zlim(lo[2], hi[2])
+        span = hi - lo
+        ax.set_box_aspect(tuple(np.maximum(span, 0.02 * span.max())), zoom=0.9)
+    from matplotlib.ticker import MaxNLocator
+
+    ax.zaxis.set_major_locator(MaxNLocator(4))
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_zlabel("z [mm]")
+    ax.set_title("Shear angle" + (" (black outline: past locking)" if energy is not None else ""))
+    colour_bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.7, pad=0.12)
+    colour_bar.set_label("signed shear angle γ [deg]")
+
+
+def fibre_pattern_figure(
+    result: DrapeResult,
+    energy: EnergyField | None,
+    path: str | os.PathLike[str],
+    *,
+    title: str | None = None,
+    tow_every: int = 1,
+    size_px: tuple[int, int] = (1600, 800),
+) -> Figure:
+    """Draw a draped net and save it to ``path``: left, the fibres from above; right, the net
+    in 3D with cells coloured by signed shear.
+
+    The top view draws every ``tow_every``-th line of nodes of both fibre families (the lines
+    through the start node, the generators, always and in bold), broken wherever a node is not
+    placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
+    colour bar in degrees; with ``energy``, cells past locking are outlined and the total energy
+    [J] goes into the title. Axes in mm. ``size_px`` is the saved (width, height) [pixels].
+    Returns the figure (already saved).
+    """
+    fig = new_figure(size_px)
+    _top_view(fig.add_subplot(1, 2, 1), result, tow_every)
+    _shear_view(fig, cast("Axes3D", fig.add_subplot(1, 2, 2, projection="3d")), result, energy)
+    summary = (
+        f"generator angle {np.degrees(result.generator_angle):.1f}°, "
+        f"{result.nodes_placed}/{result.nodes_total} nodes placed"
+    )
+    if energy is not None:
+        summary += f", total shear energy {energy.total_energy:.4g} J"
+    fig.suptitle(f"{title}\n{summary}" if title else summary)
+    save_figure(fig, path)
+    return fig

@@ -1,0 +1,156 @@
+"""Tidy tables (CSV, Parquet) and JSON summaries of a draped net.
+
+Columns carry their unit in the name (``x_mm``, ``shear_deg``, ``energy_J_per_m2``) because a
+table outlives the code that wrote it. Parquet needs pyarrow (``preform[parquet]``).
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from preform.drape.result import CellStatus, DrapeResult, EnergyField
+from preform.export.atomic import atomic_open, atomic_path
+
+#: Column order of ``cells_table``.
+CELL_COLUMNS: tuple[str, ...] = (
+    "i",
+    "j",
+    "status",
+    "in_part",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "shear_deg",
+    "area_mm2",
+    "thinning",
+    "energy_J_per_m2",
+    "past_locking",
+    "past_failure",
+)
+
+
+def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.DataFrame:
+    """One row per cell of the net, invalid cells included.
+
+    Columns: ``i``, ``j`` (cell index), ``status`` (CellStatus name, e.g. "VALID",
+    "INCOMPLETE"), ``in_part`` (bool), ``x_mm``, ``y_mm``, ``z_mm`` (centroid [mm]),
+    ``shear_deg`` (signed shear [deg]), ``area_mm2`` (draped area [mm²]), ``thinning``
+    (t/t0 = 1/cos γ [-]), ``energy_J_per_m2`` (strain energy density [J/m²]),
+    ``past_locking`` and ``past_failure`` (nullable bool). Values of cells that are not VALID
+    are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
+    the thinning then follows from the shear.
+    """
+    n1, n2 = np.asarray(result.cell_status).shape
+    ii, jj = np.meshgrid(np.arange(n1), np.arange(n2), indexing="ij")
+    valid = np.asarray(result.cell_status == CellStatus.VALID).ravel()
+
+    def on_valid(values: Any) -> np.ndarray:
+        out = np.asarray(values, dtype=float).ravel().copy()
+        out[~valid] = np.nan
+        return out
+
+    def flags(values: Any | None) -> pd.arrays.BooleanArray:
+        if values is None:
+            return pd.array([pd.NA] * (n1 * n2), dtype="boolean")
+        return pd.arrays.BooleanArray(np.asarray(values, dtype=bool).ravel(), ~valid)
+
+    centroid_mm = 1e3 * np.asarray(result.centroid, dtype=float).reshape(-1, 3)
+    centroid_mm[~valid] = np.nan
+    shear = on_valid(result.shear)
+    names = {int(s): s.name for s in CellStatus}
+    codes = np.asarray(result.cell_status, dtype=np.int64).ravel().tolist()
+    status = [names.get(code, f"UNKNOWN_{code}") for code in codes]
+
+    if energy is not None:
+        energy_density = on_valid(energy.energy_density)
+        thinning = on_valid(energy.thinning)
+    else:
+        energy_density = np.full(n1 * n2, np.nan)
+        thinning = 1.0 / np.cos(shear)
+    table = pd.DataFrame(
+        {
+            "i": ii.ravel(),
+            "j": jj.ravel(),
+            "status": pd.array(status, dtype="string"),
+            "in_part": np.asarray(result.in_part, dtype=bool).ravel(),
+            "x_mm": centroid_mm[:, 0],
+            "y_mm": centroid_mm[:, 1],
+            "z_mm": centroid_mm[:, 2],
+            "shear_deg": np.degrees(shear),
+            "area_mm2": 1e6 * on_valid(result.area),
+            "thinning": thinning,
+            "energy_J_per_m2": energy_density,
+            "past_locking": flags(None if energy is None else energy.past_locking),
+            "past_failure": flags(None if energy is None else energy.past_failure),
+        }
+    )
+    return table.loc[:, list(CELL_COLUMNS)]
+
+
+def write_table(table: pd.DataFrame, path: str | os.PathLike[str]) -> None:
+    """Write ``table`` to ``path``: Parquet when the suffix is ``.parquet``, otherwise CSV.
+
+    CSV leaves missing values empty. Parquet keeps dtypes (nullable booleans stay nullable)
+    and needs pyarrow: ``pip install "preform[parquet]"``.
+    """
+    if Path(path).suffix.lower() == ".parquet":
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError as exc:  # pragma: no cover - exercised only without the extra
+            raise ImportError(
+                'Writing Parquet needs pyarrow: pip install "preform[parquet]"'
+            ) from exc
+        with atomic_path(path) as tmp:
+            table.to_parquet(tmp, engine="pyarrow", index=False)
+        return
+    with atomic_open(path, "w", encoding="utf-8") as handle:
+        table.to_csv(handle, index=False, lineterminator="\n")
+
+
+def to_json_compatible(obj: Any) -> Any:
+    """``obj`` made of plain JSON types: numpy scalars and arrays become numbers and lists,
+    NaN and ±inf become None (JSON has no NaN), enums their name, paths strings, sets sorted
+    lists, mapping keys strings. Raises TypeError for anything else.
+    """
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, enum.Enum):
+        return obj.name
+    if isinstance(obj, (int, np.integer)) and not isinstance(obj, np.bool_):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, (float, np.floating)):
+        value = float(obj)
+        return value if math.isfinite(value) else None
+    if isinstance(obj, np.ndarray):
+        return [to_json_compatible(v) for v in obj.tolist()]
+    if isinstance(obj, Mapping):
+        return {str(k): to_json_compatible(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_json_compatible(v) for v in obj]
+    if isinstance(obj, (set, frozenset)):
+        return sorted((to_json_compatible(v) for v in obj), key=repr)
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    if obj is pd.NA:
+        return None
+    raise TypeError(f"cannot write {type(obj).__name__} to JSON: {obj!r}")
+
+
+def write_json(obj: Any, path: str | os.PathLike[str]) -> None:
+    """Write ``obj`` to ``path`` as strict JSON (sorted keys, indent 2, trailing newline).
+
+    Conversions as ``to_json_compatible``: NaN → null, numpy scalars → numbers.
+    """
+    text = json.dumps(to_json_compatible(obj), sort_keys=True, indent=2, allow_nan=False)
+    with atomic_open(path, "w", encoding="utf-8") as handle:
+        handle.write(text + "\n")

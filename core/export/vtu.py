@@ -1,0 +1,145 @@
+"""VTK unstructured-grid (.vtu) files for ParaView: the unit cell's tow paths and the draped net.
+
+Coordinates are written in metres, as held inside preform; angles in degrees because that is what
+a ParaView user reads off a colour bar. meshio is an optional extra (``preform[vtk]``).
+"""
+
+from __future__ import annotations
+
+import os
+from types import ModuleType
+from typing import TYPE_CHECKING
+
+import numpy as np
+from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.export.atomic import atomic_path
+
+if TYPE_CHECKING:
+    from preform.geometry.unit_cell import UnitCell
+
+#: Integer code of each tow kind in the ``kind`` cell array (VTK cell data must be numeric).
+TOW_KIND_CODES: dict[str, int] = {"warp": 0, "weft": 1, "binder": 2, "tow": 3, "stitch": 4}
+#: Code for a kind not in ``TOW_KIND_CODES`` (a plugin's own kind still exports).
+OTHER_KIND_CODE = 9
+
+
+def _require_meshio() -> ModuleType:
+    try:
+        import meshio
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise ImportError('Writing .vtu files needs meshio: pip install "preform[vtk]"') from exc
+    return meshio
+
+
+def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
+    """Write a unit cell's tow centrelines to ``path`` (.vtu) as line segments.
+
+    Each tow becomes a chain of VTK "line" cells between its consecutive centreline points
+    (meshio has no poly-line cell). Points are in metres. Cell data on every segment:
+    ``tow`` (index of the tow in ``cell.tows``), ``kind`` (code from ``TOW_KIND_CODES``),
+    ``level``, ``width`` [m] and ``height`` [m].
+    """
+    meshio = _require_meshio()
+    point_blocks: list[np.ndarray] = []
+    segment_blocks: list[np.ndarray] = []
+    tow_index: list[np.ndarray] = []
+    offset = 0
+    for k, tow in enumerate(cell.tows):
+        pts = np.asarray(tow.points, dtype=float).reshape(-1, 3)
+        n = len(pts)
+        point_blocks.append(pts)
+        if n >= 2:
+            start = np.arange(offset, offset + n - 1)
+            segment_blocks.append(np.column_stack([start, start + 1]))
+            tow_index.append(np.full(n - 1, k, dtype=np.int32))
+        offset += n
+    if not segment_blocks:
+        raise ValueError("the unit cell has no tow with two or more points to write")
+
+    tows = np.concatenate(tow_index)
+    kind = np.array(
+        [TOW_KIND_CODES.get(t.kind, OTHER_KIND_CODE) for t in cell.tows], dtype=np.int32
+    )
+    level = np.array([t.level for t in cell.tows], dtype=np.int32)
+    width = np.array([t.width for t in cell.tows], dtype=float)
+    height = np.array([t.height for t in cell.tows], dtype=float)
+    mesh = meshio.Mesh(
+        points=np.concatenate(point_blocks),
+        cells=[("line", np.concatenate(segment_blocks))],
+        cell_data={
+            "tow": [tows],
+            "kind": [kind[tows]],
+            "level": [level[tows]],
+            "width": [width[tows]],
+            "height": [height[tows]],
+        },
+    )
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")
+
+
+def write_drape_vtu(
+    result: DrapeResult, energy: EnergyField | None, path: str | os.PathLike[str]
+) -> None:
+    """Write the draped net to ``path`` (.vtu): placed nodes as points, valid cells as quads.
+
+    Points are in metres. Cells that are not VALID are left out, so the file holds no NaN.
+    Point data: ``i``, ``j`` (net indices), ``residual`` [m]. Cell data: ``i``, ``j``,
+    ``shear_deg`` (signed shear [deg]), ``fibre_u`` and ``fibre_v`` (unit 3-vectors),
+    ``thinning`` (t/t0 = 1/cos γ [-]), ``status`` (CellStatus code), ``in_part`` (0/1) and,
+    when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking`` and
+    ``past_failure`` (0/1). Without ``energy`` the thinning is computed from the shear. A net
+    with no valid cell is written as its placed nodes, one vertex cell each, without cell data.
+    """
+    meshio = _require_meshio()
+    ni, nj = result.shape
+    placed = np.asarray(result.status == NodeStatus.PLACED)
+    # Renumber placed nodes 0..n-1 so unplaced (NaN) nodes never reach the file.
+    point_id = np.full((ni, nj), -1, dtype=np.int64)
+    point_id[placed] = np.arange(np.count_nonzero(placed))
+    node_i, node_j = np.nonzero(placed)
+
+    valid = np.asarray(result.cell_status == CellStatus.VALID)
+    ci, cj = np.nonzero(valid)
+    quads = np.column_stack(
+        [point_id[ci, cj], point_id[ci + 1, cj], point_id[ci + 1, cj + 1], point_id[ci, cj + 1]]
+    )
+    if np.any(quads < 0):
+        raise ValueError(
+            "a VALID cell has an unplaced corner node; the DrapeResult is inconsistent"
+        )
+
+    shear = np.asarray(result.shear, dtype=float)[ci, cj]
+    cell_data: dict[str, np.ndarray] = {
+        "i": ci.astype(np.int32),
+        "j": cj.astype(np.int32),
+        "shear_deg": np.degrees(shear),
+        "fibre_u": np.asarray(result.fibre_u, dtype=float)[ci, cj],
+        "fibre_v": np.asarray(result.fibre_v, dtype=float)[ci, cj],
+        "status": np.asarray(result.cell_status, dtype=np.int32)[ci, cj],
+        "in_part": np.asarray(result.in_part, dtype=np.int32)[ci, cj],
+    }
+    if energy is not None:
+        cell_data["energy_J_per_m2"] = np.asarray(energy.energy_density, dtype=float)[ci, cj]
+        cell_data["thinning"] = np.asarray(energy.thinning, dtype=float)[ci, cj]
+        cell_data["past_locking"] = np.asarray(energy.past_locking, dtype=np.int32)[ci, cj]
+        cell_data["past_failure"] = np.asarray(energy.past_failure, dtype=np.int32)[ci, cj]
+    else:
+        cell_data["thinning"] = 1.0 / np.cos(shear)
+
+    # A net without a valid cell still shows its placed nodes, as vertex cells without cell
+    # data: a file with an empty quad block, or with no cells, is one meshio cannot read back.
+    has_cells = len(quads) > 0
+    vertices = np.arange(len(node_i)).reshape(-1, 1)
+    mesh = meshio.Mesh(
+        points=np.asarray(result.nodes, dtype=float)[placed],
+        cells=[("quad", quads)] if has_cells else [("vertex", vertices)],
+        point_data={
+            "i": node_i.astype(np.int32),
+            "j": node_j.astype(np.int32),
+            "residual": np.nan_to_num(np.asarray(result.residual, dtype=float)[placed]),
+        },
+        cell_data={name: [values] for name, values in cell_data.items()} if has_cells else {},
+    )
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")

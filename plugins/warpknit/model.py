@@ -1,0 +1,245 @@
+"""The library entry of a warp-knitted (stitch-bonded, NCF) fabric: ``architecture: warp_knit``.
+
+Fields keep the datasheet units named in them (mm, tex, deg, needles per inch) so an entry
+round-trips to the same YAML; ``geometry()`` converts to SI once. Optional fields default to
+None (not to their meaning) so that ``model_dump(exclude_none=True)`` gives back what was
+written.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from preform.geometry.fibres import FIBRES, fibre
+from preform.geometry.unit_cell import UnitCell
+from preform.material import FabricBase, Location
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from .geometry import ThreadLevel, TowLayer, TowType, WarpKnitGeometry
+from .lapping import LappingSyntaxError, parse_lapping
+
+MM = 1e-3
+#: Relative gap between the derived and the datasheet areal density that ``check`` reports.
+AREAL_DENSITY_WARNING = 0.05
+
+
+def _known_fibre(name: str) -> str:
+    if name not in FIBRES:
+        raise ValueError(f"unknown fibre {name!r}; known fibres: {', '.join(sorted(FIBRES))}")
+    return name
+
+
+class _Part(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class TowLayerEntry(_Part):
+    """One layer of parallel, non-interlacing reinforcement tows."""
+
+    orientation_deg: float = Field(
+        ge=-180.0,
+        le=180.0,
+        description="Tow direction [deg] from the stitch (machine) direction towards the "
+        "cross direction, e.g. 0, 90, +45, -45.",
+    )
+    spacing_mm: float = Field(
+        gt=0.0,
+        description="Centre-to-centre distance between neighbouring tows, normal to them [mm].",
+    )
+    fibre: str = Field(description="Fibre of the tows: one of preform's known fibres (glass, ...).")
+    linear_density_tex: float = Field(gt=0.0, description="Linear density of one tow [tex = g/km].")
+    tow_width_mm: float = Field(gt=0.0, description="Tow width in the fabric plane [mm].")
+    tow_height_mm: float = Field(gt=0.0, description="Tow height (thickness) [mm].")
+    offset_mm: float | None = Field(
+        default=None,
+        description="Normal distance of the first tow's centreline from the cell origin [mm] "
+        "(default 0); moves the tows against the needles.",
+    )
+
+    _fibre_known = field_validator("fibre")(_known_fibre)
+
+
+class ThreadLevelEntry(_Part):
+    """One level of stitching threads, knitted by one guide bar."""
+
+    knitting_sequence: str = Field(
+        description="Lapping notation of the guide bar, course by course: '1-0/0-1' pillar "
+        "(chain), '1-0/1-2' tricot, '1-0/2-3' cord, '1-0/3-4' satin; may end in '/' or '//'.",
+    )
+    overlap_length_mm: float = Field(
+        gt=0.0,
+        description="Thread length of one loop (overlap), from leaving the underlap plane "
+        "through the stack, round the needle and back [mm].",
+    )
+    stitch_length_mm: float = Field(
+        gt=0.0, description="Course spacing (stitch length) along the machine direction [mm]."
+    )
+    gauge_needles_per_inch: float | None = Field(
+        default=None,
+        gt=0.0,
+        description="Machine gauge E [needles per inch]; the needle distance is 25.4 mm / E. "
+        "Give this, needle_distance_mm, or both (they must agree).",
+    )
+    needle_distance_mm: float | None = Field(
+        default=None, gt=0.0, description="Distance between adjacent needles D [mm]."
+    )
+    empty_guides: int | None = Field(
+        default=None,
+        ge=0,
+        description="Empty guides between two loaded guides (default 0: fully threaded).",
+    )
+    linear_density_tex: float = Field(
+        gt=0.0, description="Linear density of the stitching yarn [tex = g/km] (76 dtex = 7.6 tex)."
+    )
+    fibre: str | None = Field(
+        default=None, description="Fibre of the stitching yarn (default polyester)."
+    )
+
+    @field_validator("knitting_sequence")
+    @classmethod
+    def _sequence_parses(cls, text: str) -> str:
+        try:
+            parse_lapping(text)
+        except LappingSyntaxError as err:
+            raise ValueError(
+                f"{err.message} at character {err.position + 1}\n{err.caret_diagram()}"
+            ) from None
+        return text
+
+    @field_validator("fibre")
+    @classmethod
+    def _fibre_known(cls, name: str | None) -> str | None:
+        return None if name is None else _known_fibre(name)
+
+
+PlacementEntry = Annotated[int, Field(ge=0)]
+
+
+class WarpKnitFabric(FabricBase):
+    """A warp-knitted / stitch-bonded (non-crimp) fabric: tow layers held by stitching threads
+    (PHYSICS §1.2). The stitch (machine) direction is the reference for signed shear."""
+
+    architecture: Literal["warp_knit"] = Field(
+        description="Warp-knitted / stitch-bonded (NCF) fabric."
+    )
+    tow_layers: tuple[TowLayerEntry, ...] = Field(
+        description="Tow layers from the technical face (loop side) to the back."
+    )
+    threads: tuple[ThreadLevelEntry, ...] = Field(
+        description="Thread levels, one per guide bar, numbered from 1; their underlaps stack "
+        "in this order from the face towards the back.",
+    )
+    placement: tuple[tuple[PlacementEntry, ...], ...] | None = Field(
+        default=None,
+        description="Placement matrix: one row per tow layer giving, for its tows in order "
+        "across the cell, the thread level (from 1) of the first underlap above the tow; a row "
+        "shorter than the layer repeats. 0 means no underlap above. Default: every tow under "
+        "thread level 1.",
+    )
+    nominal_areal_density_g_m2: float | None = Field(
+        default=None,
+        gt=0.0,
+        description="Datasheet areal density including the stitch yarn [g/m²], checked against "
+        "the derived value.",
+    )
+
+    # -- conversion -------------------------------------------------------------------------
+    @cached_property
+    def geometry(self) -> WarpKnitGeometry:
+        """The fabric as the SI geometric model."""
+        layers = tuple(
+            TowLayer(
+                orientation_deg=t.orientation_deg,
+                spacing=t.spacing_mm * MM,
+                tow=TowType(
+                    fibre=t.fibre,
+                    linear_density_tex=t.linear_density_tex,
+                    width=t.tow_width_mm * MM,
+                    height=t.tow_height_mm * MM,
+                ),
+                offset=(t.offset_mm or 0.0) * MM,
+            )
+            for t in self.tow_layers
+        )
+        levels = tuple(
+            ThreadLevel(
+                sequence=parse_lapping(t.knitting_sequence),
+                overlap_length=t.overlap_length_mm * MM,
+                stitch_length=t.stitch_length_mm * MM,
+                linear_density_tex=t.linear_density_tex,
+                needle_distance=None if t.needle_distance_mm is None else t.needle_distance_mm * MM,
+                gauge_needles_per_inch=t.gauge_needles_per_inch,
+                empty_guides=t.empty_guides or 0,
+                fibre=t.fibre or "polyester",
+            )
+            for t in self.threads
+        )
+        return WarpKnitGeometry(tow_layers=layers, thread_levels=levels, placement=self.placement)
+
+    # -- FabricBase hooks -------------------------------------------------------------------
+    def unit_cell(self) -> UnitCell:
+        """The repeating cell in metres (x = stitch direction); raises ValueError on an entry
+        with errors."""
+        problems = self.errors()
+        if problems:
+            loc, message = problems[0]
+            raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
+        return self.geometry.unit_cell()
+
+    def derived(self) -> dict[str, Any]:
+        """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow
+        fibre volume fractions [-] (elliptical tow section) and each level's stitch."""
+        if self.errors():
+            return {"stitch_direction_deg": 0.0}
+        geo = self.geometry
+        layers = [t.areal_density_g_m2 for t in geo.tow_layers]
+        stitch = [geo.stitch_areal_density_g_m2(k) for k in range(len(geo.thread_levels))]
+        length, width = geo.cell_fit.size
+        return {
+            "areal_density_g_m2": sum(layers) + sum(stitch),
+            "areal_density_layers_g_m2": layers,
+            "areal_density_stitch_g_m2": sum(stitch),
+            "areal_density_stitch_levels_g_m2": stitch,
+            "stitch_direction_deg": self.reference_direction_deg(),
+            "stitch": [t.sequence.describe() for t in geo.thread_levels],
+            "needle_distance_mm": [t.needle_pitch / MM for t in geo.thread_levels],
+            "thickness_mm": geo.thickness / MM,
+            "unit_cell_mm": [length / MM, width / MM],
+            "tow_fibre_volume_fraction_layers": [
+                t.tow.linear_density_tex
+                / (1000.0 * fibre(t.tow.fibre).density_g_cm3)
+                * 1e-6
+                / (np.pi / 4.0 * t.tow.width * t.tow.height)
+                for t in geo.tow_layers
+            ],
+        }
+
+    def errors(self) -> list[tuple[Location, str]]:
+        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors."""
+        return self.geometry.problems()
+
+    def check(self) -> list[tuple[Location, str]]:
+        """Warnings: tows no stitch crosses, cells that fit poorly, wide overlaps, and a
+        derived areal density more than 5 % from the datasheet's."""
+        if self.errors():
+            return []
+        out = self.geometry.warnings()
+        if self.nominal_areal_density_g_m2 is not None:
+            derived = self.geometry.areal_density_g_m2()
+            nominal = self.nominal_areal_density_g_m2
+            if abs(derived / nominal - 1.0) > AREAL_DENSITY_WARNING:
+                out.append(
+                    (
+                        ("nominal_areal_density_g_m2",),
+                        f"the layers and stitch give {derived:.4g} g/m², "
+                        f"{100 * (derived / nominal - 1):+.1f} % from the datasheet's {nominal:g}",
+                    )
+                )
+        return out
+
+    def reference_direction_deg(self) -> float:
+        """The stitch (machine) direction, 0 deg: positive shear lengthens the fabric along the
+        stitch ("parallel" shear, stitch in tension)."""
+        return 0.0

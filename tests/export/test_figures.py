@@ -1,0 +1,154 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
+from preform.export.fig_drape import fibre_lines, fibre_pattern_figure
+from preform.export.fig_unit_cell import refine_polyline, tow_ribbon, unit_cell_figure
+
+
+def assert_real_picture(pixels: np.ndarray, size_px: tuple[int, int], min_colours: int) -> None:
+    width, height = size_px
+    assert pixels.shape[:2] == (height, width)
+    rgb = pixels[..., :3]
+    assert rgb.var() > 1e-3, "image is (nearly) blank"
+    colours = np.unique((rgb * 255).round().astype(np.uint8).reshape(-1, 3), axis=0)
+    assert len(colours) > min_colours
+
+
+def test_unit_cell_figure_by_level(tmp_path, unit_cell, read_png):
+    path = tmp_path / "cell.png"
+    fig = unit_cell_figure(unit_cell, path, repeats=(2, 2), size_px=(640, 480))
+
+    assert_real_picture(read_png(path), (640, 480), min_colours=50)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == ["level 1 (warp)", "level 2 (weft)", "level 3 (stitch)"]
+    # 2 × 2 repeats; long segments are split to about a tow width for depth sorting.
+    quads = sum(len(tow_ribbon(t, max_segment=t.width)) for t in unit_cell.tows)
+    assert quads > 4 * 16 + 2
+    assert len(fig.axes[0].collections[0].get_paths()) == 4 * quads
+    assert "drawn ×" in fig.axes[0].get_zlabel()  # 0.8 mm thick over 16 mm: exaggerated
+
+
+def test_unit_cell_figure_by_type_uses_level_names_and_types(tmp_path, unit_cell, read_png):
+    path = tmp_path / "cell_types.png"
+    fig = unit_cell_figure(unit_cell, path, colour_by="type", size_px=(500, 400), title="PW")
+    assert_real_picture(read_png(path), (500, 400), min_colours=50)
+    labels = {t.get_text() for t in fig.axes[0].get_legend().get_texts()}
+    assert labels == {"glass 600 tex", "glass 1200 tex", "polyester"}
+    with pytest.raises(ValueError, match="colour_by"):
+        unit_cell_figure(unit_cell, tmp_path / "x.png", colour_by="colour")
+
+
+def test_refined_ribbon_keeps_the_path(unit_cell):
+    stitch = unit_cell.tows[-1]
+    fine = refine_polyline(stitch.points, 1e-3)
+    assert np.max(np.linalg.norm(np.diff(fine, axis=0), axis=1)) <= 1e-3 + 1e-15
+    assert len(fine) == 1 + 1 + 9  # 0.8 mm leg stays whole, 8.9 mm leg in 9 pieces
+    np.testing.assert_allclose(fine[[0, 1, -1]], stitch.points)
+    ribbon = tow_ribbon(stitch, max_segment=1e-3)
+    assert ribbon.shape == (len(fine) - 1, 4, 3)
+
+
+def test_ribbon_is_a_flat_strip_of_the_tow_width(unit_cell):
+    warp = unit_cell.tows[0]
+    quads = tow_ribbon(warp)
+    assert quads.shape == (len(warp.points) - 1, 4, 3)
+    across = quads[:, 0] - quads[:, 3]  # left minus right at each segment start
+    np.testing.assert_allclose(np.linalg.norm(across, axis=1), warp.width)
+    np.testing.assert_allclose(across[:, 2], 0.0, atol=1e-15)  # in the fabric plane
+    # The stitch's vertical first leg borrows the next in-plane direction: no NaN, right width.
+    stitch = tow_ribbon(unit_cell.tows[-1])
+    assert np.all(np.isfinite(stitch))
+    np.testing.assert_allclose(np.linalg.norm(stitch[:, 0] - stitch[:, 3], axis=1), 0.3e-3)
+
+
+def test_fibre_pattern_figure(tmp_path, damaged_net, make_energy, read_png):
+    path = tmp_path / "pattern.png"
+    fig = fibre_pattern_figure(
+        damaged_net,
+        make_energy(damaged_net),
+        path,
+        title="dome",
+        tow_every=2,
+        size_px=(1200, 600),
+    )
+    assert_real_picture(read_png(path), (1200, 600), min_colours=100)
+
+    top, shear_view = fig.axes[0], fig.axes[1]
+    u_fibres = top.get_lines()[0].get_xydata()
+    # Lines of constant j through the start node (j0 = 6) every 2nd: j = 0, 2, ..., 10.
+    assert fibre_lines(damaged_net, "u", 2) == [0, 2, 4, 6, 8, 10]
+    assert fibre_lines(damaged_net, "v", 4) == [1, 5, 9]
+    assert len(u_fibres) == 6 * (10 + 1)
+    # The line j = 0 starts at unplaced node (0, 0): a break, then placed nodes in mm.
+    assert np.all(np.isnan(u_fibres[0]))
+    np.testing.assert_allclose(u_fibres[1], 1e3 * damaged_net.nodes[1, 0, :2])
+    # Node (9, 5) is unplaced but j = 5 is not drawn at tow_every=2; j = 4 is whole.
+    assert np.all(np.isfinite(u_fibres[2 * 11 : 2 * 11 + 10]))
+    assert len(shear_view.collections[0].get_paths()) == np.count_nonzero(damaged_net.valid)
+    colour_bar = fig.axes[2]
+    assert "deg" in colour_bar.get_ylabel()
+    low, high = colour_bar.get_ylim()
+    assert low == pytest.approx(-high)  # centred at zero
+
+
+def test_fibre_pattern_figure_without_energy_on_a_flat_net(tmp_path, make_net, read_png):
+    path = tmp_path / "flat.png"
+    fibre_pattern_figure(make_net(6, 6, generator_angle_deg=70.0), None, path, size_px=(800, 400))
+    assert_real_picture(read_png(path), (800, 400), min_colours=30)
+
+
+def _shear_curves() -> dict:
+    angle = np.linspace(0.0, 50.0, 26)
+    force_pos = 0.002 * angle + 1e-6 * angle**3
+    force_neg = 0.001 * angle + 5e-7 * angle**3
+    return {
+        "angle_deg": angle.tolist(),
+        "positive": {
+            "force_N_per_mm": force_pos,
+            "energy_J_per_m2": np.cumsum(force_pos) * 0.5,
+            "label": "parallel to stitch",
+        },
+        "negative": {"force_N_per_mm": -force_neg, "energy_J_per_m2": np.cumsum(force_neg) * 0.5},
+        "failure_angle_deg": 35.0,
+    }
+
+
+def test_shear_curve_figure(tmp_path, read_png):
+    path = tmp_path / "shear.png"
+    fig = shear_curve_figure(_shear_curves(), path, title="E-BX 318", size_px=(1000, 450))
+    assert_real_picture(read_png(path), (1000, 450), min_colours=30)
+    force_ax, energy_ax = fig.axes
+    labels = [t.get_text() for t in force_ax.get_legend().get_texts()]
+    assert labels == ["parallel to stitch", "negative shear (γ < 0)", "stitch failure"]
+    # Signed negative-sense forces are drawn as magnitudes.
+    assert np.all(force_ax.get_lines()[1].get_ydata() >= 0)
+    assert "N/mm" in force_ax.get_ylabel() and "J/m²" in energy_ax.get_ylabel()
+
+
+def test_shear_curve_figure_rejects_mismatched_lengths(tmp_path):
+    curves = _shear_curves()
+    curves["positive"]["force_N_per_mm"] = [1.0, 2.0]
+    with pytest.raises(ValueError, match=r"positive\.force_N_per_mm has 2 values"):
+        shear_curve_figure(curves, tmp_path / "bad.png")
+    assert not (tmp_path / "bad.png").exists()
+
+
+def test_energy_vs_angle_figure_marks_optima(tmp_path, read_png):
+    angles = np.arange(30.0, 151.0, 5.0)
+    curves = {
+        "E-BXhd 936": [(a, 2.0 + 1e-3 * (a - 75.0) ** 2) for a in angles],
+        "E-BX 318": [(a, 3.0 + 2e-3 * (a - 60.0) ** 2) for a in angles[::-1]]
+        + [(155.0, float("nan"))],
+    }
+    path = tmp_path / "energy.png"
+    fig = energy_vs_angle_figure(
+        curves, path, optima={"E-BXhd 936": 75.0, "E-BX 318": 60.0}, size_px=(700, 500)
+    )
+    assert_real_picture(read_png(path), (700, 500), min_colours=30)
+    stars = [line for line in fig.axes[0].get_lines() if line.get_marker() == "*"]
+    assert [tuple(s.get_xydata()[0]) for s in stars] == [(75.0, 2.0), (60.0, 3.0)]
+    # Sorted by angle, NaN dropped.
+    second = fig.axes[0].get_lines()[2].get_xydata()
+    assert np.all(np.diff(second[:, 0]) > 0) and np.all(np.isfinite(second))
