@@ -35,5 +35,8 @@ class Surface(Protocol):
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
         """The surface point seen from above at plan positions ``xy`` (n, 2) [m] (the topmost
-        one), and a mask of the positions that lie over the tool at all."""
+        one), and a mask of the positions that lie over the tool at all.
+
+        Where the mask is false the returned point is unspecified (NaN, or a point on the base
+        plane, depending on the surface): callers must use the mask, never the point."""
         ...
