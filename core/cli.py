@@ -280,6 +280,16 @@ def pipeline_run(libraries: tuple[str, ...], scenes: tuple[str, ...],
         sys.exit(1)
 
 
+def _add_physics_commands() -> None:
+    from preform.shear.commands import fit_command, shear_command
+
+    cli.add_command(shear_command, "shear")
+    cli.add_command(fit_command, "fit")
+
+
+_add_physics_commands()
+
+
 def build_cli() -> click.Group:
     """The command group with every plugin's commands added."""
     _host().register_commands(cli)

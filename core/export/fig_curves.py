@@ -26,6 +26,16 @@ def _series(values: Any, name: str, n: int) -> np.ndarray:
     return out
 
 
+def _columns(curves: Mapping[str, Any]) -> dict[str, Any]:
+    """Turn per-angle rows of a sense into the column form this module draws."""
+    out = dict(curves)
+    for sense in ("positive", "negative"):
+        rows = out.get(sense)
+        if isinstance(rows, list) and rows and isinstance(rows[0], Mapping):
+            out[sense] = {key: [row[key] for row in rows] for key in rows[0]}
+    return out
+
+
 def shear_curve_figure(
     curves: Mapping[str, Any],
     path: str | os.PathLike[str],
@@ -50,10 +60,13 @@ def shear_curve_figure(
             "failure_angle_deg": 35.0,       # optional, dashed vertical line (stitch failure)
         }
 
-    Either sense may be left out, and either quantity within a sense. Both senses are drawn
-    against |γ|, as the paper plots them. Left panel force, right panel energy. Returns the
-    figure (already saved).
+    Either sense may be left out, and either quantity within a sense. Each sense may also be
+    given as rows, as ``preform shear --json`` and the ``shear_curve`` step produce them:
+    ``"positive": [{"angle_deg": .., "force_N_per_mm": .., "energy_J_per_m2": ..}, ...]``.
+    Both senses are drawn against |γ|, as the paper plots them. Left panel force, right panel
+    energy. Returns the figure (already saved).
     """
+    curves = _columns(curves)
     fig = new_figure(size_px)
     force_ax, energy_ax = fig.subplots(1, 2)
     drawn = 0

@@ -55,7 +55,10 @@ def _angles_deg(ctx: CaseContext) -> Any:
 def run_shear_curve(ctx: CaseContext) -> dict[str, Any]:
     from preform.shear.commands import shear_curves
 
-    curves = shear_curves(ctx.products["shear_law"], np.radians(_angles_deg(ctx)))
+    law_block = ctx.fabric.shear_law or ctx.fabric.default_shear_law()
+    law_name = getattr(law_block, "law", None) or (law_block or {}).get("law", "")
+    curves = shear_curves(ctx.products["shear_law"], _angles_deg(ctx), ctx.fabric.name,
+                          str(law_name))
     return {"shear_curve": curves}
 
 
@@ -67,9 +70,9 @@ def write_shear_curve_json(ctx: CaseContext) -> dict[str, Any]:
 
 
 def write_shear_curve_png(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.fig_curves import shear_curve_figure
+    from preform.shear.commands import plot_shear_curves
 
-    shear_curve_figure(ctx.products["shear_curve"], ctx.case_dir / "shear_curve.png")
+    plot_shear_curves(ctx.products["shear_curve"], ctx.case_dir / "shear_curve.png")
     return {"shear_curve_png": "shear_curve.png"}
 
 

@@ -366,10 +366,46 @@ def run_cases(
                                      f"worker failed: {type(exc).__name__}: {exc}")
                 record(res)
     ordered = [results[c.case_id] for c in cases]
+    manifest["aggregates"] = _run_aggregates(cases, ordered, out_dir, host)
     manifest["finished"] = datetime.now(UTC).isoformat(timespec="seconds")
     write_json(out_dir / "manifest.json", manifest)
     _write_tables(out_dir, ordered)
     return RunReport(out_dir, ordered)
+
+
+def _run_aggregates(cases: Sequence[Case], results: Sequence[CaseResult], out_dir: Path,
+                    host: PluginHost) -> dict[str, Any]:
+    """Run-level outputs of steps that define ``aggregate``, once per scene."""
+    written: dict[str, Any] = {}
+    by_scene: dict[str, list[tuple[Case, CaseResult]]] = {}
+    for case, res in zip(cases, results, strict=True):
+        by_scene.setdefault(case.scene, []).append((case, res))
+    for scene_name, members in by_scene.items():
+        first = members[0][0]
+        try:
+            scene = scene_from_data(first.scene_data, first.scene_base_dir, host.registry)
+            steps = [s for s in plan(scene, host.registry) if s.aggregate is not None]
+        except Exception as exc:
+            written[scene_name] = {"error": f"{type(exc).__name__}: {exc}"}
+            continue
+        summaries = []
+        for case, res in members:
+            if res.status in ("ok", "skipped"):
+                try:
+                    summaries.append(json.loads((Path(case.case_dir) / "summary.json")
+                                                .read_text()))
+                except (OSError, ValueError):
+                    continue
+        folder = out_dir / _slug(scene_name)
+        for step in steps:
+            assert step.aggregate is not None
+            try:
+                files = step.aggregate(folder, summaries)
+                written.setdefault(scene_name, {})[step.name] = files
+            except Exception as exc:  # a run-level figure must not lose the run's results
+                written.setdefault(scene_name, {})[step.name] = {
+                    "error": f"{type(exc).__name__}: {exc}"}
+    return written
 
 
 def input_files_record(paths: Sequence[Path]) -> list[dict[str, str]]:

@@ -55,3 +55,8 @@ class Step:
     #: Extra requirements that depend on the scene (a module-level function of the scene),
     #: e.g. the drape needs the search's optimum when the scene searches.
     extra_requires: Callable[[Scene], tuple[str, ...]] | None = None
+    #: Run-level output (module-level function): called once per scene after all its cases,
+    #: with the scene's results folder and the summaries of its successful cases (each with
+    #: ``material`` and the case's scalar and list results); returns the files it wrote,
+    #: relative to the folder. E.g. one energy curve per fabric on one figure.
+    aggregate: Callable[[Path, list[Mapping[str, Any]]], list[str]] | None = None

@@ -28,7 +28,9 @@ def test_round_trip(entry):
     assert fabric.errors() == []
     assert fabric.check() == []
     assert "illustrative" in fabric.note.lower()
-    assert "shear_law" not in entry
+    # the illustrative shear law is in the entry and its provenance is in the note
+    assert entry["shear_law"]["law"] == "stitch_polynomial"
+    assert "shear law illustrative" in fabric.note.lower()
 
 
 @pytest.mark.parametrize("name", ["E-BXhd-936", "E-BX-318"])

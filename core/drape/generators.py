@@ -1,0 +1,328 @@
+"""Generator fibre paths: the two fibres through the start point that fix a pin-jointed net.
+
+A generator is built as half-lines from the start node, each carrying nodes at successive chord
+distance d (the net is inextensible between pins, so the chord, not the arc, is d). Three kinds:
+
+- geodesic: the straightest path on the tool. A surface may give it in closed form
+  (:class:`ClosedFormGeodesics`, e.g. great circles on a sphere); otherwise it is marched in
+  sub-steps h = d / substeps by straight continuation, x_{k+1} = closest(x_k + h·t_k) with t_k
+  the last chord direction. The second difference of a geodesic is along the surface normal,
+  which this continuation honours up to O(h³) per step, so the sideways drift is O(h²) over
+  the generator's length, not the O(d) drift of building a generator cell by cell.
+- plan: the tool surface above a straight line in plan.
+- a user polyline in plan (:class:`PlanPolylines`), likewise lifted onto the tool.
+
+Every function here is vectorised over the half-lines and loops only along them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from preform.drape.result import NodeStatus
+from preform.drape.surface import Surface
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+StatusArray = NDArray[np.int8]
+
+
+@runtime_checkable
+class ClosedFormGeodesics(Protocol):
+    """Optional surface method: generator nodes along geodesics in closed form."""
+
+    def geodesic_nodes(
+        self, start: FloatArray, direction: FloatArray, spacing: float, count: int
+    ) -> tuple[FloatArray, StatusArray]:
+        """``count`` nodes (m, count, 3) [m] along the geodesics leaving ``start`` (m, 3) in
+        tangent ``direction`` (m, 3), successive chords ``spacing`` [m] long, with NodeStatus
+        codes (m, count): PLACED, or OFF_TOOL where the geodesic has left the tool."""
+        ...
+
+
+@dataclass(frozen=True)
+class PlanPolylines:
+    """User generator paths in plan [m]: polylines (k ≥ 2, 2) for the first (+u) and second
+    (+v) fibre families, each running through the start point in its positive direction
+    (vertex order = +u / +v). Beyond their ends they are continued straight."""
+
+    first_xy_m: FloatArray
+    second_xy_m: FloatArray
+
+    def __init__(self, first_xy_m: ArrayLike, second_xy_m: ArrayLike) -> None:
+        for name, value in (("first_xy_m", first_xy_m), ("second_xy_m", second_xy_m)):
+            arr = np.asarray(value, dtype=float)
+            if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) < 2:
+                raise ValueError(f"{name} must be a (k >= 2, 2) plan polyline, got {arr.shape}")
+            object.__setattr__(self, name, arr)
+
+
+@dataclass(frozen=True)
+class GeneratorNodes:
+    """Nodes along m generator half-lines."""
+
+    #: Positions (m, count, 3) [m]; NaN where status != PLACED.
+    points: FloatArray
+    #: NodeStatus codes (m, count): PLACED, then OFF_TOOL once, then NOT_REACHED.
+    status: StatusArray
+    #: Residual (m, count) [m]: max of |chord − d| and the distance to the surface.
+    residual: FloatArray
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _unit(a: FloatArray) -> FloatArray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / np.sqrt(_dot(a, a))[..., None]
+
+
+def _finish(points: FloatArray, on_tool: BoolArray, residual: FloatArray) -> GeneratorNodes:
+    """Statuses along each half-line: the first node off the tool is OFF_TOOL, the rest of that
+    half-line NOT_REACHED (it hangs from a node that does not exist)."""
+    alive = np.logical_and.accumulate(on_tool, axis=1)
+    first_dead = ~alive & np.concatenate(
+        [np.ones((len(alive), 1), dtype=bool), alive[:, :-1]], axis=1
+    )
+    status = np.full(alive.shape, NodeStatus.NOT_REACHED, dtype=np.int8)
+    status[alive] = NodeStatus.PLACED
+    status[first_dead] = NodeStatus.OFF_TOOL
+    points = points.copy()
+    points[~alive] = np.nan
+    residual = np.where(alive, residual, 0.0)
+    return GeneratorNodes(points, status, residual)
+
+
+def _residual(
+    surface: Surface, points: FloatArray, start: FloatArray, spacing: float
+) -> FloatArray:
+    """|chord − d| to the previous node and distance to the surface, (m, count) [m]."""
+    m, count, _ = points.shape
+    prev = np.concatenate([np.broadcast_to(start, (m, 1, 3)), points[:, :-1]], axis=1)
+    chord = np.sqrt(_dot(points - prev, points - prev))
+    flat = points.reshape(-1, 3)
+    finite = np.isfinite(flat[:, 0])
+    dist = np.zeros(len(flat))
+    if finite.any():
+        dist[finite] = surface.closest_point(flat[finite])[1]
+    return np.maximum(np.abs(chord - spacing), dist.reshape(m, count))
+
+
+def geodesic_generators(
+    surface: Surface,
+    start: FloatArray,
+    directions: FloatArray,
+    spacing: float,
+    count: int,
+    *,
+    substeps: int = 16,
+    tolerance: float = 1e-9,
+    use_closed_form: bool = True,
+) -> GeneratorNodes:
+    """Nodes along geodesics from ``start`` (3,) [m] in unit tangent ``directions`` (m, 3).
+
+    ``count`` nodes per half-line at chord ``spacing`` [m]. The closed form of the surface is
+    used when it has one and ``use_closed_form``; otherwise the geodesic is marched in
+    ``substeps`` sub-steps per node spacing and each node is put at chord d from the previous
+    one to ``tolerance``·d.
+    """
+    m = len(directions)
+    starts = np.broadcast_to(start, (m, 3)).copy()
+    if count == 0:
+        return GeneratorNodes(np.zeros((m, 0, 3)), np.zeros((m, 0), np.int8), np.zeros((m, 0)))
+    if use_closed_form and isinstance(surface, ClosedFormGeodesics):
+        points, status = surface.geodesic_nodes(starts, directions, spacing, count)
+        on_tool = status == NodeStatus.PLACED
+        points = np.where(on_tool[..., None], points, np.nan)
+        return _finish(points, on_tool, _residual(surface, points, start, spacing))
+    return _march_geodesics(surface, starts, directions, spacing, count, substeps, tolerance)
+
+
+def _march_geodesics(
+    surface: Surface,
+    starts: FloatArray,
+    directions: FloatArray,
+    spacing: float,
+    count: int,
+    substeps: int,
+    tolerance: float,
+) -> GeneratorNodes:
+    m = len(starts)
+    h = spacing / max(int(substeps), 1)
+    points = np.full((m, count, 3), np.nan)
+    on_tool = np.zeros((m, count), dtype=bool)
+    found = np.zeros(m, dtype=int)
+    running = np.ones(m, dtype=bool)
+    x = starts.copy()
+    t = _unit(np.asarray(directions, dtype=float))
+    normal = surface.normal(starts)
+    last = starts.copy()
+    # A generator that keeps turning back (a closed geodesic shorter than d) must still stop.
+    for _ in range(4 * count * max(int(substeps), 1) + 16):
+        act = np.flatnonzero(running & (found < count))
+        if act.size == 0:
+            break
+        xa, ta, na = x[act], t[act], normal[act]
+        # Straight continuation, brought back to the tool along the normal at x_k (the
+        # discrete geodesic equation): projecting along the normal at the new point instead
+        # would leave an O(h³) sideways error per step, i.e. an O(h) drift overall.
+        ahead = xa + h * ta
+        foot, _ = surface.closest_point(ahead)
+        n_foot = surface.normal(foot)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = _dot(foot - ahead, n_foot) / _dot(na, n_foot)
+        x_new, dist = surface.closest_point(ahead + lam[:, None] * na)
+        step = x_new - xa
+        progress = _dot(step, ta)
+        # Past the edge the closest point sticks to the boundary: no progress, or far away.
+        off = ~np.isfinite(progress) | (progress < 0.5 * h) | (dist > 0.5 * h)
+        running[act[off]] = False
+        keep = ~off
+        act, xa, x_new, step = act[keep], xa[keep], x_new[keep], step[keep]
+        n_new = n_foot[keep]
+        w = xa - last[act]
+        reach = _dot(x_new - last[act], x_new - last[act]) >= spacing * spacing
+        if reach.any():
+            idx = act[reach]
+            s, wr = step[reach], w[reach]
+            ss, ws = _dot(s, s), _dot(wr, s)
+            tau = (-ws + np.sqrt(np.maximum(ws * ws - ss * (_dot(wr, wr) - spacing**2), 0))) / ss
+            node = xa[reach] + tau[:, None] * s
+            node = _slide_to_chord(surface, last[idx], node, spacing, tolerance)
+            points[idx, found[idx]] = node
+            on_tool[idx, found[idx]] = True
+            found[idx] += 1
+            last[idx] = node
+        x[act] = x_new
+        t[act] = _unit(step)
+        # The foot of the first projection is O(h³) from x_{k+1}: its normal serves there.
+        normal[act] = n_new
+    return _finish(points, on_tool, _residual(surface, points, starts[0], spacing))
+
+
+def _slide_to_chord(
+    surface: Surface, anchor: FloatArray, guess: FloatArray, spacing: float, tolerance: float
+) -> FloatArray:
+    """Move surface points ``guess`` to chord ``spacing`` from ``anchor`` keeping their
+    direction: alternate rescaling and projection (each round shrinks the error by ~(d/R)²)."""
+    node = guess
+    for _ in range(8):
+        node = anchor + spacing * _unit(node - anchor)
+        node, _ = surface.closest_point(node)
+        chord = np.sqrt(_dot(node - anchor, node - anchor))
+        if np.all(np.abs(chord - spacing) <= tolerance * spacing):
+            break
+    return node
+
+
+class _PlanPaths:
+    """m plan polylines starting at a common start, parametrised by plan arc length [m]."""
+
+    def __init__(self, polylines: list[FloatArray], reach: float) -> None:
+        self.arc: list[FloatArray] = []
+        self.xy: list[FloatArray] = []
+        for line in polylines:
+            # Continue the last segment far beyond the tool so np.interp never clamps.
+            tail = line[-1] - line[-2]
+            tail = tail / np.hypot(*tail)
+            line = np.vstack([line, line[-1] + reach * tail])
+            seg = np.hypot(*np.diff(line, axis=0).T)
+            keep = np.concatenate([[True], seg > 0])
+            line = line[keep]
+            self.xy.append(line)
+            self.arc.append(np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))]))
+
+    def at(self, rows: NDArray[np.intp], s: FloatArray) -> FloatArray:
+        out = np.empty((len(rows), 2))
+        for k, (row, sk) in enumerate(zip(rows, s, strict=True)):
+            out[k, 0] = np.interp(sk, self.arc[row], self.xy[row][:, 0])
+            out[k, 1] = np.interp(sk, self.arc[row], self.xy[row][:, 1])
+        return out
+
+
+def plan_generators(
+    surface: Surface,
+    start: FloatArray,
+    polylines: list[FloatArray],
+    spacing: float,
+    count: int,
+    *,
+    substeps: int = 16,
+    tolerance: float = 1e-9,
+) -> GeneratorNodes:
+    """Nodes along the tool surface above plan polylines (each (k, 2) [m], starting at the
+    start's plan position): successive chords ``spacing`` [m] to ``tolerance``·d.
+
+    Each node is bracketed by stepping d / ``substeps`` in plan arc length from the previous
+    one, then found by regula falsi (Illinois) on chord(s) − d. A plan position that is not
+    over the tool ends the half-line (OFF_TOOL).
+    """
+    m = len(polylines)
+    points = np.full((m, count, 3), np.nan)
+    on_tool = np.zeros((m, count), dtype=bool)
+    if count == 0:
+        return GeneratorNodes(points, on_tool.astype(np.int8), np.zeros((m, 0)))
+    (x0, y0, _), (x1, y1, _) = surface.bounds
+    reach = 4.0 * (np.hypot(x1 - x0, y1 - y0) + count * spacing)
+    paths = _PlanPaths(polylines, reach)
+    h = spacing / max(int(substeps), 1)
+    s_prev = np.zeros(m)
+    last = np.broadcast_to(start, (m, 3)).copy()
+    running = np.ones(m, dtype=bool)
+
+    def chord_at(rows: NDArray[np.intp], s: FloatArray) -> tuple[FloatArray, BoolArray]:
+        pts, mask = surface.point_at_plan(paths.at(rows, s))
+        with np.errstate(invalid="ignore"):
+            f = np.sqrt(_dot(pts - last[rows], pts - last[rows])) - spacing
+        return f, mask & np.isfinite(f)
+
+    for k in range(count):
+        rows = np.flatnonzero(running)
+        if rows.size == 0:
+            break
+        lo = s_prev[rows].copy()
+        f_lo = np.full(len(rows), -spacing)
+        hi = lo.copy()
+        f_hi = f_lo.copy()
+        bracketed = np.zeros(len(rows), dtype=bool)
+        alive = np.ones(len(rows), dtype=bool)
+        for _ in range(64 * max(int(substeps), 1)):
+            todo = np.flatnonzero(alive & ~bracketed)
+            if todo.size == 0:
+                break
+            lo[todo], f_lo[todo] = hi[todo], f_hi[todo]
+            hi[todo] = lo[todo] + h
+            f, ok = chord_at(rows[todo], hi[todo])
+            f_hi[todo] = f
+            alive[todo[~ok]] = False
+            bracketed[todo[ok & (f >= 0)]] = True
+        alive &= bracketed
+        running[rows[~alive]] = False
+        rows, lo, hi, f_lo, f_hi = rows[alive], lo[alive], hi[alive], f_lo[alive], f_hi[alive]
+        if rows.size == 0:
+            break
+        s = hi.copy()
+        side = np.zeros(len(rows), dtype=int)
+        for _ in range(100):
+            s = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+            f, _ok = chord_at(rows, s)
+            if np.all(np.abs(f) <= tolerance * spacing):
+                break
+            # Illinois: halve the stale end's value so the bracket shrinks from both sides.
+            right = f > 0
+            hi, f_hi = np.where(right, s, hi), np.where(right, f, f_hi)
+            lo, f_lo = np.where(right, lo, s), np.where(right, f_lo, f)
+            f_lo = np.where(right & (side == 1), 0.5 * f_lo, f_lo)
+            f_hi = np.where(~right & (side == -1), 0.5 * f_hi, f_hi)
+            side = np.where(right, 1, -1)
+        node, _mask = surface.point_at_plan(paths.at(rows, s))
+        points[rows, k] = node
+        on_tool[rows, k] = True
+        last[rows] = node
+        s_prev[rows] = s
+    return _finish(points, on_tool, _residual(surface, points, np.asarray(start), spacing))

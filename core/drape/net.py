@@ -1,0 +1,508 @@
+"""The kinematic drape engine: a pin-jointed net placed on a tool front by front.
+
+Mack & Taylor's net (PHYSICS §6): inextensible tows pinned at crossovers that turn freely.
+Two generator fibres through the start point fix it; node (i, j) is then the point on the tool
+at chord d from (i∓1, j) and (i, j∓1), on the far side from (i∓1, j∓1). A node depends only on
+nodes of the two previous anti-diagonals |i − i0| + |j − j0| = k − 1, k − 2, so every node of
+a front (all four quadrants stacked) is placed in one vectorised step:
+
+- in closed form when the surface offers it (:class:`ClosedFormPlacement`, e.g. the sphere);
+- otherwise on the circle where the two distance spheres meet: P(φ) = M + r(cos φ·a1 +
+  sin φ·a2), a1 the surface normal seen from the chord A→B, a2 pointing away from the opposite
+  node. Both distance constraints then hold exactly for every φ and only the signed distance
+  to the surface g(φ) is left: a few vectorised, damped Newton steps in φ solve it to
+  ``tolerance``·d.
+
+Every node ends with a :class:`~preform.drape.result.NodeStatus` and a residual; a node whose
+parent failed is NOT_REACHED, never a silent NaN.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from preform.drape.fields import cell_fields
+from preform.drape.generators import (
+    GeneratorNodes,
+    PlanPolylines,
+    geodesic_generators,
+    plan_generators,
+)
+from preform.drape.ply import PlyOutline
+from preform.drape.result import DrapeResult, NodeStatus
+from preform.drape.surface import Surface
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+StatusArray = NDArray[np.int8]
+
+_PLACED = np.int8(NodeStatus.PLACED)
+_NOT_REACHED = np.int8(NodeStatus.NOT_REACHED)
+
+
+class DrapeError(ValueError):
+    """A drape that cannot start: the set-up itself is wrong (start off the tool, bad angle)."""
+
+
+@runtime_checkable
+class ClosedFormPlacement(Protocol):
+    """Optional surface method: net nodes in closed form, vectorised over a front."""
+
+    def place_nodes(
+        self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
+    ) -> tuple[FloatArray, StatusArray]:
+        """Points (m, 3) [m] on the tool at chord ``spacing`` [m] from both ``a`` and ``b``
+        (m, 3), the root on the far side from ``opposite`` (m, 3); and NodeStatus codes (m,):
+        PLACED, NO_INTERSECTION (no such point), OFF_TOOL (it lies past the tool's edge)."""
+        ...
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("ij,ij->i", a, b)
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
+def _norm(a: FloatArray) -> FloatArray:
+    return np.sqrt(_dot(a, a))
+
+
+def _unit(a: FloatArray) -> FloatArray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / _norm(a)[:, None]
+
+
+# --------------------------------------------------------------------------------------------
+# One front, general surfaces
+
+
+def _solve_on_circle(
+    surface: Surface,
+    a: FloatArray,
+    b: FloatArray,
+    c: FloatArray,
+    spacing: float,
+    tolerance_m: float,
+    max_iterations: int,
+) -> tuple[FloatArray, StatusArray, int]:
+    """Nodes at chord ``spacing`` from a and b on the surface, away from c (see module doc).
+
+    Returns points (m, 3) (NaN where not placed), NodeStatus codes and the iterations used.
+    """
+    m = len(a)
+    points = np.full((m, 3), np.nan)
+    status = np.full(m, NodeStatus.NO_INTERSECTION, dtype=np.int8)
+    mid = 0.5 * (a + b)
+    chord = b - a
+    radius2 = spacing * spacing - 0.25 * _dot(chord, chord)
+    e = _unit(chord)
+    guess, _ = surface.closest_point(a + b - c)
+    n0 = surface.normal(guess)
+    a1 = _unit(n0 - _dot(n0, e)[:, None] * e)
+    a2 = _cross(e, a1)
+    a2 *= np.where(_dot(c - mid, a2) > 0, -1.0, 1.0)[:, None]
+    radius = np.sqrt(np.maximum(radius2, 0.0))
+    rel = guess - mid
+    phi = np.clip(np.arctan2(_dot(rel, a2), _dot(rel, a1)), 0.0, np.pi)
+    active = np.flatnonzero((radius2 > 0) & np.isfinite(a1[:, 0]) & np.isfinite(phi))
+    used = 0
+    for used in range(1, max_iterations + 1):  # the last value is reported
+        if active.size == 0:
+            break
+        p_act, r_act = phi[active], radius[active]
+        cos_p, sin_p = np.cos(p_act), np.sin(p_act)
+        x = mid[active] + r_act[:, None] * (
+            cos_p[:, None] * a1[active] + sin_p[:, None] * a2[active]
+        )
+        foot, dist = surface.closest_point(x)
+        n = surface.normal(foot)
+        offset = x - foot
+        g = _dot(offset, n)
+        done = dist <= tolerance_m
+        points[active[done]] = x[done]
+        status[active[done]] = NodeStatus.PLACED
+        slope = r_act * (-sin_p * _dot(n, a1[active]) + cos_p * _dot(n, a2[active]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.clip(-g / slope, -0.5, 0.5)
+        step = np.where(np.isfinite(step), step, 0.0)
+        new_phi = np.clip(p_act + step, 0.0, np.pi)
+        # A point whose closest point is an edge of the tool has an offset with a tangential
+        # part; an interior closest point has a purely normal one.
+        tangential = _norm(offset - g[:, None] * n) > 0.5 * dist
+        stuck = ~done & (np.abs(new_phi - p_act) <= 1e-15 * np.pi)
+        last_try = used == max_iterations
+        fail = ~done & (stuck | last_try)
+        status[active[fail & tangential]] = NodeStatus.OFF_TOOL
+        phi[active] = new_phi
+        active = active[~done & ~fail]
+    return points, status, used
+
+
+# --------------------------------------------------------------------------------------------
+# The start and the generators
+
+
+def _lift_to_tangent(direction_xy: FloatArray, normal: FloatArray) -> FloatArray | None:
+    """The unit tangent whose plan projection points along ``direction_xy`` (None if none)."""
+    dx, dy = direction_xy / np.hypot(*direction_xy)
+    if normal[2] > 1e-9:
+        t = np.array([dx, dy, -(normal[0] * dx + normal[1] * dy) / normal[2]])
+    elif abs(normal[0] * dx + normal[1] * dy) <= 1e-9:
+        # Vertical wall: only a horizontal tangent keeps its plan direction.
+        t = np.array([dx, dy, 0.0])
+    else:
+        return None
+    return np.asarray(t / np.linalg.norm(t), dtype=float)
+
+
+def _split_polyline(
+    line: FloatArray, at_xy: FloatArray, tol: float
+) -> tuple[FloatArray, FloatArray]:
+    """Forward and backward half-lines (both starting at ``at_xy``) of a plan polyline that
+    passes within ``tol`` [m] of ``at_xy``."""
+    seg0, seg1 = line[:-1], line[1:]
+    ext = seg1 - seg0
+    len2 = np.maximum(np.einsum("ij,ij->i", ext, ext), 1e-300)
+    t = np.clip(np.einsum("ij,ij->i", at_xy - seg0, ext) / len2, 0.0, 1.0)
+    foot = seg0 + t[:, None] * ext
+    dist = np.hypot(*(foot - at_xy).T)
+    k = int(np.argmin(dist))
+    if dist[k] > tol:
+        raise DrapeError(
+            f"the generator polyline passes {dist[k]:.3g} m from the start point; it must run "
+            "through it"
+        )
+    forward = np.vstack([at_xy, line[k + 1 :]])
+    backward = np.vstack([at_xy, line[: k + 1][::-1]])
+    if len(backward) == 2 and np.hypot(*(backward[1] - at_xy)) == 0.0:
+        backward = np.vstack([at_xy, at_xy - ext[k]])
+    if np.hypot(*(forward[-1] - at_xy)) == 0.0:
+        forward = np.vstack([at_xy, at_xy + ext[k]])
+    # Drop a leading vertex that coincides with the start.
+    forward = forward[np.r_[True, np.hypot(*(forward[1:] - at_xy).T) > 0]]
+    backward = backward[np.r_[True, np.hypot(*(backward[1:] - at_xy).T) > 0]]
+    return forward, backward
+
+
+def _generators(
+    surface: Surface,
+    start: FloatArray,
+    start_xy: FloatArray,
+    t_u: FloatArray,
+    t_v: FloatArray,
+    kind: str | PlanPolylines,
+    spacing: float,
+    counts: tuple[int, int, int, int],
+    substeps: int,
+    tolerance: float,
+    use_closed_form: bool,
+    polyline_halves: list[FloatArray] | None,
+) -> GeneratorNodes:
+    """Nodes on the four half-generators +u, −u, +v, −v."""
+    count = max(counts)
+    if kind == "geodesic":
+        directions = np.stack([t_u, -t_u, t_v, -t_v])
+        return geodesic_generators(
+            surface,
+            start,
+            directions,
+            spacing,
+            count,
+            substeps=substeps,
+            tolerance=tolerance,
+            use_closed_form=use_closed_form,
+        )
+    if kind == "plan":
+        lines = []
+        for t in (t_u, -t_u, t_v, -t_v):
+            if np.hypot(t[0], t[1]) <= 1e-9:
+                raise DrapeError(
+                    "a generator is vertical at the start point, so it has no plan direction; "
+                    "use geodesic generators"
+                )
+            lines.append(np.vstack([start_xy, start_xy + spacing * t[:2] / np.hypot(*t[:2])]))
+        return plan_generators(
+            surface, start, lines, spacing, count, substeps=substeps, tolerance=tolerance
+        )
+    assert polyline_halves is not None
+    return plan_generators(
+        surface, start, polyline_halves, spacing, count, substeps=substeps, tolerance=tolerance
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# The engine
+
+
+def drape(
+    surface: Surface,
+    *,
+    node_spacing_m: float,
+    ply: PlyOutline,
+    start_xy_m: ArrayLike | None = None,
+    start_point: ArrayLike | None = None,
+    orientation_rad: float | None = 0.0,
+    generator_angle_rad: float | None = 0.5 * np.pi,
+    generators: str | PlanPolylines = "geodesic",
+    trim: Callable[[FloatArray], BoolArray] | None = None,
+    tolerance: float = 1e-9,
+    max_iterations: int = 30,
+    substeps: int = 16,
+    use_closed_form: bool = True,
+) -> DrapeResult:
+    """Drape a ply over ``surface`` as a pin-jointed net.
+
+    Parameters
+    ----------
+    surface: the tool (any :class:`~preform.drape.surface.Surface`).
+    node_spacing_m: node spacing d [m], the chord between neighbouring crossovers.
+    ply: the ply outline in the flat; its origin is the start point, its axes the fibres.
+    start_xy_m: plan position (x, y) [m] of the start point, put on the tool's top with
+        ``point_at_plan``. Or ``start_point``: a 3-D point [m] already on the tool.
+    orientation_rad: plan direction [rad from the tool's x axis] of the first generator (+u)
+        at the start.
+    generator_angle_rad: angle α [rad] from +u to +v at the start, counter-clockwise seen from
+        the outward normal, in the tangent plane; 0 < α < π.
+    generators: "geodesic", "plan" (tool surface above straight plan lines), or
+        :class:`PlanPolylines` (then orientation and α follow from the polylines; pass None).
+    trim: predicate on cell centroids (n, 3) [m] giving the part (default: every valid cell).
+    tolerance: relative tolerance; every solve stops at ``tolerance``·d [m].
+    max_iterations: cap on Newton steps per front on surfaces without a closed form.
+    substeps: sub-steps per node spacing when marching generators.
+    use_closed_form: use the surface's closed forms when it has them.
+
+    Raises :class:`DrapeError` for a set-up that cannot give a net at all (start off the tool,
+    start outside the ply, α outside (0, π), d ≤ 0). Everything else, including a net that
+    runs off the tool, comes back as node statuses.
+    """
+    clock = time.perf_counter()
+    d = float(node_spacing_m)
+    if not (np.isfinite(d) and d > 0):
+        raise DrapeError(f"node spacing must be a positive length, got {node_spacing_m!r} m")
+    if not 0 < tolerance < 1e-2:
+        raise DrapeError(f"tolerance is relative to the node spacing; got {tolerance!r}")
+    tol_m = tolerance * d
+
+    # The start point.
+    if (start_xy_m is None) == (start_point is None):
+        raise DrapeError("give exactly one of start_xy_m (plan) and start_point (3-D)")
+    if start_xy_m is not None:
+        start_xy = np.asarray(start_xy_m, dtype=float).reshape(2)
+        pts, mask = surface.point_at_plan(start_xy[None, :])
+        if not bool(mask[0]) or not np.all(np.isfinite(pts[0])):
+            raise DrapeError(
+                f"the start point (x, y) = ({start_xy[0]:.6g}, {start_xy[1]:.6g}) m is not over "
+                f"the tool (bounds {surface.bounds} m)"
+            )
+        start = pts[0]
+    else:
+        point = np.asarray(start_point, dtype=float).reshape(1, 3)
+        foot, dist = surface.closest_point(point)
+        if not dist[0] <= max(1e-6 * surface.size, tol_m):
+            raise DrapeError(f"the start point is {dist[0]:.3g} m from the tool surface")
+        start = foot[0]
+        start_xy = start[:2].copy()
+    normal = surface.normal(start[None, :])[0]
+
+    # The generator directions at the start.
+    polyline_halves: list[FloatArray] | None = None
+    if isinstance(generators, PlanPolylines):
+        if orientation_rad is not None and generator_angle_rad is not None:
+            if (orientation_rad, generator_angle_rad) != (0.0, 0.5 * np.pi):
+                raise DrapeError("with PlanPolylines the polylines set orientation and angle")
+        fu, bu = _split_polyline(generators.first_xy_m, start_xy, 1e-6 * d)
+        fv, bv = _split_polyline(generators.second_xy_m, start_xy, 1e-6 * d)
+        polyline_halves = [fu, bu, fv, bv]
+        lifted_u = _lift_to_tangent(fu[1] - fu[0], normal)
+        lifted_v = _lift_to_tangent(fv[1] - fv[0], normal)
+        if lifted_u is None or lifted_v is None:
+            raise DrapeError("a generator polyline crosses a vertical wall at the start point")
+        t_u, t_v = lifted_u, lifted_v
+        alpha = float(np.arctan2(_cross(t_u[None], t_v[None])[0] @ normal, t_u @ t_v))
+        theta = float(np.arctan2(fu[1, 1] - fu[0, 1], fu[1, 0] - fu[0, 0]))
+        if not 0 < alpha < np.pi:
+            raise DrapeError(
+                f"the second generator polyline is {np.degrees(alpha):.3g}° from the first; it "
+                "must be counter-clockwise from it (seen from the outward normal), 0 < α < 180°"
+            )
+    elif generators in ("geodesic", "plan"):
+        if orientation_rad is None or generator_angle_rad is None:
+            raise DrapeError("orientation_rad and generator_angle_rad are required")
+        theta, alpha = float(orientation_rad), float(generator_angle_rad)
+        if not 0 < alpha < np.pi:
+            raise DrapeError(f"generator angle must lie in (0, π) rad, got {alpha!r}")
+        lifted = _lift_to_tangent(np.array([np.cos(theta), np.sin(theta)]), normal)
+        if lifted is None:
+            raise DrapeError(
+                "the tool is vertical at the start point and the orientation is not tangential "
+                "to it"
+            )
+        t_u = lifted
+        t_v = np.cos(alpha) * t_u + np.sin(alpha) * _cross(normal[None], t_u[None])[0]
+    else:
+        raise DrapeError(
+            f"generators must be 'geodesic', 'plan' or PlanPolylines, got {generators!r}"
+        )
+
+    # The grid and the ply.
+    try:
+        grid = ply.node_grid(d)
+    except ValueError as exc:
+        raise DrapeError(str(exc)) from exc
+    ni, nj = grid.shape
+    i0, j0 = grid.start_index
+    n_nodes = ni * nj
+    pos = np.full((n_nodes, 3), np.nan)
+    status = np.full(n_nodes, NodeStatus.NOT_REACHED, dtype=np.int8)
+    status[~grid.inside.ravel()] = NodeStatus.OUTSIDE_PLY
+    residual = np.zeros(n_nodes)
+    start_flat = i0 * nj + j0
+    pos[start_flat] = start
+    status[start_flat] = NodeStatus.PLACED
+    residual[start_flat] = float(surface.closest_point(start[None, :])[1][0])
+
+    # Generators: +u, −u, +v, −v.
+    counts = (ni - 1 - i0, i0, nj - 1 - j0, j0)
+    gen = _generators(
+        surface,
+        start,
+        start_xy,
+        t_u,
+        t_v,
+        generators,
+        d,
+        counts,
+        substeps,
+        tolerance,
+        use_closed_form,
+        polyline_halves,
+    )
+    steps = ((nj, 0), (-nj, 0), (1, 1), (-1, 1))
+    for row, (count, (stride, _)) in enumerate(zip(counts, steps, strict=True)):
+        if count == 0:
+            continue
+        flat = start_flat + stride * np.arange(1, count + 1)
+        gen_status = gen.status[row, :count].copy()
+        inside = status[flat] != NodeStatus.OUTSIDE_PLY
+        # A generator node outside the ply cuts the generator there like an edge of the tool.
+        alive = np.logical_and.accumulate((gen_status == _PLACED) & inside)
+        first_dead = ~alive & np.r_[True, alive[:-1]]
+        new = np.where(alive, _PLACED, _NOT_REACHED).astype(np.int8)
+        new[first_dead & (gen_status != _PLACED)] = NodeStatus.OFF_TOOL
+        new[~inside] = NodeStatus.OUTSIDE_PLY
+        status[flat] = new
+        pos[flat[alive]] = gen.points[row, :count][alive]
+        residual[flat[alive]] = gen.residual[row, :count][alive]
+
+    # The wavefronts.
+    closed_form = use_closed_form and isinstance(surface, ClosedFormPlacement)
+    (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
+    lo_bound = np.array([bx0, by0, bz0]) - tol_m
+    hi_bound = np.array([bx1, by1, bz1]) + tol_m
+    quadrants = [
+        (sa, sb, na, nb)
+        for sa, na in ((1, ni - 1 - i0), (-1, i0))
+        for sb, nb in ((1, nj - 1 - j0), (-1, j0))
+        if na > 0 and nb > 0
+    ]
+    last_front = max((na + nb for _, _, na, nb in quadrants), default=1)
+    newton_iterations = 0
+    fronts = 0
+    # Node (i0 + sa·a, j0 + sb·b) with a + b = k has flat index
+    # i0·nj + j0 + sb·k + a·(sa·nj − sb): each quadrant's part of a front is an arithmetic run.
+    q_sa = np.array([q[0] for q in quadrants], dtype=np.int64)
+    q_sb = np.array([q[1] for q in quadrants], dtype=np.int64)
+    q_na = np.array([q[2] for q in quadrants], dtype=np.int64)
+    q_nb = np.array([q[3] for q in quadrants], dtype=np.int64)
+    q_step = q_sa * nj - q_sb
+    for k in range(2, last_front + 1):
+        a_lo = np.maximum(1, k - q_nb)
+        lens = np.maximum(np.minimum(q_na, k - 1) - a_lo + 1, 0)
+        total = int(lens.sum())
+        first = np.cumsum(lens) - lens
+        a_off = np.arange(total) + np.repeat(a_lo - first, lens)
+        node = np.repeat(start_flat + q_sb * k, lens) + a_off * np.repeat(q_step, lens)
+        da, db = np.repeat(q_sa * nj, lens), np.repeat(q_sb, lens)
+        ia, ib = node - da, node - db
+        ic = ia - db
+        ready = (
+            (status[node] == _NOT_REACHED)
+            & (status[ia] == _PLACED)
+            & (status[ib] == _PLACED)
+            & (status[ic] == _PLACED)
+        )
+        if not ready.any():
+            if k > 2:
+                # Every node of front k has a parent in front k − 1 off the generators.
+                break
+            continue
+        fronts += 1
+        node, ia, ib, ic = node[ready], ia[ready], ib[ready], ic[ready]
+        orient = np.sign(da[ready]) * db[ready]
+        a, b, c = pos[ia], pos[ib], pos[ic]
+        if closed_form:
+            p, st = surface.place_nodes(a, b, c, d)
+            st = np.asarray(st, dtype=np.int8).copy()
+        else:
+            p, st, used = _solve_on_circle(surface, a, b, c, d, tol_m, max_iterations)
+            newton_iterations = max(newton_iterations, used)
+        ok = st == _PLACED
+        if ok.any():
+            p_ok = p[ok]
+            past = np.any((p_ok < lo_bound) | (p_ok > hi_bound), axis=1)
+            # The cell this node completes, oriented +u × +v whatever the quadrant.
+            cell_normal = orient[ok][:, None] * _cross(p_ok - c[ok], a[ok] - b[ok])
+            folded = _dot(cell_normal, surface.normal(p_ok)) <= 0
+            sub = st[ok]
+            sub[folded] = NodeStatus.FOLDED
+            sub[past] = NodeStatus.OFF_TOOL
+            st[ok] = sub
+            ok = st == _PLACED
+            p_ok = p[ok]
+            dist = surface.closest_point(p_ok)[1]
+            res = np.maximum.reduce(
+                [
+                    np.abs(_norm(p_ok - a[ok]) - d),
+                    np.abs(_norm(p_ok - b[ok]) - d),
+                    dist,
+                ]
+            )
+            pos[node[ok]] = p_ok
+            residual[node[ok]] = res
+        status[node] = st
+
+    nodes = pos.reshape(ni, nj, 3)
+    node_status = status.reshape(ni, nj)
+    fields = cell_fields(nodes, node_status, trim=trim)
+    placed = status == _PLACED
+    info: dict[str, object] = {
+        "placement": "closed form" if closed_form else "newton on the constraint circle",
+        "generators": generators if isinstance(generators, str) else "plan polylines",
+        "tolerance_m": tol_m,
+        "max_residual_m": float(residual[placed].max()) if placed.any() else 0.0,
+        "newton_iterations_max": newton_iterations,
+        "fronts": fronts,
+        "seconds": time.perf_counter() - clock,
+    }
+    return DrapeResult(
+        nodes=nodes,
+        status=node_status,
+        residual=residual.reshape(ni, nj),
+        start_index=(i0, j0),
+        node_spacing=d,
+        generator_angle=alpha,
+        orientation=theta,
+        info=info,
+        **fields,
+    )

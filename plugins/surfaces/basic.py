@@ -1,0 +1,340 @@
+"""Analytic tool surfaces: a flat plate, a sphere (and the upper hemisphere), a cylinder.
+
+Each implements the ``preform.drape.surface.Surface`` protocol vectorised over (n, 3) points.
+``Plane`` and ``Sphere``/``Hemisphere`` also offer the drape engine's optional closed forms
+(``place_nodes`` for a net node, ``geodesic_nodes`` for a generator), so draping them needs no
+iteration. Lengths in metres.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from preform.drape.result import NodeStatus
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+StatusArray = NDArray[np.int8]
+
+#: Points this fraction of the node spacing outside a trimmed surface still count as on it, so
+#: rounding never turns a node lying exactly on an edge (a hemisphere's rim) into OFF_TOOL.
+_EDGE_TOLERANCE = 1e-9
+
+
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    # Written out: np.cross has a large fixed cost on the small arrays of one wavefront.
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def _unit(a: FloatArray) -> FloatArray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / np.sqrt(_dot(a, a))[..., None]
+
+
+class Plane:
+    """A flat rectangular plate, horizontal, of plan size ``size_m`` = (Lx, Ly) [m] centred at
+    ``centre_m`` [m]; its outward normal is +z."""
+
+    def __init__(
+        self, size_m: tuple[float, float], *, centre_m: ArrayLike = (0.0, 0.0, 0.0)
+    ) -> None:
+        self.half = 0.5 * np.asarray(size_m, dtype=float)
+        if self.half.shape != (2,) or not np.all(self.half > 0):
+            raise ValueError(f"plane size must be two positive lengths, got {size_m!r} m")
+        self.centre = np.asarray(centre_m, dtype=float)
+        lo, hi = self.centre[:2] - self.half, self.centre[:2] + self.half
+        z = float(self.centre[2])
+        self.bounds = ((float(lo[0]), float(lo[1]), z), (float(hi[0]), float(hi[1]), z))
+        self.size = float(2.0 * np.hypot(*self.half))
+
+    def __repr__(self) -> str:
+        return f"Plane(size_m={tuple(2 * self.half)}, centre_m={tuple(self.centre)})"
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Closest points on the plate [m] and distances (n,) [m] to points (n, 3) [m]."""
+        p = np.asarray(points, dtype=float)
+        q = np.empty_like(p)
+        q[:, :2] = np.clip(p[:, :2], self.centre[:2] - self.half, self.centre[:2] + self.half)
+        q[:, 2] = self.centre[2]
+        return q, np.sqrt(_dot(p - q, p - q))
+
+    def normal(self, points: FloatArray) -> FloatArray:
+        """Unit outward normals (n, 3): +z everywhere."""
+        n = np.zeros((len(points), 3))
+        n[:, 2] = 1.0
+        return n
+
+    def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
+        """Plate points over plan positions (n, 2) [m], and which positions are over the plate."""
+        xy = np.asarray(xy, dtype=float)
+        mask = np.all(np.abs(xy - self.centre[:2]) <= self.half, axis=1)
+        pts = np.column_stack([xy, np.full(len(xy), self.centre[2])])
+        pts[~mask] = np.nan
+        return pts, mask
+
+    def _on_plate(self, p: FloatArray, spacing: float) -> BoolArray:
+        slack = _EDGE_TOLERANCE * spacing
+        return np.all(np.abs(p[..., :2] - self.centre[:2]) <= self.half + slack, axis=-1)
+
+    def place_nodes(
+        self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
+    ) -> tuple[FloatArray, StatusArray]:
+        """Net nodes (m, 3) [m] at distance ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the
+        side away from ``opposite``, with NodeStatus codes (m,)."""
+        mid = 0.5 * (a + b)
+        chord = b - a
+        half2 = 0.25 * _dot(chord, chord)
+        radius2 = spacing * spacing - half2
+        ok = radius2 > 0
+        e = _unit(chord)
+        side = _unit(np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))]))
+        away = np.where(_dot(opposite - mid, side) > 0, -1.0, 1.0)
+        p = mid + (away * np.sqrt(np.where(ok, radius2, 0.0)))[:, None] * side
+        p[:, 2] = self.centre[2]
+        status = np.where(ok, NodeStatus.PLACED, NodeStatus.NO_INTERSECTION).astype(np.int8)
+        status[ok & ~self._on_plate(p, spacing)] = NodeStatus.OFF_TOOL
+        p[status != NodeStatus.PLACED] = np.nan
+        return p, status
+
+    def geodesic_nodes(
+        self, start: FloatArray, direction: FloatArray, spacing: float, count: int
+    ) -> tuple[FloatArray, StatusArray]:
+        """``count`` nodes (m, count, 3) [m] along the straight lines from ``start`` (m, 3) in
+        ``direction`` (m, 3), spacing [m] apart, with NodeStatus codes (m, count)."""
+        t = direction.copy()
+        t[:, 2] = 0.0
+        t = _unit(t)
+        k = np.arange(1, count + 1, dtype=float)
+        p = start[:, None, :] + spacing * k[None, :, None] * t[:, None, :]
+        on = self._on_plate(p, spacing)
+        status = np.where(on, NodeStatus.PLACED, NodeStatus.OFF_TOOL).astype(np.int8)
+        return p, status
+
+
+class Sphere:
+    """A full sphere of radius ``radius_m`` [m] centred at ``centre_m`` [m]."""
+
+    def __init__(self, radius_m: float, *, centre_m: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+        self.radius = float(radius_m)
+        if not self.radius > 0:
+            raise ValueError(f"sphere radius must be positive, got {radius_m!r} m")
+        self.centre = np.asarray(centre_m, dtype=float)
+        self.bounds = self._bounds()
+        self.size = self.radius
+
+    def _bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        lo, hi = self.centre - self.radius, self.centre + self.radius
+        return (float(lo[0]), float(lo[1]), float(lo[2])), (
+            float(hi[0]),
+            float(hi[1]),
+            float(hi[2]),
+        )
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(radius_m={self.radius}, centre_m={tuple(self.centre)})"
+
+    def _radial(self, points: FloatArray) -> FloatArray:
+        """Unit directions from the centre; +z for the centre itself (any choice is closest)."""
+        rel = np.asarray(points, dtype=float) - self.centre
+        length = np.sqrt(_dot(rel, rel))
+        at_centre = length == 0
+        if at_centre.any():
+            rel[at_centre] = (0.0, 0.0, 1.0)
+            length[at_centre] = 1.0
+        rel /= length[:, None]
+        return rel
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Closest points on the sphere [m] and distances (n,) [m] to points (n, 3) [m]."""
+        p = np.asarray(points, dtype=float)
+        q = self.centre + self.radius * self._radial(p)
+        return q, np.sqrt(_dot(p - q, p - q))
+
+    def normal(self, points: FloatArray) -> FloatArray:
+        """Unit outward normals (n, 3) at sphere points (n, 3) [m]."""
+        return self._radial(points)
+
+    def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
+        """The top of the sphere over plan positions (n, 2) [m], and which lie over it."""
+        rel = np.asarray(xy, dtype=float) - self.centre[:2]
+        height2 = self.radius**2 - _dot(rel, rel)
+        mask = height2 >= 0
+        pts = np.column_stack([xy, self.centre[2] + np.sqrt(np.where(mask, height2, np.nan))])
+        pts[~mask] = np.nan
+        return pts, mask
+
+    def _on_tool(self, p: FloatArray, spacing: float) -> BoolArray:
+        """Where points of the (untrimmed) sphere belong to the tool: everywhere."""
+        return np.isfinite(p[..., 0])
+
+    def place_nodes(
+        self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
+    ) -> tuple[FloatArray, StatusArray]:
+        """Net nodes (m, 3) [m] at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the side
+        away from ``opposite``, with NodeStatus codes (m,).
+
+        Closed form (PHYSICS §6): relative to the centre, P·A = P·B = R² − d²/2 and |P| = R. P
+        lies in the plane spanned by A + B and n = A × B; the root on the far side of the
+        plane (0, A, B) from the opposite node is the new node.
+        """
+        r = self.radius
+        pa, pb, pc = a - self.centre, b - self.centre, opposite - self.centre
+        along = pa + pb
+        along_len = np.sqrt(_dot(along, along))
+        n = _cross(pa, pb)
+        n_len = np.sqrt(_dot(n, n))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            height = (2.0 * r * r - spacing * spacing) / along_len
+            off2 = r * r - height * height
+            ok = (off2 >= 0) & (n_len > 1e-12 * r * spacing)
+            away = np.where(_dot(pc, n) > 0, -1.0, 1.0)
+            p = (height / along_len)[:, None] * along + (
+                away * np.sqrt(np.where(ok, off2, 0.0)) / n_len
+            )[:, None] * n
+        p += self.centre
+        status = np.where(ok, NodeStatus.PLACED, NodeStatus.NO_INTERSECTION).astype(np.int8)
+        status[ok & ~self._on_tool(p, spacing)] = NodeStatus.OFF_TOOL
+        p[status != NodeStatus.PLACED] = np.nan
+        return p, status
+
+    def geodesic_nodes(
+        self, start: FloatArray, direction: FloatArray, spacing: float, count: int
+    ) -> tuple[FloatArray, StatusArray]:
+        """``count`` nodes (m, count, 3) [m] along the great circles from ``start`` (m, 3) in
+        tangent ``direction`` (m, 3), successive chords ``spacing`` [m], with NodeStatus codes
+        (m, count). A chord longer than the diameter leaves the tool at once: OFF_TOOL."""
+        r = self.radius
+        radial = self._radial(start)
+        t = _unit(direction - _dot(direction, radial)[:, None] * radial)
+        m = len(start)
+        if spacing > 2.0 * r:
+            return np.full((m, count, 3), np.nan), np.full(
+                (m, count), NodeStatus.OFF_TOOL, dtype=np.int8
+            )
+        step = 2.0 * np.arcsin(spacing / (2.0 * r))
+        theta = step * np.arange(1, count + 1)
+        p = self.centre + r * (
+            np.cos(theta)[None, :, None] * radial[:, None, :]
+            + np.sin(theta)[None, :, None] * t[:, None, :]
+        )
+        on = self._on_tool(p, spacing)
+        status = np.where(on, NodeStatus.PLACED, NodeStatus.OFF_TOOL).astype(np.int8)
+        p[~on] = np.nan
+        return p, status
+
+
+class Hemisphere(Sphere):
+    """The upper half (z ≥ centre z) of a sphere of radius ``radius_m`` [m] centred at
+    ``centre_m`` [m]: the classic drape test tool. Nodes below the rim are OFF_TOOL."""
+
+    def __init__(self, radius_m: float, *, centre_m: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+        super().__init__(radius_m, centre_m=centre_m)
+        (x0, y0, _), (x1, y1, z1) = self.bounds
+        self.bounds = ((x0, y0, float(self.centre[2])), (x1, y1, z1))
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Closest points on the hemisphere [m] (on the rim for points below it) and distances."""
+        p = np.asarray(points, dtype=float)
+        radial = self._radial(p)
+        below = radial[:, 2] < 0
+        if np.any(below):
+            flat = radial[below].copy()
+            flat[:, 2] = 0.0
+            length = np.sqrt(_dot(flat, flat))
+            flat = np.where(
+                length[:, None] > 0,
+                flat / np.where(length > 0, length, 1.0)[:, None],
+                np.array([1.0, 0.0, 0.0]),
+            )
+            radial[below] = flat
+        q = self.centre + self.radius * radial
+        return q, np.sqrt(_dot(p - q, p - q))
+
+    def _on_tool(self, p: FloatArray, spacing: float) -> BoolArray:
+        with np.errstate(invalid="ignore"):
+            return np.asarray(p[..., 2] >= self.centre[2] - _EDGE_TOLERANCE * spacing)
+
+
+class Cylinder:
+    """The lateral surface of a circular cylinder with a horizontal ``axis`` ("x" or "y"),
+    radius ``radius_m`` [m] and length ``length_m`` [m], centred at ``centre_m`` [m]."""
+
+    def __init__(
+        self,
+        radius_m: float,
+        length_m: float,
+        axis: Literal["x", "y"] = "x",
+        *,
+        centre_m: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> None:
+        if axis not in ("x", "y"):
+            # A vertical cylinder has no top seen from above, so point_at_plan is undefined.
+            raise ValueError(f"cylinder axis must be 'x' or 'y' (horizontal), got {axis!r}")
+        self.radius, self.length = float(radius_m), float(length_m)
+        if not (self.radius > 0 and self.length > 0):
+            raise ValueError("cylinder radius and length must be positive")
+        self.axis = axis
+        self._ax, self._across = (0, 1) if axis == "x" else (1, 0)
+        self.centre = np.asarray(centre_m, dtype=float)
+        lo = self.centre - self.radius
+        hi = self.centre + self.radius
+        lo[self._ax] = self.centre[self._ax] - 0.5 * self.length
+        hi[self._ax] = self.centre[self._ax] + 0.5 * self.length
+        self.bounds = (
+            (float(lo[0]), float(lo[1]), float(lo[2])),
+            (float(hi[0]), float(hi[1]), float(hi[2])),
+        )
+        self.size = float(np.hypot(2.0 * self.radius, self.length))
+
+    def __repr__(self) -> str:
+        return (
+            f"Cylinder(radius_m={self.radius}, length_m={self.length}, axis={self.axis!r}, "
+            f"centre_m={tuple(self.centre)})"
+        )
+
+    def _radial(self, p: FloatArray) -> FloatArray:
+        """Unit direction from the axis, in the cross-section plane (+z for points on it)."""
+        rel = p - self.centre
+        rel[:, self._ax] = 0.0
+        length = np.sqrt(_dot(rel, rel))
+        on_axis = length == 0
+        if on_axis.any():
+            rel[on_axis] = (0.0, 0.0, 1.0)
+            length[on_axis] = 1.0
+        rel /= length[:, None]
+        return rel
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Closest points on the lateral surface [m] and distances (n,) [m]."""
+        p = np.asarray(points, dtype=float)
+        q = self.centre + self.radius * self._radial(p)
+        half = 0.5 * self.length
+        c = self.centre[self._ax]
+        q[:, self._ax] = np.clip(p[:, self._ax], c - half, c + half)
+        return q, np.sqrt(_dot(p - q, p - q))
+
+    def normal(self, points: FloatArray) -> FloatArray:
+        """Unit outward (radial) normals (n, 3) at surface points (n, 3) [m]."""
+        return self._radial(np.asarray(points, dtype=float))
+
+    def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
+        """The top of the cylinder over plan positions (n, 2) [m], and which lie over it."""
+        xy = np.asarray(xy, dtype=float)
+        across = xy[:, self._across] - self.centre[self._across]
+        along = xy[:, self._ax] - self.centre[self._ax]
+        height2 = self.radius**2 - across**2
+        mask = (height2 >= 0) & (np.abs(along) <= 0.5 * self.length)
+        pts = np.column_stack([xy, self.centre[2] + np.sqrt(np.where(mask, height2, 0.0))])
+        pts[~mask] = np.nan
+        return pts, mask

@@ -1,0 +1,163 @@
+"""The ``tool:`` blocks a scene may hold, one pydantic model per surface, and their builders.
+
+Dimensions are millimetres in YAML (the unit is in every field name); builders return surfaces
+in metres. Mesh files are resolved against the scene file's directory, then against the bundled
+``preform/materials/tools``.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane
+from preform.plugins.surfaces.domes import Cone, EllipsoidDome, FlangedHemisphere, ParaboloidDome
+from preform.plugins.surfaces.mesh import TriangleMesh, read_obj, read_stl
+
+MM = 1e-3
+_STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class PlaneTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["plane"]
+    size_mm: tuple[float, float] = Field(
+        default=(1000.0, 1000.0), description="Plan size of the flat plate [mm] (x, y)."
+    )
+
+    @model_validator(mode="after")
+    def _positive(self) -> PlaneTool:
+        if min(self.size_mm) <= 0:
+            raise ValueError("size_mm must be two positive lengths")
+        return self
+
+
+class HemisphereTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["hemisphere"]
+    radius_mm: float = Field(gt=0, description="Sphere radius [mm]; pole at (0, 0, R).")
+    flange_half_width_mm: float | None = Field(
+        default=None,
+        gt=0,
+        description="If given, the hemisphere stands on a flat flange (z = 0) reaching this far "
+        "from the axis [mm]; otherwise the tool ends at the equator.",
+    )
+    fillet_radius_mm: float = Field(
+        default=0.0,
+        ge=0,
+        description="Radius of the concave fillet between hemisphere and flange [mm] (needs a "
+        "flange).",
+    )
+
+    @model_validator(mode="after")
+    def _flange(self) -> HemisphereTool:
+        if self.fillet_radius_mm > 0 and self.flange_half_width_mm is None:
+            raise ValueError("fillet_radius_mm needs flange_half_width_mm (a fillet joins the "
+                             "hemisphere to a flange)")
+        return self
+
+
+class CylinderTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["cylinder"]
+    radius_mm: float = Field(gt=0, description="Cylinder radius [mm].")
+    length_mm: float = Field(gt=0, description="Cylinder length [mm].")
+    axis: Literal["x", "y"] = Field(default="x", description="Horizontal axis direction.")
+
+
+class ConeTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["cone"]
+    base_radius_mm: float = Field(gt=0, description="Base radius [mm] (on z = 0).")
+    height_mm: float = Field(gt=0, description="Height [mm].")
+    top_radius_mm: float = Field(default=0.0, ge=0, description="Truncation radius [mm].")
+
+
+class EllipsoidTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["ellipsoid"]
+    semi_axes_mm: tuple[float, float, float] = Field(
+        description="Semi-axes (a, b, c) [mm] of the upper half-ellipsoid dome."
+    )
+
+
+class ParaboloidTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["paraboloid"]
+    radius_mm: float = Field(gt=0, description="Base radius R [mm].")
+    height_mm: float = Field(gt=0, description="Height h [mm]: z = h(1 − r²/R²).")
+
+
+class MeshTool(BaseModel):
+    model_config = _STRICT
+    surface: Literal["mesh"]
+    file: str = Field(description="STL or OBJ file, relative to the scene file (or bundled).")
+    units: Literal["mm", "m", "in"] = Field(default="mm", description="Length unit of the file.")
+
+
+_UNITS_TO_M = {"mm": 1e-3, "m": 1.0, "in": 0.0254}
+
+
+def build_plane(p: PlaneTool, base_dir: str) -> Plane:
+    return Plane((p.size_mm[0] * MM, p.size_mm[1] * MM))
+
+
+def build_hemisphere(p: HemisphereTool, base_dir: str) -> Hemisphere | FlangedHemisphere:
+    if p.flange_half_width_mm is None:
+        return Hemisphere(p.radius_mm * MM)
+    return FlangedHemisphere(p.radius_mm * MM, p.fillet_radius_mm * MM,
+                             p.flange_half_width_mm * MM)
+
+
+def build_cylinder(p: CylinderTool, base_dir: str) -> Cylinder:
+    return Cylinder(p.radius_mm * MM, p.length_mm * MM, p.axis)
+
+
+def build_cone(p: ConeTool, base_dir: str) -> Cone:
+    return Cone(p.base_radius_mm * MM, p.height_mm * MM, top_radius_m=p.top_radius_mm * MM)
+
+
+def build_ellipsoid(p: EllipsoidTool, base_dir: str) -> EllipsoidDome:
+    return EllipsoidDome(tuple(a * MM for a in p.semi_axes_mm))
+
+
+def build_paraboloid(p: ParaboloidTool, base_dir: str) -> ParaboloidDome:
+    return ParaboloidDome(p.radius_mm * MM, p.height_mm * MM)
+
+
+def resolve_tool_file(name: str, base_dir: str) -> Path:
+    """A tool mesh path: relative to the scene, else among the bundled tools."""
+    path = Path(name)
+    if not path.is_absolute():
+        local = Path(base_dir) / path
+        if local.exists():
+            return local
+        bundled = Path(str(resources.files("preform.materials") / "tools")) / path
+        if bundled.exists():
+            return bundled
+    if not path.exists():
+        raise FileNotFoundError(f"tool mesh {name!r} not found next to the scene ({base_dir}) "
+                                "nor among the bundled tools")
+    return path
+
+
+def build_mesh(p: MeshTool, base_dir: str) -> TriangleMesh:
+    path = resolve_tool_file(p.file, base_dir)
+    scale = _UNITS_TO_M[p.units]
+    if path.suffix.lower() == ".obj":
+        return read_obj(path, scale)
+    return read_stl(path, scale)
+
+
+SURFACES = [
+    ("plane", PlaneTool, build_plane),
+    ("hemisphere", HemisphereTool, build_hemisphere),
+    ("cylinder", CylinderTool, build_cylinder),
+    ("cone", ConeTool, build_cone),
+    ("ellipsoid", EllipsoidTool, build_ellipsoid),
+    ("paraboloid", ParaboloidTool, build_paraboloid),
+    ("mesh", MeshTool, build_mesh),
+]

@@ -1,0 +1,367 @@
+"""The woven ``friction_compaction`` shear law: crossover friction, then tow compaction [P].
+
+Paper (Souter, Long et al., Nottingham, "Mechanical model for fabric shear"), Eqns 1–5: each
+crossover resists rotation with the torque T = μ·F_c·R_eff, R_eff the mean distance from the
+centre of the parallelogram where the two tows touch; tow widths stay Tw0 until neighbouring tows
+meet at the locking angle γ_L = acos(Tw0/Ts), then follow Tw = Ts·cos γ; the contact force comes
+from the fabric pre-tension, plus, after lateral contact, a force from inter-tow compaction.
+Torque per unit area C(γ) = (crossovers per area)·T. The law is symmetric in γ.
+
+Modelling choices [C] (the paper does not pin these down; every one is a parameter):
+
+* Tow height h = fabric_thickness / levels (the paper calibrated the thickness, so it overrides
+  the nominal tow heights of the unit cell); tow cross-section lenticular, area (2/3)·Tw0·h,
+  which gives the as-woven tow fibre fraction V_f0 = A_f / ((2/3)·Tw0·h) unless given.
+* Pre-tension contact force, crimp interaction: ``pretension_N`` is the clamping-frame tension
+  across a fabric width ``pretension_width_mm``, shared by the tows of each family, so one tow
+  carries T = pretension·Ts/width. A lenticular tow path (two circular arcs) rising by the
+  crossing tow's height h over one crossing spacing Ts' turns by 2θ at a crossover with
+  tan(θ/2) = h/Ts', pressing the crossing tow with 2T·sin θ; the contact force is the mean of the
+  two families' values, F_pre = T_wp sin θ_wp + T_wt sin θ_wt.
+* Compaction: the bundle stress (``preform.plugins.woven.compaction``; V_f = V_f0·Tw0/Tw, onset
+  fraction V_o = V_f0 by default so the force starts at zero at locking) is integrated over the
+  tow contact area the paper names, the crossover parallelogram A = Tw_wp·Tw_wt/cos γ; the mean
+  of the two families' stresses is used. Past the cap fraction V_a(1 − ε) the stress continues
+  linearly: the torque grows steeply but stays finite; ``packing_angle`` reports where.
+* Angles are clamped to |γ| ≤ 90° − 1e-9 rad (the picture frame and the parallelogram are
+  singular at 90°).
+
+Our extension to twill, satin and 3D weaves [C, not from the paper], driven by the unit cell's
+``CrossoverGeometry``: the pre-tension presses tows together only where a tow changes side (an
+interlacing); a crossover inside a float keeps only ``float_contact_fraction`` of the crimp force.
+With f = interlacings / (2·crossovers) (1 for a plain weave, whose every crossover is flanked by
+two interlacings) the mean pre-tension contact force is F_pre·(f + κ(1 − f)). Compaction acts at
+every crossover; for 3D weaves crossovers_per_area counts every tow-on-tow contact of the stack
+and h = thickness / levels. For a plain weave the extension reduces exactly to the paper's model.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from pydantic import BaseModel, ConfigDict, Field
+
+from preform.plugins.woven.compaction import SQUARE_PACKING, BundleCompaction
+from preform.plugins.woven.crossover import CrossoverGeometry
+from preform.shear.energy import QuadratureBranch
+from preform.shear.law import ShearLaw
+from preform.shear.laws import SignedShearLaw
+
+FloatArray = NDArray[np.float64]
+
+#: Largest shear-angle magnitude [rad] the law evaluates; the crossover is singular at 90°.
+MAX_SHEAR = math.pi / 2 - 1e-9
+
+
+def _strip_edge_integral(distance: FloatArray, s_lo: FloatArray, s_hi: FloatArray) -> FloatArray:
+    """∫ r dA over the triangle (centre, edge) for an edge on a line at ``distance`` p from the
+    centre, running from s_lo to s_hi along the line (s from the foot of the perpendicular).
+
+    In polar coordinates about the centre, ∫∫ r·r dr dt = (p³/3)∫ sec³t dt, and with x = tan t,
+    ∫ sec³ = [x√(1+x²) + asinh x]/2.
+    """
+
+    def g(x: FloatArray) -> FloatArray:
+        return np.asarray(x * np.sqrt(1.0 + x * x) + np.arcsinh(x), dtype=float)
+
+    return np.asarray(distance**3 / 6.0 * (g(s_hi / distance) - g(s_lo / distance)), dtype=float)
+
+
+def contact_mean_radius(width_1: ArrayLike, width_2: ArrayLike, gamma: ArrayLike) -> FloatArray:
+    """R_eff [m]: mean distance from the centre over the crossover contact parallelogram.
+
+    Two straight tow strips of widths ``width_1``, ``width_2`` [m] crossing at 90° − γ (γ [rad])
+    overlap in a parallelogram of area w1·w2/cos γ. Closed form: the parallelogram is split into
+    the four triangles (centre, edge). For a square of side w it gives w(√2 + ln(1+√2))/6.
+    Broadcasts over all arguments.
+    """
+    w1 = np.asarray(width_1, dtype=float)
+    w2 = np.asarray(width_2, dtype=float)
+    g = np.clip(np.abs(np.asarray(gamma, dtype=float)), 0.0, MAX_SHEAR)
+    cos_g, sin_g = np.cos(g), np.sin(g)
+    # Edges along strip 1 lie at distance w1/2 and run between s = (w1 sin γ ± w2)/(2 cos γ);
+    # edges along strip 2 likewise with the roles swapped. Each pair appears twice (symmetry).
+    p1, p2 = 0.5 * w1, 0.5 * w2
+    along_1 = _strip_edge_integral(
+        p1, (w1 * sin_g - w2) / (2 * cos_g), (w1 * sin_g + w2) / (2 * cos_g)
+    )
+    along_2 = _strip_edge_integral(
+        p2, (w2 * sin_g - w1) / (2 * cos_g), (w2 * sin_g + w1) / (2 * cos_g)
+    )
+    area = w1 * w2 / cos_g
+    return np.asarray(2.0 * (along_1 + along_2) / area, dtype=float)
+
+
+def tow_width(gamma: ArrayLike, initial_width: float, spacing: float) -> FloatArray:
+    """Tow width Tw [m] at shear angle γ [rad] (paper Eqn 3): Tw0 up to γ_L, then Ts·cos γ."""
+    g = np.clip(np.abs(np.asarray(gamma, dtype=float)), 0.0, MAX_SHEAR)
+    return np.asarray(np.minimum(initial_width, spacing * np.cos(g)), dtype=float)
+
+
+def locking_angle(initial_width: float, spacing: float) -> float:
+    """γ_L = acos(Tw0/Ts) [rad] (paper Eqn 4): neighbouring tows meet. 0 if Tw0 ≥ Ts."""
+    return math.acos(min(1.0, initial_width / spacing))
+
+
+def crimp_angle(crossing_height: float, crossing_spacing: float) -> float:
+    """θ [rad] of a lenticular (two-arc) tow path over tows of height h at spacing Ts' [m]."""
+    return 2.0 * math.atan(crossing_height / crossing_spacing)
+
+
+class FrictionCompactionParams(BaseModel):
+    """Parameters of the woven ``friction_compaction`` law (YAML ``shear_law`` block)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    law: Literal["friction_compaction"] = Field(description="Selects this law.")
+    friction_coefficient: float = Field(
+        default=0.3, ge=0.0, description="Tow-on-tow friction coefficient μ at crossovers [-]."
+    )
+    pretension_N: float = Field(
+        ge=0.0,
+        description=(
+            "Clamping-frame pre-tension of the fabric [N] across pretension_width_mm, per "
+            "family; one tow carries pretension·Ts/width and presses the crossing tows through "
+            "its crimp [C]."
+        ),
+    )
+    fabric_thickness_mm: float = Field(
+        gt=0.0,
+        description="Fabric thickness [mm]; tow height = thickness / levels [C] (paper: fitted).",
+    )
+    pretension_width_mm: float = Field(
+        default=150.0,
+        gt=0.0,
+        description="Fabric width [mm] sharing pretension_N (the frame side) [C].",
+    )
+    tow_volume_fraction: float | None = Field(
+        default=None,
+        gt=0.0,
+        lt=1.0,
+        description=(
+            "As-woven fibre fraction V_f0 in a tow [-]; default A_f / ((2/3)·Tw0·h), a "
+            "lenticular section of height h [C]."
+        ),
+    )
+    onset_volume_fraction: float | None = Field(
+        default=None,
+        gt=0.0,
+        lt=1.0,
+        description="Gutowski V_o [-], the fraction where the fibres start to carry load; default V_f0 [C].",
+    )
+    max_volume_fraction: float = Field(
+        default=SQUARE_PACKING,
+        gt=0.0,
+        lt=1.0,
+        description="Gutowski V_a [-], maximum attainable fraction; default π/4 (square packing).",
+    )
+    fibre_wave_ratio: float = Field(
+        default=30.0,
+        gt=0.0,
+        description=(
+            "Gutowski β [-], span-to-height ratio of fibre waves, A_s = 3πE_f/β⁴. Default 30 [C]: "
+            "makes compaction stiffen the Table 1 fabrics within ~10° past locking, as the "
+            "paper's curves do; the carbon value 350 leaves it negligible at V_f0 ≈ 0.23."
+        ),
+    )
+    coupling_compliance_per_GPa: float = Field(
+        default=0.0,
+        ge=0.0,
+        description="Cai–Gutowski F_bl [1/GPa]; 0 reduces the bundle stress to Gutowski's [C].",
+    )
+    packing_margin: float = Field(
+        default=1e-2,
+        gt=0.0,
+        lt=0.5,
+        description="ε: V_f is followed exactly up to V_a(1−ε), linearly beyond (pole guard) [-].",
+    )
+    float_contact_fraction: float = Field(
+        default=0.25,
+        ge=0.0,
+        le=1.0,
+        description=(
+            "Share of the crimp contact force kept at a crossover inside a float (twill, satin, "
+            "3D; our extension, no effect on a plain weave) [-]."
+        ),
+    )
+
+
+class FrictionCompactionLaw(SignedShearLaw):
+    """Symmetric friction–compaction law of a woven fabric, built from its crossover geometry.
+
+    ``geometries``: one ``CrossoverGeometry`` (2D weave) or several (e.g. level pairs of a 3D
+    weave), whose torques add. Torque [N·m/m²], energy [J/m²], angles [rad]. Also offers the
+    intermediate quantities per crossover for inspection and tests.
+    """
+
+    def __init__(
+        self,
+        geometries: CrossoverGeometry | Sequence[CrossoverGeometry],
+        params: FrictionCompactionParams,
+    ) -> None:
+        self.geometries: tuple[CrossoverGeometry, ...] = (
+            (geometries,) if isinstance(geometries, CrossoverGeometry) else tuple(geometries)
+        )
+        if not self.geometries:
+            raise ValueError("need at least one crossover geometry")
+        self.params = params
+        self._parts = [_CrossoverPart(g, params) for g in self.geometries]
+        locks = [a for part in self._parts for a in part.locking_angles]
+        packs = [a for part in self._parts for a in part.packing_angles if a is not None]
+        #: Angle [rad] where the first tow family reaches the guarded packing cap, or None.
+        self.packing_angle: float | None = min(packs) if packs else None
+        branch = QuadratureBranch(self.torque_magnitude, breakpoints=[*locks, *packs])
+        super().__init__(branch, None, locking_angle=min(locks), failure_angle=None)
+
+    def torque_magnitude(self, u: FloatArray) -> FloatArray:
+        """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]."""
+        total = np.zeros(np.shape(u))
+        for part in self._parts:
+            total = total + part.torque_per_area(u)
+        return total
+
+    def contact_force(self, gamma: ArrayLike) -> FloatArray:
+        """Mean contact force per crossover F_c [N] of the first geometry."""
+        return self._parts[0].contact_force(np.asarray(gamma, dtype=float))
+
+    def effective_radius(self, gamma: ArrayLike) -> FloatArray:
+        """R_eff [m] of the first geometry's crossover at γ [rad]."""
+        return self._parts[0].effective_radius(np.asarray(gamma, dtype=float))
+
+
+class _CrossoverPart:
+    """The crossovers described by one ``CrossoverGeometry``, with SI quantities precomputed."""
+
+    def __init__(self, geometry: CrossoverGeometry, params: FrictionCompactionParams) -> None:
+        g = geometry
+        self.geometry = g
+        self.mu = params.friction_coefficient
+        height = params.fabric_thickness_mm * 1e-3 / max(g.levels, 1)
+        width = params.pretension_width_mm * 1e-3
+        tension_wp = params.pretension_N * g.tow_spacing_warp / width
+        tension_wt = params.pretension_N * g.tow_spacing_weft / width
+        crimp_force = tension_wp * math.sin(
+            crimp_angle(height, g.tow_spacing_weft)
+        ) + tension_wt * math.sin(crimp_angle(height, g.tow_spacing_warp))
+        share = min(1.0, max(0.0, g.interlacings_per_area / (2.0 * g.crossovers_per_area)))
+        kappa = params.float_contact_fraction
+        #: Pre-tension contact force per crossover [N].
+        self.pretension_force = crimp_force * (share + kappa * (1.0 - share))
+        self.locking_angles = (
+            locking_angle(g.tow_width_warp, g.tow_spacing_warp),
+            locking_angle(g.tow_width_weft, g.tow_spacing_weft),
+        )
+        self.bundles = tuple(
+            self._bundle(params, fibre_area, w0, height, g.fibre_modulus)
+            for fibre_area, w0 in (
+                (g.fibre_area_warp, g.tow_width_warp),
+                (g.fibre_area_weft, g.tow_width_weft),
+            )
+        )
+        self.packing_angles = tuple(
+            self._packing_angle(b, w0, ts)
+            for b, w0, ts in (
+                (self.bundles[0], g.tow_width_warp, g.tow_spacing_warp),
+                (self.bundles[1], g.tow_width_weft, g.tow_spacing_weft),
+            )
+        )
+
+    @staticmethod
+    def _bundle(
+        params: FrictionCompactionParams,
+        fibre_area: float,
+        initial_width: float,
+        height: float,
+        modulus: float,
+    ) -> BundleCompaction:
+        v0 = params.tow_volume_fraction or fibre_area / (2.0 / 3.0 * initial_width * height)
+        cap = params.max_volume_fraction * (1.0 - params.packing_margin)
+        if not v0 < cap:
+            raise ValueError(
+                f"as-woven tow fibre fraction {v0:.3f} (fibre area over a lenticular section of "
+                f"width {initial_width * 1e3:.3g} mm, height {height * 1e3:.3g} mm = thickness / "
+                f"levels) is not below the packing cap {cap:.3f}: raise fabric_thickness_mm or "
+                "give tow_volume_fraction"
+            )
+        return BundleCompaction(
+            fibre_modulus=modulus,
+            span_to_height=params.fibre_wave_ratio,
+            initial_fraction=v0,
+            onset_fraction=params.onset_volume_fraction or v0,
+            max_fraction=params.max_volume_fraction,
+            coupling_compliance=params.coupling_compliance_per_GPa * 1e-9,
+            packing_margin=params.packing_margin,
+        )
+
+    @staticmethod
+    def _packing_angle(bundle: BundleCompaction, initial_width: float, spacing: float) -> float:
+        # V_f = V_f0·Tw0/(Ts cos γ) reaches the cap when cos γ = V_f0·Tw0/(V_c·Ts).
+        ratio = bundle.initial_fraction * initial_width / (bundle.cap_fraction * spacing)
+        return math.acos(min(1.0, ratio))
+
+    def widths(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        g = self.geometry
+        return (
+            tow_width(u, g.tow_width_warp, g.tow_spacing_warp),
+            tow_width(u, g.tow_width_weft, g.tow_spacing_weft),
+        )
+
+    def effective_radius(self, u: FloatArray) -> FloatArray:
+        w_wp, w_wt = self.widths(u)
+        return contact_mean_radius(w_wp, w_wt, u)
+
+    def contact_force(self, u: FloatArray) -> FloatArray:
+        g = self.geometry
+        w_wp, w_wt = self.widths(u)
+        stress = 0.5 * (
+            self.bundles[0].stress(self.bundles[0].initial_fraction * g.tow_width_warp / w_wp)
+            + self.bundles[1].stress(self.bundles[1].initial_fraction * g.tow_width_weft / w_wt)
+        )
+        cos_g = np.cos(np.clip(np.abs(u), 0.0, MAX_SHEAR))
+        return np.asarray(self.pretension_force + stress * w_wp * w_wt / cos_g, dtype=float)
+
+    def torque_per_area(self, u: FloatArray) -> FloatArray:
+        crossover_torque = self.mu * self.contact_force(u) * self.effective_radius(u)
+        return np.asarray(self.geometry.crossovers_per_area * crossover_torque, dtype=float)
+
+
+def build_friction_compaction(params: FrictionCompactionParams, fabric: Any) -> SignedShearLaw:
+    """Build the law for a woven fabric entry offering ``crossover_geometry()``."""
+    return FrictionCompactionLaw(fabric.crossover_geometry(), params)
+
+
+def plain_weave_geometry(
+    tow_width_mm: float,
+    tow_spacing_mm: float,
+    linear_density_tex: float,
+    fibre_density_g_cm3: float = 2.55,
+    fibre_modulus_GPa: float = 72.0,
+    tow_height_mm: float = 0.5,
+) -> CrossoverGeometry:
+    """A balanced plain weave's ``CrossoverGeometry`` in SI, from datasheet units (for tests and
+    for the Table 1 fabrics without a full unit-cell model; glass defaults)."""
+    w, s = tow_width_mm * 1e-3, tow_spacing_mm * 1e-3
+    fibre_area = linear_density_tex / (1000.0 * fibre_density_g_cm3) * 1e-6
+    return CrossoverGeometry(
+        tow_width_warp=w,
+        tow_width_weft=w,
+        tow_spacing_warp=s,
+        tow_spacing_weft=s,
+        tow_height_warp=tow_height_mm * 1e-3,
+        tow_height_weft=tow_height_mm * 1e-3,
+        fibre_area_warp=fibre_area,
+        fibre_area_weft=fibre_area,
+        fibre_modulus=fibre_modulus_GPa * 1e9,
+        crossovers_per_area=1.0 / (s * s),
+        interlacings_per_area=2.0 / (s * s),
+    )
+
+
+#: (law name, params model, builder) for the registry.
+SHEAR_LAWS: list[tuple[str, type[BaseModel], Callable[[Any, Any], ShearLaw]]] = [
+    ("friction_compaction", FrictionCompactionParams, build_friction_compaction)
+]
