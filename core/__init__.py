@@ -7,11 +7,11 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-from preform.material import FabricBase, Location  # noqa: E402
-from preform.pipeline.step import CaseContext, Step  # noqa: E402
-from preform.plugin_manager import PluginHost, default_host, hookimpl  # noqa: E402
-from preform.registry import Registry, RegistrationError  # noqa: E402
-from preform.shear.law import ShearLaw, force_per_length_N_per_mm  # noqa: E402
+from preform.material import FabricBase, Location
+from preform.pipeline.step import CaseContext, Step
+from preform.plugin_manager import PluginHost, default_host, hookimpl
+from preform.registry import RegistrationError, Registry
+from preform.shear.law import ShearLaw, force_per_length_N_per_mm
 
 
 def load_library(*args: Any, **kwargs: Any) -> Any:
@@ -26,8 +26,8 @@ __all__ = [
     "FabricBase",
     "Location",
     "PluginHost",
-    "Registry",
     "RegistrationError",
+    "Registry",
     "ShearLaw",
     "Step",
     "__version__",

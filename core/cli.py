@@ -91,8 +91,12 @@ def materials_list(libraries: tuple[str, ...], as_json: bool) -> None:
     """The fabrics of the library."""
     lib = load_library_or_exit(libraries)
     rows = [
-        {"name": f.name, "architecture": f.architecture, "source": f.source,
-         "origin": str(lib.origins[f.name])}
+        {
+            "name": f.name,
+            "architecture": f.architecture,
+            "source": f.source,
+            "origin": str(lib.origins[f.name]),
+        }
         for f in lib
     ]
     if as_json:
@@ -164,17 +168,32 @@ def _repeats(_ctx: Any, _param: Any, value: str) -> tuple[int, int]:
 
 @cli.command()
 @click.argument("name")
-@click.option("--repeats", default="2x2", callback=_repeats, show_default=True,
-              help="Unit cells to draw along each direction, NxM.")
-@click.option("--out", "png", type=click.Path(), default=None,
-              help="PNG file (default NAME.png).")
-@click.option("--vtu", type=click.Path(), default=None,
-              help="Also write the tow paths as a VTK .vtu file for ParaView.")
-@click.option("--colour-by", type=click.Choice(["level", "type"]), default="level",
-              show_default=True)
+@click.option(
+    "--repeats",
+    default="2x2",
+    callback=_repeats,
+    show_default=True,
+    help="Unit cells to draw along each direction, NxM.",
+)
+@click.option("--out", "png", type=click.Path(), default=None, help="PNG file (default NAME.png).")
+@click.option(
+    "--vtu",
+    type=click.Path(),
+    default=None,
+    help="Also write the tow paths as a VTK .vtu file for ParaView.",
+)
+@click.option(
+    "--colour-by", type=click.Choice(["level", "type"]), default="level", show_default=True
+)
 @click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
-def view(name: str, repeats: tuple[int, int], png: str | None, vtu: str | None,
-         colour_by: str, libraries: tuple[str, ...]) -> None:
+def view(
+    name: str,
+    repeats: tuple[int, int],
+    png: str | None,
+    vtu: str | None,
+    colour_by: str,
+    libraries: tuple[str, ...],
+) -> None:
     """A 3D picture of a fabric's unit cell (tows as ribbons), and optionally a VTU file."""
     from preform.export.fig_unit_cell import unit_cell_figure
     from preform.export.vtu import write_unit_cell_vtu
@@ -214,28 +233,59 @@ def pipeline() -> None:
 
 @pipeline.command("run")
 @click.argument("libraries", nargs=-1, type=click.Path())
-@click.option("--scene", "scenes", multiple=True,
-              help="Scene file, or the name of a bundled scene (repeatable). Default: the "
-                   "bundled default scene.")
-@click.option("--materials", "materials_glob", default=None,
-              help="Only fabrics whose name matches this glob.")
-@click.option("--out", "out_dir", default="preform-results", type=click.Path(),
-              show_default=True, help="Results directory.")
-@click.option("--engine", type=click.Choice(["serial", "process", "dask"]), default="process",
-              show_default=True)
+@click.option(
+    "--scene",
+    "scenes",
+    multiple=True,
+    help="Scene file, or the name of a bundled scene (repeatable). Default: the "
+    "bundled default scene.",
+)
+@click.option(
+    "--materials", "materials_glob", default=None, help="Only fabrics whose name matches this glob."
+)
+@click.option(
+    "--out",
+    "out_dir",
+    default="preform-results",
+    type=click.Path(),
+    show_default=True,
+    help="Results directory.",
+)
+@click.option(
+    "--engine",
+    type=click.Choice(["serial", "process", "dask"]),
+    default="process",
+    show_default=True,
+)
 @click.option("--scheduler", default=None, help="Dask scheduler address (engine dask).")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="Worker processes (default: all cores).")
+@click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes (default: all cores).",
+)
 @click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
-def pipeline_run(libraries: tuple[str, ...], scenes: tuple[str, ...],
-                 materials_glob: str | None, out_dir: str, engine: str, scheduler: str | None,
-                 workers: int | None, force: bool, explain: bool) -> None:
+def pipeline_run(
+    libraries: tuple[str, ...],
+    scenes: tuple[str, ...],
+    materials_glob: str | None,
+    out_dir: str,
+    engine: str,
+    scheduler: str | None,
+    workers: int | None,
+    force: bool,
+    explain: bool,
+) -> None:
     """Run every (material, scene) case. LIBRARY paths replace the bundled library when given."""
     from preform.pipeline.planner import explain as explain_plan
     from preform.pipeline.runner import input_files_record, make_cases, run_cases
-    from preform.pipeline.scene import SceneError, default_scene_path, load_scene, \
-        resolve_scene_path
+    from preform.pipeline.scene import (
+        SceneError,
+        default_scene_path,
+        load_scene,
+        resolve_scene_path,
+    )
 
     host = _host()
     lib = load_library_or_exit(libraries, bundled=not libraries)
@@ -258,22 +308,36 @@ def pipeline_run(libraries: tuple[str, ...], scenes: tuple[str, ...],
     out = Path(out_dir)
     cases = make_cases(lib, loaded, out, host, materials_glob)
     if not cases:
-        _fail(["no (material, scene) case matches; check --materials and the scenes' "
-               "materials globs"], code=1)
-    inputs = {"libraries": input_files_record(lib.files),
-              "scenes": input_files_record(scene_paths)}
+        _fail(
+            [
+                "no (material, scene) case matches; check --materials and the scenes' "
+                "materials globs"
+            ],
+            code=1,
+        )
+    inputs = {"libraries": input_files_record(lib.files), "scenes": input_files_record(scene_paths)}
     from rich.progress import Progress
 
     with Progress(transient=False, disable=not sys.stderr.isatty()) as progress:
         task = progress.add_task("cases", total=len(cases))
-        report = run_cases(cases, out, host, engine=engine, workers=workers,
-                           scheduler=scheduler, force=force, inputs=inputs,
-                           on_done=lambda r: progress.advance(task))
+        report = run_cases(
+            cases,
+            out,
+            host,
+            engine=engine,
+            workers=workers,
+            scheduler=scheduler,
+            force=force,
+            inputs=inputs,
+            on_done=lambda r: progress.advance(task),
+        )
     counts: dict[str, int] = {}
     for r in report.results:
         counts[r.status] = counts.get(r.status, 0) + 1
-    click.echo(f"{len(report.results)} case(s) -> {out}/: "
-               + ", ".join(f"{n} {s}" for s, n in sorted(counts.items())))
+    click.echo(
+        f"{len(report.results)} case(s) -> {out}/: "
+        + ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
+    )
     for r in report.failed:
         click.echo(f"FAILED {r.case_id}: {r.error}", err=True)
     if report.failed:

@@ -126,7 +126,7 @@ def build_shear_law(fabric: FabricBase, registry: Registry) -> Any:
         )
     if isinstance(params, dict):
         params = registry.shear_law_type(str(params.get("law"))).params.model_validate(params)
-    law_type = registry.shear_law_type(getattr(params, "law"))
+    law_type = registry.shear_law_type(params.law)
     return law_type.build(params, fabric)
 
 
@@ -138,22 +138,43 @@ def validate_entry(
 
     def err(path: Location, message: str, shown: str | None = None) -> SourceError:
         line, column = doc.locate_value(base + path)
-        return SourceError(doc.file, line, column, shown or f"{label}.{format_path(path)}",
-                           message)
+        return SourceError(doc.file, line, column, shown or f"{label}.{format_path(path)}", message)
 
     if not isinstance(entry, dict):
-        return None, [err((), f"a fabric entry must be a mapping, got {type(entry).__name__}",
-                          label)], []
+        return (
+            None,
+            [err((), f"a fabric entry must be a mapping, got {type(entry).__name__}", label)],
+            [],
+        )
     tag = entry.get("architecture")
     known = registry.names("architectures")
     if tag is None:
-        return None, [err((), f"missing 'architecture'; registered architectures: "
-                              f"{', '.join(known) or 'none'}", label)], []
+        return (
+            None,
+            [
+                err(
+                    (),
+                    f"missing 'architecture'; registered architectures: "
+                    f"{', '.join(known) or 'none'}",
+                    label,
+                )
+            ],
+            [],
+        )
     if tag not in known:
         close = difflib.get_close_matches(str(tag), known, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        return None, [err(("architecture",), f"unknown architecture {tag!r}{hint}; "
-                          f"registered architectures: {', '.join(known) or 'none'}")], []
+        return (
+            None,
+            [
+                err(
+                    ("architecture",),
+                    f"unknown architecture {tag!r}{hint}; "
+                    f"registered architectures: {', '.join(known) or 'none'}",
+                )
+            ],
+            [],
+        )
     model = registry.architecture(tag)
     errors: list[SourceError] = []
     law_params: BaseModel | None = None
@@ -173,8 +194,11 @@ def validate_entry(
         consistency = fabric.errors()
         warns = list(fabric.check())
     except Exception as exc:  # a plugin bug must be reported, not crash the whole library
-        return None, [err((), f"architecture {tag!r} failed to check this entry: {exc!r}",
-                          label)], []
+        return (
+            None,
+            [err((), f"architecture {tag!r} failed to check this entry: {exc!r}", label)],
+            [],
+        )
     errors += [err(tuple(path), msg) for path, msg in consistency]
     if errors:
         return None, errors, []
@@ -185,20 +209,34 @@ def validate_entry(
 def _validate_law(
     doc: Document, base: Location, raw: Any, registry: Registry, label: str
 ) -> tuple[BaseModel | None, list[SourceError]]:
-    where = base + ("shear_law",)
+    where = (*base, "shear_law")
     line, column = doc.locate(where)
     if not isinstance(raw, dict):
-        return None, [SourceError(doc.file, line, column, f"{label}.shear_law",
-                                  "shear_law must be a mapping with a 'law' field")]
+        return None, [
+            SourceError(
+                doc.file,
+                line,
+                column,
+                f"{label}.shear_law",
+                "shear_law must be a mapping with a 'law' field",
+            )
+        ]
     known = registry.names("shear_laws")
     law = raw.get("law")
     if law not in known:
         close = difflib.get_close_matches(str(law), known, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         line, column = doc.locate(where + (("law",) if "law" in raw else ()))
-        return None, [SourceError(doc.file, line, column, f"{label}.shear_law.law",
-                                  f"unknown shear law {law!r}{hint}; registered shear laws: "
-                                  f"{', '.join(known) or 'none'}")]
+        return None, [
+            SourceError(
+                doc.file,
+                line,
+                column,
+                f"{label}.shear_law.law",
+                f"unknown shear law {law!r}{hint}; registered shear laws: "
+                f"{', '.join(known) or 'none'}",
+            )
+        ]
     params_model = registry.shear_law_type(str(law)).params
     try:
         return params_model.model_validate(raw), []
@@ -239,19 +277,23 @@ def validate_files(
                     warnings += warns
                     if fabric is None:
                         continue
-                    line, column = doc.locate_value(base + ("name",))
+                    line, column = doc.locate_value((*base, "name"))
                     origin = Origin(doc.file, line, column)
                     if fabric.name in seen:
-                        errors.append(SourceError(
-                            doc.file, line, column, f"{fabric.name}.name",
-                            f"duplicate fabric name {fabric.name!r}; first defined at "
-                            f"{seen[fabric.name]}; names must be unique across the library",
-                        ))
+                        errors.append(
+                            SourceError(
+                                doc.file,
+                                line,
+                                column,
+                                f"{fabric.name}.name",
+                                f"duplicate fabric name {fabric.name!r}; first defined at "
+                                f"{seen[fabric.name]}; names must be unique across the library",
+                            )
+                        )
                         continue
                     seen[fabric.name] = origin
                     for message in hooks(fabric):
-                        warnings.append(SourceError(doc.file, line, column, fabric.name,
-                                                    message))
+                        warnings.append(SourceError(doc.file, line, column, fabric.name, message))
                     fabrics.append((fabric, origin))
     return fabrics, errors, warnings
 

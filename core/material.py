@@ -10,13 +10,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-#: Where in an entry a problem is: a path of field names and list indices, e.g. ("weave", "matrix", 2).
-Location = tuple[str | int, ...]
-
 from pydantic import BaseModel, ConfigDict, Field
 
 if TYPE_CHECKING:
     from preform.geometry.unit_cell import UnitCell
+
+#: Where in an entry a problem is: a path of field names and list indices,
+#: e.g. ("weave", "matrix", 2).
+Location = tuple[str | int, ...]
 
 
 class FabricBase(BaseModel):

@@ -169,9 +169,7 @@ class PluginHost:
     # -- reading ------------------------------------------------------------------------------
     def plugin_modules(self) -> list[tuple[str, str]]:
         """(name, module) of every working plugin, for re-loading in worker processes."""
-        return [
-            (r.name, r.module) for r in self.records.values() if r.error is None and r.module
-        ]
+        return [(r.name, r.module) for r in self.records.values() if r.error is None and r.module]
 
     def register_commands(self, cli: Any) -> None:
         """Let each plugin add click commands; a failing plugin is recorded, not fatal."""

@@ -155,7 +155,8 @@ class ArchitectureRegistrar(Registrar[type[FabricBase]]):
         """Register a fabric model; its ``architecture`` Literal is the YAML tag."""
         if not (inspect.isclass(model) and issubclass(model, FabricBase)):
             raise RegistrationError(f"{model!r} is not a subclass of preform.FabricBase")
-        self._put(_literal_tag(model, "architecture"), model)
+        fabric_model: type[FabricBase] = model
+        self._put(_literal_tag(fabric_model, "architecture"), fabric_model)
 
 
 def _check_callable(build: Any, what: str, arity: int) -> None:

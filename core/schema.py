@@ -20,22 +20,25 @@ def _union(models: list[Any], tag: str) -> Any:
 
 def library_schema(registry: Registry) -> dict[str, Any]:
     """Schema of a library file: one entry or a list of entries."""
-    laws = _union([registry.shear_law_type(n).params for n in registry.names("shear_laws")],
-                  "law")
+    laws = _union([registry.shear_law_type(n).params for n in registry.names("shear_laws")], "law")
     entries = []
     for tag in registry.names("architectures"):
         model = registry.architecture(tag)
-        entries.append(create_model(  # the entry as the user writes it, with its law typed
-            model.__name__, __base__=model, shear_law=(laws | None, None)))
+        entries.append(
+            create_model(  # the entry as the user writes it, with its law typed
+                model.__name__, __base__=model, shear_law=(laws | None, None)
+            )
+        )
     entry = _union(entries, "architecture")
-    schema = TypeAdapter(Union[entry, list[entry]]).json_schema()  # noqa: UP007
+    # the union is built at run time from the registry, which static typing cannot follow
+    file_form: Any = Union[entry, list[entry]]  # type: ignore[valid-type]  # noqa: UP007
+    schema = TypeAdapter(file_form).json_schema()
     schema["title"] = "preform materials library file"
     return schema
 
 
 def scene_schema(registry: Registry) -> dict[str, Any]:
-    tools = _union([registry.surface_type(n).params for n in registry.names("surfaces")],
-                   "surface")
+    tools = _union([registry.surface_type(n).params for n in registry.names("surfaces")], "surface")
     model = create_model("Scene", __base__=Scene, tool=(tools | None, None))
     schema = model.model_json_schema()
     schema["title"] = "preform scene file"

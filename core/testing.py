@@ -31,17 +31,20 @@ class PluginSandbox:
     def registry(self) -> Any:
         return self.host.registry
 
-    def register(self, plugin: Any, name: str | None = None, version: str = "0.0.test") -> (
-        PluginRecord
-    ):
+    def register(
+        self, plugin: Any, name: str | None = None, version: str = "0.0.test"
+    ) -> PluginRecord:
         """Register a plugin (module or object with hookimpls) for this test."""
         name = name or getattr(plugin, "__name__", type(plugin).__name__)
         return self.host.add(plugin, name, version=version)
 
     def load_builtins(self, *names: str) -> None:
         """Load preform's own plugins by entry-point name (all of them when none is given)."""
-        eps = {ep.name: ep for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)
-               if ep.value.startswith("preform.")}
+        eps = {
+            ep.name: ep
+            for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)
+            if ep.value.startswith("preform.")
+        }
         for name in names or tuple(sorted(eps)):
             self.host.add_modules([(name, eps[name].value.split(":")[0])])
 

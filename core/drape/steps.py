@@ -116,9 +116,13 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
     ply: DrapedPly = ctx.products["drape"]
     alpha = np.degrees(ply.result.generator_angle)
     every = max(1, round(5e-3 / ply.result.node_spacing))  # a tow line every ~5 mm
-    fibre_pattern_figure(ply.result, ply.energy, ctx.case_dir / "fibre_pattern.png",
-                         title=f"{ctx.fabric.name}: generator angle {alpha:.1f}°",
-                         tow_every=every)
+    fibre_pattern_figure(
+        ply.result,
+        ply.energy,
+        ctx.case_dir / "fibre_pattern.png",
+        title=f"{ctx.fabric.name}: generator angle {alpha:.1f}°",
+        tow_every=every,
+    )
     return {"fibre_pattern_png": "fibre_pattern.png"}
 
 
@@ -140,20 +144,54 @@ def write_flat_pattern(ctx: CaseContext) -> dict[str, Any]:
 
 
 STEPS = [
-    Step("surface", ("surface",), (), "1", run_surface, "Build the scene's tool surface.",
-         scene_sections=("tool",)),
-    Step("drape", ("drape",), ("surface", "shear_law"), "1", run_drape,
-         "Pin-jointed net on the tool, its shear field and strain energy.",
-         scene_sections=("tool", "ply", "start"), extra_requires=_needs_optimum),
+    Step(
+        "surface",
+        ("surface",),
+        (),
+        "1",
+        run_surface,
+        "Build the scene's tool surface.",
+        scene_sections=("tool",),
+    ),
+    Step(
+        "drape",
+        ("drape",),
+        ("surface", "shear_law"),
+        "1",
+        run_drape,
+        "Pin-jointed net on the tool, its shear field and strain energy.",
+        scene_sections=("tool", "ply", "start"),
+        extra_requires=_needs_optimum,
+    ),
 ]
 
 EXPORTERS = [
-    Step("cells_csv", ("cells_csv",), ("drape",), "1", write_cells_csv,
-         "cells.csv: one row per cell (shear, energy, status)", writes_files=True),
-    Step("vtu", ("vtu",), ("drape",), "1", write_vtu, "drape.vtu for ParaView",
-         writes_files=True),
-    Step("fibre_pattern_png", ("fibre_pattern_png",), ("drape",), "1", write_fibre_pattern_png,
-         "fibre_pattern.png: top view with tows, 3D view by shear", writes_files=True),
-    Step("flat_pattern", ("flat_pattern",), ("drape",), "1", write_flat_pattern,
-         "flat_pattern.csv/.dxf/.svg: the ply outline in the flat", writes_files=True),
+    Step(
+        "cells_csv",
+        ("cells_csv",),
+        ("drape",),
+        "1",
+        write_cells_csv,
+        "cells.csv: one row per cell (shear, energy, status)",
+        writes_files=True,
+    ),
+    Step("vtu", ("vtu",), ("drape",), "1", write_vtu, "drape.vtu for ParaView", writes_files=True),
+    Step(
+        "fibre_pattern_png",
+        ("fibre_pattern_png",),
+        ("drape",),
+        "1",
+        write_fibre_pattern_png,
+        "fibre_pattern.png: top view with tows, 3D view by shear",
+        writes_files=True,
+    ),
+    Step(
+        "flat_pattern",
+        ("flat_pattern",),
+        ("drape",),
+        "1",
+        write_flat_pattern,
+        "flat_pattern.csv/.dxf/.svg: the ply outline in the flat",
+        writes_files=True,
+    ),
 ]

@@ -7,6 +7,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
 from preform.export.figures import new_figure, save_figure
 
 if TYPE_CHECKING:

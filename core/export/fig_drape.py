@@ -7,6 +7,7 @@ import os
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
+
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.export.figures import new_figure, save_figure
 

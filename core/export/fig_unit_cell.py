@@ -12,6 +12,7 @@ from collections import Counter
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+
 from preform.export.figures import new_figure, save_figure
 from preform.geometry.unit_cell import TowPath, UnitCell
 

@@ -19,6 +19,7 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 from numpy.typing import NDArray
+
 from preform.drape.result import CellStatus, DrapeResult
 from preform.export.atomic import atomic_open
 

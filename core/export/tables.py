@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
 from preform.drape.result import CellStatus, DrapeResult, EnergyField
 from preform.export.atomic import atomic_open, atomic_path
 

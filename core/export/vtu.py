@@ -11,6 +11,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.export.atomic import atomic_path
 

@@ -30,9 +30,7 @@ def _scalars(prefix: str, values: Mapping[str, Any]) -> dict[str, Any]:
 def run_unit_cell(ctx: CaseContext) -> dict[str, Any]:
     cell = ctx.fabric.unit_cell()
     if cell is None:
-        raise ValueError(
-            f"architecture {ctx.fabric.architecture!r} provides no unit-cell model"
-        )
+        raise ValueError(f"architecture {ctx.fabric.architecture!r} provides no unit-cell model")
     ctx.summary.update(_scalars("", ctx.fabric.derived()))
     return {"unit_cell": cell}
 
@@ -57,8 +55,9 @@ def run_shear_curve(ctx: CaseContext) -> dict[str, Any]:
 
     law_block = ctx.fabric.shear_law or ctx.fabric.default_shear_law()
     law_name = getattr(law_block, "law", None) or (law_block or {}).get("law", "")
-    curves = shear_curves(ctx.products["shear_law"], _angles_deg(ctx), ctx.fabric.name,
-                          str(law_name))
+    curves = shear_curves(
+        ctx.products["shear_law"], _angles_deg(ctx), ctx.fabric.name, str(law_name)
+    )
     return {"shear_curve": curves}
 
 
@@ -79,8 +78,12 @@ def write_shear_curve_png(ctx: CaseContext) -> dict[str, Any]:
 def write_unit_cell_png(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.fig_unit_cell import unit_cell_figure
 
-    unit_cell_figure(ctx.products["unit_cell"], ctx.case_dir / "unit_cell.png",
-                     title=ctx.fabric.name, repeats=(2, 2))
+    unit_cell_figure(
+        ctx.products["unit_cell"],
+        ctx.case_dir / "unit_cell.png",
+        title=ctx.fabric.name,
+        repeats=(2, 2),
+    )
     return {"unit_cell_png": "unit_cell.png"}
 
 
@@ -92,21 +95,67 @@ def write_unit_cell_vtu(ctx: CaseContext) -> dict[str, Any]:
 
 
 STEPS = [
-    Step("unit_cell", ("unit_cell",), (), "1", run_unit_cell,
-         "Build the fabric's repeating cell; records its derived properties."),
-    Step("shear_law", ("shear_law",), (), "1", run_shear_law,
-         "Build the fabric's shear law from its shear_law block or its default."),
-    Step("shear_curve", ("shear_curve",), ("shear_law",), "1", run_shear_curve,
-         "Torque, force and energy against shear angle, both senses."),
+    Step(
+        "unit_cell",
+        ("unit_cell",),
+        (),
+        "1",
+        run_unit_cell,
+        "Build the fabric's repeating cell; records its derived properties.",
+    ),
+    Step(
+        "shear_law",
+        ("shear_law",),
+        (),
+        "1",
+        run_shear_law,
+        "Build the fabric's shear law from its shear_law block or its default.",
+    ),
+    Step(
+        "shear_curve",
+        ("shear_curve",),
+        ("shear_law",),
+        "1",
+        run_shear_curve,
+        "Torque, force and energy against shear angle, both senses.",
+    ),
 ]
 
 EXPORTERS = [
-    Step("shear_curve_json", ("shear_curve_json",), ("shear_curve",), "1",
-         write_shear_curve_json, "shear_curve.json", writes_files=True),
-    Step("shear_curve_png", ("shear_curve_png",), ("shear_curve",), "1",
-         write_shear_curve_png, "shear_curve.png (paper Fig. 8/9 style)", writes_files=True),
-    Step("unit_cell_png", ("unit_cell_png",), ("unit_cell",), "1", write_unit_cell_png,
-         "unit_cell.png: 3D view of the repeating cell", writes_files=True),
-    Step("unit_cell_vtu", ("unit_cell_vtu",), ("unit_cell",), "1", write_unit_cell_vtu,
-         "unit_cell.vtu: tow paths for ParaView", writes_files=True),
+    Step(
+        "shear_curve_json",
+        ("shear_curve_json",),
+        ("shear_curve",),
+        "1",
+        write_shear_curve_json,
+        "shear_curve.json",
+        writes_files=True,
+    ),
+    Step(
+        "shear_curve_png",
+        ("shear_curve_png",),
+        ("shear_curve",),
+        "1",
+        write_shear_curve_png,
+        "shear_curve.png (paper Fig. 8/9 style)",
+        writes_files=True,
+    ),
+    Step(
+        "unit_cell_png",
+        ("unit_cell_png",),
+        ("unit_cell",),
+        "1",
+        write_unit_cell_png,
+        "unit_cell.png: 3D view of the repeating cell",
+        writes_files=True,
+    ),
+    Step(
+        "unit_cell_vtu",
+        ("unit_cell_vtu",),
+        ("unit_cell",),
+        "1",
+        write_unit_cell_vtu,
+        "unit_cell.vtu: tow paths for ParaView",
+        writes_files=True,
+    ),
 ]

@@ -49,13 +49,23 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
             close = difflib.get_close_matches(product, by_product, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             via = f" (needed by {' <- '.join(reversed(chain))})" if chain else ""
-            problems.append((index, f"unknown output {product!r}{via}{hint}; available "
-                                    f"outputs: {', '.join(sorted(by_product))}"))
+            problems.append(
+                (
+                    index,
+                    f"unknown output {product!r}{via}{hint}; available "
+                    f"outputs: {', '.join(sorted(by_product))}",
+                )
+            )
             return
         for section in step.scene_sections:
             if getattr(scene, section, None) is None:
-                problems.append((index, f"output {scene.outputs[index]!r} needs the scene "
-                                        f"section {section!r} (for step {step.name!r})"))
+                problems.append(
+                    (
+                        index,
+                        f"output {scene.outputs[index]!r} needs the scene "
+                        f"section {section!r} (for step {step.name!r})",
+                    )
+                )
         if step.name in needed:
             return
         needed[step.name] = step

@@ -185,14 +185,21 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
 # -- planning a run --------------------------------------------------------------------------
 
 
-def _input_hash(fabric_data: dict[str, Any], scene: Scene, scene_data: dict[str, Any],
-                host: PluginHost) -> str:
+def _input_hash(
+    fabric_data: dict[str, Any], scene: Scene, scene_data: dict[str, Any], host: PluginHost
+) -> str:
     steps = [(s.name, s.version) for s in plan(scene, host.registry)]
     plugins = sorted((r.name, r.version or "") for r in host.records.values() if not r.error)
     blob = json.dumps(
-        {"fabric": fabric_data, "scene": scene_data, "steps": steps, "plugins": plugins,
-         "preform": __version__},
-        sort_keys=True, default=_json_default,
+        {
+            "fabric": fabric_data,
+            "scene": scene_data,
+            "steps": steps,
+            "plugins": plugins,
+            "preform": __version__,
+        },
+        sort_keys=True,
+        default=_json_default,
     )
     return hashlib.sha256(blob.encode()).hexdigest()
 
@@ -248,12 +255,26 @@ def previous_result(case: Case) -> CaseResult | None:
     files = summary.get("files", [])
     if not all((Path(case.case_dir) / f).exists() for f in files):
         return None
-    reserved = {"material", "scene", "status", "error", "input_hash", "wall_time_s",
-                "step_times_s", "files"}
+    reserved = {
+        "material",
+        "scene",
+        "status",
+        "error",
+        "input_hash",
+        "wall_time_s",
+        "step_times_s",
+        "files",
+    }
     return CaseResult(
-        case.case_id, case.material, case.scene, "skipped", None,
-        float(summary.get("wall_time_s", 0.0)), dict(summary.get("step_times_s", {})),
-        {k: v for k, v in summary.items() if k not in reserved}, list(files),
+        case.case_id,
+        case.material,
+        case.scene,
+        "skipped",
+        None,
+        float(summary.get("wall_time_s", 0.0)),
+        dict(summary.get("step_times_s", {})),
+        {k: v for k, v in summary.items() if k not in reserved},
+        list(files),
     )
 
 
@@ -318,13 +339,17 @@ def run_cases(
     manifest: dict[str, Any] = {
         "preform_version": __version__,
         "started": datetime.now(UTC).isoformat(timespec="seconds"),
-        "settings": {"engine": engine, "workers": workers, "scheduler": scheduler,
-                     "force": force},
+        "settings": {"engine": engine, "workers": workers, "scheduler": scheduler, "force": force},
         "inputs": inputs or {},
         "plugins": [r.as_json() for r in host.records.values()],
-        "cases": {c.case_id: {"status": "pending", "case_dir": str(Path(c.case_dir)
-                                                                   .relative_to(out_dir)),
-                              "input_hash": c.input_hash} for c in cases},
+        "cases": {
+            c.case_id: {
+                "status": "pending",
+                "case_dir": str(Path(c.case_dir).relative_to(out_dir)),
+                "input_hash": c.input_hash,
+            }
+            for c in cases
+        },
     }
     write_json(out_dir / "manifest.json", manifest)
     results: dict[str, CaseResult] = {}
@@ -332,8 +357,12 @@ def run_cases(
     def record(result: CaseResult) -> None:
         results[result.case_id] = result
         manifest["cases"][result.case_id].update(
-            {"status": result.status, "error": result.error,
-             "wall_time_s": round(result.wall_time_s, 6)})
+            {
+                "status": result.status,
+                "error": result.error,
+                "wall_time_s": round(result.wall_time_s, 6),
+            }
+        )
         write_json(out_dir / "manifest.json", manifest)
         if on_done is not None:
             on_done(result)
@@ -362,8 +391,13 @@ def run_cases(
                 try:
                     res = fut.result()
                 except Exception as exc:  # the worker died (killed, out of memory, ...)
-                    res = CaseResult(case.case_id, case.material, case.scene, "failed",
-                                     f"worker failed: {type(exc).__name__}: {exc}")
+                    res = CaseResult(
+                        case.case_id,
+                        case.material,
+                        case.scene,
+                        "failed",
+                        f"worker failed: {type(exc).__name__}: {exc}",
+                    )
                 record(res)
     ordered = [results[c.case_id] for c in cases]
     manifest["aggregates"] = _run_aggregates(cases, ordered, out_dir, host)
@@ -373,8 +407,9 @@ def run_cases(
     return RunReport(out_dir, ordered)
 
 
-def _run_aggregates(cases: Sequence[Case], results: Sequence[CaseResult], out_dir: Path,
-                    host: PluginHost) -> dict[str, Any]:
+def _run_aggregates(
+    cases: Sequence[Case], results: Sequence[CaseResult], out_dir: Path, host: PluginHost
+) -> dict[str, Any]:
     """Run-level outputs of steps that define ``aggregate``, once per scene."""
     written: dict[str, Any] = {}
     by_scene: dict[str, list[tuple[Case, CaseResult]]] = {}
@@ -392,8 +427,7 @@ def _run_aggregates(cases: Sequence[Case], results: Sequence[CaseResult], out_di
         for case, res in members:
             if res.status in ("ok", "skipped"):
                 try:
-                    summaries.append(json.loads((Path(case.case_dir) / "summary.json")
-                                                .read_text()))
+                    summaries.append(json.loads((Path(case.case_dir) / "summary.json").read_text()))
                 except (OSError, ValueError):
                     continue
         folder = out_dir / _slug(scene_name)
@@ -404,7 +438,8 @@ def _run_aggregates(cases: Sequence[Case], results: Sequence[CaseResult], out_di
                 written.setdefault(scene_name, {})[step.name] = files
             except Exception as exc:  # a run-level figure must not lose the run's results
                 written.setdefault(scene_name, {})[step.name] = {
-                    "error": f"{type(exc).__name__}: {exc}"}
+                    "error": f"{type(exc).__name__}: {exc}"
+                }
     return written
 
 
@@ -417,5 +452,12 @@ def input_files_record(paths: Sequence[Path]) -> list[dict[str, str]]:
     return out
 
 
-__all__ = ["Case", "CaseResult", "RunReport", "execute_case", "make_cases", "run_cases",
-           "asdict"]
+__all__ = [
+    "Case",
+    "CaseResult",
+    "RunReport",
+    "asdict",
+    "execute_case",
+    "make_cases",
+    "run_cases",
+]

@@ -12,7 +12,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
 from preform.registry import Registry
 from preform.validation import located_errors
@@ -129,7 +129,18 @@ class Scene(BaseModel):
     )
     outputs: list[str] = Field(min_length=1, description="Products and files to produce.")
     #: Directory of the scene file (resolves relative tool mesh paths); not from YAML.
-    base_dir: str = Field(default=".", exclude=True)
+    _base_dir: str = PrivateAttr(default=".")
+
+    @property
+    def base_dir(self) -> str:
+        """Directory of the scene file, against which relative paths in it resolve."""
+        return self._base_dir
+
+    def located_at(self, base_dir: str) -> Scene:
+        """This scene, with relative paths resolving against ``base_dir``."""
+        scene = self.model_copy()
+        scene._base_dir = base_dir
+        return scene
 
 
 class SceneError(Exception):
@@ -166,9 +177,7 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
     if not isinstance(data, dict):
         raise SceneError([err((), "", "a scene must be a mapping")])
     try:
-        scene = Scene.model_validate(
-            {**data, "base_dir": str(Path(doc.file).resolve().parent)}
-        )
+        scene = Scene.model_validate(data).located_at(str(Path(doc.file).resolve().parent))
     except ValidationError as exc:
         raise SceneError(located_errors(doc, (), data, exc, Scene)) from None
     tool = data.get("tool")
@@ -178,10 +187,17 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
         if name not in known:
             close = difflib.get_close_matches(str(name), known, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
-            where = ("tool", "surface") if isinstance(tool, dict) and "surface" in tool else (
-                "tool",)
-            errors.append(err(where, "tool.surface", f"unknown surface {name!r}{hint}; "
-                              f"registered surfaces: {', '.join(known) or 'none'}"))
+            where = (
+                ("tool", "surface") if isinstance(tool, dict) and "surface" in tool else ("tool",)
+            )
+            errors.append(
+                err(
+                    where,
+                    "tool.surface",
+                    f"unknown surface {name!r}{hint}; "
+                    f"registered surfaces: {', '.join(known) or 'none'}",
+                )
+            )
         else:
             params = registry.surface_type(str(name)).params
             try:
@@ -194,9 +210,8 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
         plan(scene, registry)
     except PlanError as exc:
         for index, message in exc.problems:
-            where: tuple[str | int, ...] = ("outputs", index) if index is not None else ()
-            errors.append(err(where, f"outputs[{index}]" if index is not None else "",
-                              message))
+            at: tuple[str | int, ...] = ("outputs", index) if index is not None else ()
+            errors.append(err(at, f"outputs[{index}]" if index is not None else "", message))
     if errors:
         raise SceneError(errors)
     return scene
@@ -210,14 +225,19 @@ def load_scene(path: str | Path, registry: Registry) -> tuple[Scene, dict[str, A
         raise SceneError(exc.errors) from None
     if len(docs) != 1:
         line, column = docs[1].locate(()) if len(docs) > 1 else (1, 1)
-        raise SceneError([SourceError(str(path), line, column, "",
-                                      "a scene file holds exactly one YAML document")])
+        raise SceneError(
+            [
+                SourceError(
+                    str(path), line, column, "", "a scene file holds exactly one YAML document"
+                )
+            ]
+        )
     return validate_scene_data(docs[0], docs[0].data, registry), docs[0].data
 
 
 def scene_from_data(data: dict[str, Any], base_dir: str, registry: Registry) -> Scene:
     """Rebuild a scene from data that already validated (worker processes)."""
-    scene = Scene.model_validate({**data, "base_dir": base_dir})
+    scene = Scene.model_validate(data).located_at(base_dir)
     tool = data.get("tool")
     if isinstance(tool, dict):
         params = registry.surface_type(str(tool.get("surface"))).params

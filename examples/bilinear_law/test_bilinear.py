@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-import preform_bilinear  # noqa: E402
+import preform_bilinear
 
 FABRIC = """\
 name: my-plain-weave
@@ -47,8 +47,9 @@ def test_energy_is_the_integral_of_torque():
         None,
     )
     g = np.linspace(0, np.radians(60), 20001)
-    trapezoid = np.concatenate([[0], np.cumsum(np.diff(g) * 0.5 * (law.torque(g)[1:]
-                                                                     + law.torque(g)[:-1]))])
+    trapezoid = np.concatenate(
+        [[0], np.cumsum(np.diff(g) * 0.5 * (law.torque(g)[1:] + law.torque(g)[:-1]))]
+    )
     np.testing.assert_allclose(law.energy(g), trapezoid, rtol=1e-6, atol=1e-12)
     np.testing.assert_allclose(law.energy(-g), law.energy(g))
 

@@ -55,8 +55,10 @@ class HemisphereTool(BaseModel):
     @model_validator(mode="after")
     def _flange(self) -> HemisphereTool:
         if self.fillet_radius_mm > 0 and self.flange_half_width_mm is None:
-            raise ValueError("fillet_radius_mm needs flange_half_width_mm (a fillet joins the "
-                             "hemisphere to a flange)")
+            raise ValueError(
+                "fillet_radius_mm needs flange_half_width_mm (a fillet joins the "
+                "hemisphere to a flange)"
+            )
         return self
 
 
@@ -108,8 +110,7 @@ def build_plane(p: PlaneTool, base_dir: str) -> Plane:
 def build_hemisphere(p: HemisphereTool, base_dir: str) -> Hemisphere | FlangedHemisphere:
     if p.flange_half_width_mm is None:
         return Hemisphere(p.radius_mm * MM)
-    return FlangedHemisphere(p.radius_mm * MM, p.fillet_radius_mm * MM,
-                             p.flange_half_width_mm * MM)
+    return FlangedHemisphere(p.radius_mm * MM, p.fillet_radius_mm * MM, p.flange_half_width_mm * MM)
 
 
 def build_cylinder(p: CylinderTool, base_dir: str) -> Cylinder:
@@ -139,8 +140,10 @@ def resolve_tool_file(name: str, base_dir: str) -> Path:
         if bundled.exists():
             return bundled
     if not path.exists():
-        raise FileNotFoundError(f"tool mesh {name!r} not found next to the scene ({base_dir}) "
-                                "nor among the bundled tools")
+        raise FileNotFoundError(
+            f"tool mesh {name!r} not found next to the scene ({base_dir}) "
+            "nor among the bundled tools"
+        )
     return path
 
 

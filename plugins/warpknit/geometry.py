@@ -36,6 +36,7 @@ from math import gcd, lcm
 
 import numpy as np
 from numpy.typing import NDArray
+
 from preform.geometry.fibres import fibre, fibre_area_m2
 from preform.geometry.unit_cell import TowPath, UnitCell
 from preform.material import Location

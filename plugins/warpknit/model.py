@@ -12,10 +12,11 @@ from functools import cached_property
 from typing import Annotated, Any, Literal
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
 from preform.geometry.fibres import FIBRES, fibre
 from preform.geometry.unit_cell import UnitCell
 from preform.material import FabricBase, Location
-from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from .geometry import ThreadLevel, TowLayer, TowType, WarpKnitGeometry
 from .lapping import LappingSyntaxError, parse_lapping

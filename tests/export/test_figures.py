@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
 from preform.export.fig_drape import fibre_lines, fibre_pattern_figure
 from preform.export.fig_unit_cell import refine_polyline, tow_ribbon, unit_cell_figure

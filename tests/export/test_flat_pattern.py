@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+
 from preform.export.flat_pattern import (
     flat_node_positions,
     flat_pattern,

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+
 from preform.drape.result import CellStatus, NodeStatus
 from preform.export.tables import CELL_COLUMNS, cells_table, write_json, write_table
 

@@ -96,15 +96,15 @@ def preform_check_material(material):
 
 BROKEN_IMPORT = "raise ImportError('this plugin needs libfoo, which is not installed')\n"
 
-MISSPELLED = '''
+MISSPELLED = """
 from preform import hookimpl
 
 @hookimpl
 def preform_register_stepz(register):
     pass
-'''
+"""
 
-BAD_REGISTRATION = '''
+BAD_REGISTRATION = """
 from preform import hookimpl
 
 class NotAModel:
@@ -113,11 +113,12 @@ class NotAModel:
 @hookimpl
 def preform_register_architectures(register):
     register.add(NotAModel)
-'''
+"""
 
 
-def install_distribution(site: Path, dist: str, version: str, modules: dict[str, str],
-                         entry_points: dict[str, str]) -> None:
+def install_distribution(
+    site: Path, dist: str, version: str, modules: dict[str, str], entry_points: dict[str, str]
+) -> None:
     """Write modules plus a ``.dist-info`` with ``preform`` entry points into ``site``."""
     for module, source in modules.items():
         (site / f"{module}.py").write_text(textwrap.dedent(source))
@@ -134,14 +135,16 @@ def third_party_site(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterato
     PYTHONPATH of worker processes."""
     site = tmp_path / "site"
     site.mkdir()
-    install_distribution(site, "preform-toy", "1.2.3", {"toyplug": TOY_PLUGIN},
-                         {"toy": "toyplug"})
-    install_distribution(site, "preform-broken", "0.1", {"brokenplug": BROKEN_IMPORT},
-                         {"broken": "brokenplug"})
-    install_distribution(site, "preform-typo", "0.2", {"typoplug": MISSPELLED},
-                         {"typo": "typoplug"})
-    install_distribution(site, "preform-badreg", "0.3", {"badregplug": BAD_REGISTRATION},
-                         {"badreg": "badregplug"})
+    install_distribution(site, "preform-toy", "1.2.3", {"toyplug": TOY_PLUGIN}, {"toy": "toyplug"})
+    install_distribution(
+        site, "preform-broken", "0.1", {"brokenplug": BROKEN_IMPORT}, {"broken": "brokenplug"}
+    )
+    install_distribution(
+        site, "preform-typo", "0.2", {"typoplug": MISSPELLED}, {"typo": "typoplug"}
+    )
+    install_distribution(
+        site, "preform-badreg", "0.3", {"badregplug": BAD_REGISTRATION}, {"badreg": "badregplug"}
+    )
     monkeypatch.syspath_prepend(str(site))
     monkeypatch.setenv("PYTHONPATH", str(site))
     importlib.invalidate_caches()

@@ -52,7 +52,10 @@ def test_good_library_loads(toy, tmp_path):
 
 
 def test_every_error_is_reported_with_its_position(toy, tmp_path):
-    bad = write(tmp_path, "bad.yaml", """\
+    bad = write(
+        tmp_path,
+        "bad.yaml",
+        """\
         - name: one
           architecture: toy
           source: s
@@ -73,7 +76,8 @@ def test_every_error_is_reported_with_its_position(toy, tmp_path):
           note: n
           areal_density_g_m2: 10
           width_mm: 500
-        """)
+        """,
+    )
     errs = errors_of(toy, bad)
     f = str(bad)
     assert f"{f}:5:23: one.areal_density_g_m2: Input should be greater than 0" in errs
@@ -88,13 +92,17 @@ def test_every_error_is_reported_with_its_position(toy, tmp_path):
 
 def test_duplicate_names_across_files(toy, tmp_path):
     a = write(tmp_path, "a.yaml", GOOD)
-    b = write(tmp_path, "b.yaml", """\
+    b = write(
+        tmp_path,
+        "b.yaml",
+        """\
         name: felt-a
         architecture: toy
         source: s
         note: n
         areal_density_g_m2: 1
-        """)
+        """,
+    )
     errs = errors_of(toy, a, b)
     assert len(errs) == 1
     assert errs[0].startswith(f"{b}:1:7: felt-a.name: duplicate fabric name 'felt-a'")
@@ -128,13 +136,17 @@ def test_non_utf8_and_missing_files(toy, tmp_path):
 
 
 def test_material_lint_hook_warnings(toy, tmp_path):
-    p = write(tmp_path, "heavy.yaml", """\
+    p = write(
+        tmp_path,
+        "heavy.yaml",
+        """\
         name: brick
         architecture: toy
         source: s
         note: n
         areal_density_g_m2: 9000
-        """)
+        """,
+    )
     lib = toy.library([p])
     assert any("suspiciously heavy" in str(w) for w in lib.warnings)
 

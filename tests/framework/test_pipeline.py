@@ -51,8 +51,12 @@ def test_planner_runs_only_what_outputs_need(toy, tmp_path):
     lib = sandbox.library([lib_path])
     scene = load_scene(scene_file(tmp_path, ["mass_txt"]), sandbox.registry)
     assert [s.name for s in plan(scene[0], sandbox.registry)] == ["mass", "mass_txt"]
-    report = run_cases(make_cases(lib, [scene], tmp_path / "out", sandbox.host),
-                       tmp_path / "out", sandbox.host, engine="serial")
+    report = run_cases(
+        make_cases(lib, [scene], tmp_path / "out", sandbox.host),
+        tmp_path / "out",
+        sandbox.host,
+        engine="serial",
+    )
     # four fabrics: mass ran four times, mass_txt three (explodes fails first), heavy never
     assert sorted(calls(log)) == sorted(["mass"] * 4 + ["mass_txt"] * 3)
     assert [r.status for r in report.results] == ["ok", "ok", "failed", "ok"]
@@ -91,10 +95,19 @@ def test_engines_give_identical_results(toy, tmp_path, engine, monkeypatch):
     lib = sandbox.library([lib_path])
     scene = load_scene(scene_file(tmp_path, ["mass_txt", "heavy"]), sandbox.registry)
     serial_out, other_out = tmp_path / "serial", tmp_path / engine
-    run_cases(make_cases(lib, [scene], serial_out, sandbox.host), serial_out, sandbox.host,
-              engine="serial")
-    run_cases(make_cases(lib, [scene], other_out, sandbox.host), other_out, sandbox.host,
-              engine=engine, workers=2)
+    run_cases(
+        make_cases(lib, [scene], serial_out, sandbox.host),
+        serial_out,
+        sandbox.host,
+        engine="serial",
+    )
+    run_cases(
+        make_cases(lib, [scene], other_out, sandbox.host),
+        other_out,
+        sandbox.host,
+        engine=engine,
+        workers=2,
+    )
     pd.testing.assert_frame_equal(read_results(serial_out), read_results(other_out))
     for case in ("felt-a", "felt-b", "felt-c"):
         a = (serial_out / "toy-scene" / case / "mass.txt").read_text()
@@ -109,8 +122,20 @@ def test_interrupted_run_resumes_without_redoing_or_corrupting(toy, tmp_path):
     scene = scene_file(tmp_path, ["mass_txt", "crash"])
     out = tmp_path / "out"
     env = {**os.environ, "PREFORM_LOAD_PLUGINS": "core,toy", "TOY_CRASH_ON": "felt-c"}
-    cmd = [sys.executable, "-m", "preform", "pipeline", "run", str(lib_path), "--scene",
-           str(scene), "--out", str(out), "--engine", "serial"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "preform",
+        "pipeline",
+        "run",
+        str(lib_path),
+        "--scene",
+        str(scene),
+        "--out",
+        str(out),
+        "--engine",
+        "serial",
+    ]
     first = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
     assert first.returncode == 3  # the process died inside the felt-c case
     done_first = calls(log).count("mass_txt")
@@ -130,8 +155,12 @@ def test_interrupted_run_resumes_without_redoing_or_corrupting(toy, tmp_path):
     assert sorted(calls(log)) == sorted(["mass", "mass", "mass_txt", "crash"])
     manifest = json.loads((out / "manifest.json").read_text())
     statuses = {k: v["status"] for k, v in manifest["cases"].items()}
-    assert statuses == {"toy-scene/felt-a": "skipped", "toy-scene/felt-b": "skipped",
-                        "toy-scene/explodes": "failed", "toy-scene/felt-c": "ok"}
+    assert statuses == {
+        "toy-scene/felt-a": "skipped",
+        "toy-scene/felt-b": "skipped",
+        "toy-scene/explodes": "failed",
+        "toy-scene/felt-c": "ok",
+    }
     assert not list(out.rglob(".*.tmp*"))
     table = pd.read_csv(out / "results.csv")
     assert list(table["material"]) == ["felt-a", "felt-b", "explodes", "felt-c"]
@@ -147,9 +176,27 @@ def test_manifest_records_inputs_and_versions(toy, tmp_path):
     scene = scene_file(tmp_path, ["mass"])
     out = tmp_path / "out"
     env = {**os.environ, "PREFORM_LOAD_PLUGINS": "core,toy"}
-    subprocess.run([sys.executable, "-m", "preform", "pipeline", "run", str(lib_path),
-                    "--scene", str(scene), "--out", str(out), "--engine", "serial",
-                    "--materials", "felt-*"], env=env, check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "preform",
+            "pipeline",
+            "run",
+            str(lib_path),
+            "--scene",
+            str(scene),
+            "--out",
+            str(out),
+            "--engine",
+            "serial",
+            "--materials",
+            "felt-*",
+        ],
+        env=env,
+        check=True,
+        capture_output=True,
+    )
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["preform_version"]
     assert {p["name"] for p in manifest["plugins"]} == {"core", "toy"}
@@ -157,17 +204,30 @@ def test_manifest_records_inputs_and_versions(toy, tmp_path):
     import hashlib
 
     assert lib_rec["sha256"] == hashlib.sha256(lib_path.read_bytes()).hexdigest()
-    assert sorted(manifest["cases"]) == ["toy-scene/felt-a", "toy-scene/felt-b",
-                                         "toy-scene/felt-c"]
+    assert sorted(manifest["cases"]) == ["toy-scene/felt-a", "toy-scene/felt-b", "toy-scene/felt-c"]
 
 
 def test_explain_prints_plan_without_running(toy, tmp_path):
     _, lib_path, log = toy
     scene = scene_file(tmp_path, ["heavy"])
     env = {**os.environ, "PREFORM_LOAD_PLUGINS": "core,toy"}
-    res = subprocess.run([sys.executable, "-m", "preform", "pipeline", "run", str(lib_path),
-                          "--scene", str(scene), "--explain"], env=env, capture_output=True,
-                         text=True, check=True)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "preform",
+            "pipeline",
+            "run",
+            str(lib_path),
+            "--scene",
+            str(scene),
+            "--explain",
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     assert "mass (v1)" in res.stdout and "heavy (v1): needs mass" in res.stdout
     assert calls(log) == []
     assert textwrap.dedent(res.stdout).count("->") == 2

@@ -7,9 +7,10 @@ from importlib.resources import files
 
 import pytest
 import yaml
+from pydantic import ValidationError
+
 from preform.plugins.warpknit.geometry import cell_areal_density_g_m2
 from preform.plugins.warpknit.model import WarpKnitFabric
-from pydantic import ValidationError
 
 ENTRIES = yaml.safe_load(
     files("preform.materials").joinpath("fabrics/warpknit.yaml").read_text(encoding="utf-8")
