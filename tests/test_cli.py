@@ -1,0 +1,114 @@
+"""The commands a user types, end to end through click, on the bundled library."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from preform.cli import cli
+
+
+def run(*args: str) -> str:
+    result = CliRunner().invoke(cli, list(args))
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+def test_version():
+    import preform
+
+    assert preform.__version__ in run("--version")
+
+
+def test_materials_show_json_has_derived_properties():
+    doc = json.loads(run("materials", "show", "plain-weave-600", "--json"))
+    assert doc["architecture"] == "woven"
+    assert doc["warp"]["tow_spacing_mm"] == 4.0  # the YAML's units, not SI
+    derived = doc["derived"]
+    assert derived["areal_density_g_m2"] == pytest.approx(600, rel=0.01)
+    assert derived["locking_angle_deg"] == pytest.approx(np.degrees(np.arccos(3.1 / 4.0)))
+    knit = json.loads(run("materials", "show", "E-BX-318", "--json"))
+    assert knit["derived"]["areal_density_g_m2"] == pytest.approx(318, rel=0.01)
+
+
+def test_materials_list_json_names_every_bundled_fabric():
+    names = {m["name"] for m in json.loads(run("materials", "list", "--json"))}
+    assert {
+        "plain-weave-600",
+        "plain-weave-150",
+        "twill-2x2-glass",
+        "satin-4hs-crowfoot",
+        "satin-5hs-carbon",
+        "satin-8hs-carbon",
+        "orthogonal-3d-glass",
+        "E-BXhd-936",
+        "E-BX-318",
+        "ncf-0-90-tricot",
+    } <= names
+
+
+def test_view_writes_a_picture_and_a_vtu(tmp_path):
+    import matplotlib.image as mpimg
+    import meshio
+
+    png, vtu = tmp_path / "satin.png", tmp_path / "satin.vtu"
+    run("view", "satin-4hs-crowfoot", "--repeats", "2x1", "--out", str(png), "--vtu", str(vtu))
+    image = mpimg.imread(png)
+    assert image.shape[0] > 300 and image.shape[1] > 300
+    assert image[..., :3].std() > 0.05  # not blank
+    mesh = meshio.read(vtu)
+    # crowfoot: 4 warp + 4 weft tows per cell, 2x1 cells
+    assert len(np.unique(mesh.cell_data["tow"][0])) == 16
+
+
+def test_view_rejects_bad_repeats():
+    result = CliRunner().invoke(cli, ["view", "plain-weave-600", "--repeats", "2by2"])
+    assert result.exit_code == 2 and "NxM" in result.output
+
+
+def test_shear_json_has_both_senses_and_consistent_units():
+    doc = json.loads(run("shear", "E-BX-318", "--angles", "0:60:5", "--json"))
+    pos, neg = doc["positive"], doc["negative"]
+    assert [r["angle_deg"] for r in pos] == list(range(0, 65, 5))
+    for row in pos + neg:
+        gamma = np.radians(row["angle_deg"])
+        # F_s/L [N/mm] = C / cos γ / 1000 with C in N·m/m² (picture-frame power balance)
+        assert row["force_N_per_mm"] * np.cos(gamma) * 1000 == pytest.approx(
+            row["torque_N_per_m"], abs=1e-12
+        )
+        assert row["energy_J_per_m2"] >= 0
+    at30 = next(r for r in pos if r["angle_deg"] == 30)
+    assert at30["force_N_per_mm"] > 5 * abs(
+        next(r for r in neg if r["angle_deg"] == -30)["force_N_per_mm"]
+    )
+
+
+def test_schema_is_json_schema_of_the_registered_architectures():
+    schema = json.loads(run("schema"))
+    text = json.dumps(schema)
+    assert "warp_knit" in text and "woven" in text and "friction_compaction" in text
+    scene = json.loads(run("schema", "--scene"))
+    assert "base_dir" not in scene["properties"]
+    assert "hemisphere" in json.dumps(scene)
+
+
+def test_pipeline_unit_cell_scene_runs_only_the_unit_cell(tmp_path):
+    out = tmp_path / "out"
+    run(
+        "pipeline",
+        "run",
+        "--scene",
+        "unit-cell",
+        "--out",
+        str(out),
+        "--engine",
+        "serial",
+        "--materials",
+        "plain-*",
+    )
+    summary = json.loads((out / "unit-cell" / "plain-weave-150" / "summary.json").read_text())
+    assert set(summary["step_times_s"]) == {"unit_cell", "unit_cell_png", "unit_cell_vtu"}
+    assert summary["areal_density_g_m2"] == pytest.approx(150, rel=0.01)
