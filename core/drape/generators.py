@@ -176,15 +176,24 @@ def _march_geodesics(
         n_foot = surface.normal(foot)
         with np.errstate(divide="ignore", invalid="ignore"):
             lam = _dot(foot - ahead, n_foot) / _dot(na, n_foot)
+        # A sharp crease (a mesh edge onto a vertical wall): the tangent plane turns by more
+        # than 60° within one sub-step, and the correction along the old normal is undefined.
+        crease = np.abs(_dot(na, n_foot)) < 0.5
+        lam = np.where(crease, 0.0, lam)
         x_new, dist = surface.closest_point(ahead + lam[:, None] * na)
+        if crease.any():
+            x_new[crease], dist[crease] = _across_crease(
+                surface, ta[crease], na[crease], foot[crease], n_foot[crease], h
+            )
         step = x_new - xa
-        progress = _dot(step, ta)
+        # across a crease the path bends, so progress is the step's length, not its projection
+        progress = np.where(crease, np.linalg.norm(step, axis=-1), _dot(step, ta))
         # Past the edge the closest point sticks to the boundary: no progress, or far away.
         off = ~np.isfinite(progress) | (progress < 0.5 * h) | (dist > 0.5 * h)
         running[act[off]] = False
         keep = ~off
         act, xa, x_new, step = act[keep], xa[keep], x_new[keep], step[keep]
-        n_new = n_foot[keep]
+        n_new, via, bent = n_foot[keep], foot[keep], crease[keep]
         w = xa - last[act]
         reach = _dot(x_new - last[act], x_new - last[act]) >= spacing * spacing
         if reach.any():
@@ -194,6 +203,17 @@ def _march_geodesics(
             tau = (-ws + np.sqrt(np.maximum(ws * ws - ss * (_dot(wr, wr) - spacing**2), 0))) / ss
             node = xa[reach] + tau[:, None] * s
             node = _slide_to_chord(surface, last[idx], node, spacing, tolerance)
+            folded = bent[reach]
+            if folded.any():
+                # across a crease the straight chord cuts through the tool: find the node on
+                # the two flat pieces of the path (start -> crease -> new point) instead
+                node[folded] = _chord_on_bent_path(
+                    last[idx][folded],
+                    xa[reach][folded],
+                    via[reach][folded],
+                    x_new[reach][folded],
+                    spacing,
+                )
             points[idx, found[idx]] = node
             on_tool[idx, found[idx]] = True
             found[idx] += 1
@@ -203,6 +223,60 @@ def _march_geodesics(
         # The foot of the first projection is O(h³) from x_{k+1}: its normal serves there.
         normal[act] = n_new
     return _finish(points, on_tool, _residual(surface, points, starts[0], spacing))
+
+
+def _across_crease(
+    surface: Surface,
+    t: FloatArray,
+    n_old: FloatArray,
+    foot: FloatArray,
+    n_new: FloatArray,
+    h: float,
+) -> tuple[FloatArray, FloatArray]:
+    """Continue geodesics across a sharp crease by unfolding it: the component of the
+    direction along the crease edge is kept, the rest turns into the new face, away from the
+    crease (downhill past a convex edge, uphill at a concave one). Returns the points one
+    sub-step ``h`` [m] into the new face and their distances to the surface [m]."""
+    edge = _unit(np.cross(n_old, n_new))
+    along = np.clip(_dot(t, edge), -1.0, 1.0)
+    across = _unit(np.cross(n_new, edge))
+    # past a convex edge (the new face falls away ahead) the path leaves against the old
+    # normal; at a concave one (a wall rising ahead) along it
+    convex = _dot(n_new, t) > 0
+    wanted = np.where(convex, -1.0, 1.0)
+    flip = np.sign(_dot(across, n_old)) != wanted
+    across[flip] *= -1.0
+    t_new = along[:, None] * edge + np.sqrt(1.0 - along**2)[:, None] * across
+    return surface.closest_point(foot + h * t_new)
+
+
+def _chord_on_bent_path(
+    anchor: FloatArray, a: FloatArray, corner: FloatArray, b: FloatArray, spacing: float
+) -> FloatArray:
+    """Points on the polyline a → corner → b [m] at chord ``spacing`` [m] from ``anchor``,
+    by bisection on the path parameter (the distance from the anchor grows along the path
+    while the path leads away from it, which holds within one sub-step)."""
+    first = np.linalg.norm(corner - a, axis=-1)
+    second = np.linalg.norm(b - corner, axis=-1)
+    total = first + second
+
+    def at(length: FloatArray) -> FloatArray:
+        on_first = length <= first
+        f1 = np.where(first > 0, length / np.where(first > 0, first, 1.0), 0.0)
+        f2 = np.where(second > 0, (length - first) / np.where(second > 0, second, 1.0), 1.0)
+        return np.where(
+            on_first[:, None],
+            a + f1[:, None] * (corner - a),
+            corner + np.clip(f2, 0.0, 1.0)[:, None] * (b - corner),
+        )
+
+    lo, hi = np.zeros_like(total), total.copy()
+    for _ in range(60):  # halves the bracket to below 1e-18 of a sub-step
+        mid = 0.5 * (lo + hi)
+        beyond = np.linalg.norm(at(mid) - anchor, axis=-1) >= spacing
+        hi = np.where(beyond, mid, hi)
+        lo = np.where(beyond, lo, mid)
+    return at(hi)
 
 
 def _slide_to_chord(

@@ -128,7 +128,22 @@ class PiecewiseBranch:
         edges = np.append(self.breaks, DOMAIN_END)
         widths = np.diff(edges)
         idx = np.arange(len(polys))
-        piece_integral = self._primitive(idx, widths) - self._primitive(idx, np.zeros_like(widths))
+        #: Pieces integrated by quadrature: the closed-form primitive S sin + S' cos of p·cos
+        #: is a difference of terms as large as p's high derivatives, so a short piece with
+        #: large high-order coefficients (a sharp failure drop) loses digits to cancellation,
+        #: up to all of them. Where it would lose more than 7 (past the 1e-9 promised above),
+        #: Gauss–Legendre with deg + 16 nodes is used: exact to rounding (the cos factor's
+        #: Taylor remainder over ≤ 90° is below 1e-30) and well conditioned.
+        self._quadrature = np.zeros(len(polys), dtype=bool)
+        if weight == "cos":
+            powers = widths[:, None] ** np.arange(width + 1)
+            primitive_size = (np.abs(self._anti) + np.abs(self._anti_deriv)) * powers
+            integrand_size = np.abs(self._coef) * powers
+            self._quadrature = primitive_size.sum(axis=1) * 1e-7 > integrand_size.sum(
+                axis=1
+            ) * np.maximum(widths, 1e-300)
+        self._gl_nodes, self._gl_weights = _gauss_legendre(width + 16)
+        piece_integral = self._integral(idx, widths)
         self._cumulative = np.concatenate([[0.0], np.cumsum(piece_integral)])
 
     def _primitive(self, idx: NDArray[np.intp], x: FloatArray) -> FloatArray:
@@ -138,6 +153,20 @@ class PiecewiseBranch:
         return _horner(self._anti, idx, x) * np.sin(angle) + _horner(
             self._anti_deriv, idx, x
         ) * np.cos(angle)
+
+    def _integral(self, idx: NDArray[np.intp], x: FloatArray) -> FloatArray:
+        """∫_0^x of piece ``idx``'s magnitude in its local variable, elementwise."""
+        closed = self._primitive(idx, x) - self._primitive(idx, np.zeros_like(x))
+        quad = np.ravel(self._quadrature[idx])
+        if not np.any(quad):
+            return closed
+        out = np.array(closed, dtype=float).reshape(-1)
+        rows, half = np.ravel(idx)[quad], 0.5 * np.ravel(x)[quad]
+        local = (half[:, None] * (self._gl_nodes + 1.0)).ravel()
+        rep = np.repeat(rows, self._gl_nodes.size)
+        values = _horner(self._coef, rep, local) * np.cos(local + self.breaks[rep])
+        out[quad] = half * (values.reshape(rows.size, -1) @ self._gl_weights)
+        return out.reshape(np.shape(closed))
 
     def _locate(self, u: ArrayLike) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
         uu = _clamp_angle(u)
@@ -155,7 +184,7 @@ class PiecewiseBranch:
     def energy(self, u: ArrayLike) -> FloatArray:
         """Strain energy W(u) [J/m²], exact up to floating-point rounding."""
         idx, x, _ = self._locate(u)
-        partial = self._primitive(idx, x) - self._primitive(idx, np.zeros_like(x))
+        partial = self._integral(idx, x)
         return np.maximum(self._cumulative[idx] + partial, 0.0)
 
 
@@ -175,17 +204,39 @@ def _non_negative_parts(
     significant = np.nonzero(size > 1e-14 * size.max())[0] if size.max() > 0 else np.array([0])
     trimmed = coef[: int(significant[-1]) + 1]
     if trimmed.size > 1:
+        deriv = npoly.polyder(trimmed)
         for r in npoly.polyroots(trimmed):
-            if abs(r.imag) <= 1e-12 * max(1.0, abs(r.real)) and 0.0 < r.real < length:
-                cuts.append(float(r.real))
+            if abs(r.imag) > 1e-12 * max(1.0, abs(r.real)):
+                continue
+            # Companion-matrix roots carry an absolute error of ~eps·(largest root), so a small
+            # root next to a huge one can be off by more than the gap to it; without polishing,
+            # a negative stretch is kept and integrated, and W decreases. Newton polishes it.
+            x = float(r.real)
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                for _ in range(8):
+                    slope = float(npoly.polyval(x, deriv))
+                    if slope == 0.0:
+                        break
+                    step = x - float(npoly.polyval(x, trimmed)) / slope
+                    if not abs(npoly.polyval(step, trimmed)) < abs(npoly.polyval(x, trimmed)):
+                        break  # converged, or Newton would diverge (also catches inf/NaN)
+                    x = step
+            if 0.0 < x < length:
+                cuts.append(x)
     cuts = sorted(set(cuts))
     parts: list[tuple[float, FloatArray]] = []
+    # A sliver too short to keep joins the next part, which then starts where the sliver did:
+    # dropping it would move the first break off 0 and make W(0) ≠ 0.
+    sliver_start: float | None = None
     for a, b in itertools.pairwise(cuts):
         if b - a <= 1e-14 * max(1.0, length):
+            sliver_start = a if sliver_start is None else sliver_start
             continue
-        shifted = _shift(coef, a)
-        mid = npoly.polyval(0.5 * (b - a), shifted)
-        parts.append((start + a, shifted if mid >= 0.0 else np.zeros(1)))
+        begin = a if sliver_start is None else sliver_start
+        sliver_start = None
+        shifted = _shift(coef, begin)
+        mid = npoly.polyval(0.5 * (a + b) - begin, shifted)
+        parts.append((start + begin, shifted if mid >= 0.0 else np.zeros(1)))
     if not parts:
         parts.append((start, _shift(coef, 0.0)))
     return parts

@@ -64,11 +64,12 @@ class SignedShearLaw:
         u = np.abs(g)
         if self.symmetric:
             return np.asarray(np.sign(g) * self.positive.magnitude(u), dtype=float)
-        # At γ = 0 exactly the torque is 0 in both cases (a friction law steps from −C0 to +C0).
+        # At γ = 0 exactly the torque is 0 in both cases (a friction law steps from −C0 to +C0);
+        # 0·γ rather than 0 so that a NaN angle gives a NaN torque, as the symmetric law does.
         return np.where(
             g > 0.0,
             self.positive.magnitude(u),
-            np.where(g < 0.0, -self.negative.magnitude(u), 0.0),
+            np.where(g < 0.0, -self.negative.magnitude(u), 0.0 * g),
         )
 
     def energy(self, gamma: ArrayLike) -> FloatArray:
@@ -126,7 +127,7 @@ def _check_coefficients(values: list[float] | None, name: str) -> None:
 class PolynomialParams(BaseModel):
     """Parameters of the ``polynomial`` shear law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     law: Literal["polynomial"] = Field(description="Selects the polynomial shear law.")
     force_coefficients_N_per_mm: list[float] | None = Field(
@@ -250,7 +251,7 @@ def tabulated_branch(
 class TabulatedParams(BaseModel):
     """Parameters of the ``tabulated`` shear law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     law: Literal["tabulated"] = Field(description="Selects the tabulated shear law.")
     angle_deg: list[float] = Field(

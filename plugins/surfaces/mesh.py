@@ -192,10 +192,12 @@ class TriangleMesh:
         each closest point lies on (n,)."""
         p = _as_points(points, 3)
         n_points, n_faces = p.shape[0], self.n_triangles
-        closest = np.empty_like(p)
-        distance = np.empty(n_points)
-        face = np.empty(n_points, dtype=np.int64)
-        pending = np.arange(n_points)
+        # Non-finite queries answer NaN (face 0), as the analytic surfaces do, instead of
+        # making the k-d tree raise: a marching caller can then see the NaN and stop.
+        closest = np.full_like(p, np.nan)
+        distance = np.full(n_points, np.nan)
+        face = np.zeros(n_points, dtype=np.int64)
+        pending = np.flatnonzero(np.all(np.isfinite(p), axis=1))
         k = min(self._initial_candidates, n_faces)
         while pending.size:
             # Chunks bound the (points × candidates) temporaries to a few tens of MB.
@@ -253,10 +255,12 @@ class TriangleMesh:
         normal, or the interpolated vertex normal with ``smooth_normals``."""
         closest, _, face = self.closest_faces(points)
         if not self.smooth_normals:
-            return self.face_normals[face]
-        weights = np.clip(self.barycentric(closest, face), 0.0, 1.0)
-        blended = np.einsum("ni,nij->nj", weights, self.vertex_normals[self.faces[face]])
-        return blended / np.linalg.norm(blended, axis=1, keepdims=True)
+            normals = self.face_normals[face]
+        else:
+            weights = np.clip(self.barycentric(closest, face), 0.0, 1.0)
+            blended = np.einsum("ni,nij->nj", weights, self.vertex_normals[self.faces[face]])
+            normals = blended / np.linalg.norm(blended, axis=1, keepdims=True)
+        return np.where(np.isfinite(closest[:, :1]), normals, np.nan)
 
     # --- vertical rays ----------------------------------------------------------------------
 

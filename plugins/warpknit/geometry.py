@@ -49,6 +49,10 @@ INCH_M = 0.0254
 #: Relative disagreement between gauge and needle distance tolerated (datasheet rounding).
 GAUGE_TOLERANCE = 5e-3
 MAX_REPEATS = 24
+#: Most tow pieces (per layer) or thread repeats (per level) one unit cell may hold. The cell's
+#: paths are built one by one, so a spacing many orders below the needle distance would
+#: otherwise hang the build (and exhaust memory) instead of being reported.
+MAX_PATHS_PER_CELL = 10_000
 SPACING_TOLERANCE = 0.01
 ANGLE_TOLERANCE_DEG = 0.5
 
@@ -245,6 +249,37 @@ class WarpKnitGeometry:
         out += self._placement_problems()
         if not any(len(loc) == 2 for loc, _ in machine):  # every level has a needle distance
             out += self._overlap_problems()
+            out += self._size_problems()
+        return out
+
+    def _size_problems(self) -> list[tuple[Location, str]]:
+        out: list[tuple[Location, str]] = []
+        fit = self.cell_fit
+        length, width = fit.size
+        for i, fitted in enumerate(fit.layers):
+            # A layer's tows cross the cell edges |k_machine| + |k_cross| times in all; each
+            # crossing is one straight piece of the cell's tow paths.
+            pieces = abs(fitted.k_machine) + abs(fitted.k_cross)
+            if pieces > MAX_PATHS_PER_CELL:
+                out.append(
+                    (
+                        ("tow_layers", i, "spacing_mm"),
+                        f"this layer's tows run {pieces} times through one unit cell "
+                        f"({length * 1e3:.4g} × {width * 1e3:.4g} mm), more than "
+                        f"{MAX_PATHS_PER_CELL}: check the spacing against the stitch",
+                    )
+                )
+        for k, level in enumerate(self.thread_levels):
+            repeats = round(length / level.repeat_length) * round(width / level.thread_pitch)
+            if repeats > MAX_PATHS_PER_CELL:
+                out.append(
+                    (
+                        ("threads", k, "stitch_length_mm"),
+                        f"{repeats} stitch repeats in one unit cell ({length * 1e3:.4g} × "
+                        f"{width * 1e3:.4g} mm), more than {MAX_PATHS_PER_CELL}: check the "
+                        "stitch length and gauge against the tow spacings",
+                    )
+                )
         return out
 
     def _machine_problems(self) -> list[tuple[Location, str]]:

@@ -45,7 +45,7 @@ _COEFFICIENTS = "ascending powers of the shear-angle magnitude in degrees; a_k i
 class StitchPolynomialParams(BaseModel):
     """Parameters of the warp-knit ``stitch_polynomial`` law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     law: Literal["stitch_polynomial"] = Field(description="Selects this law.")
     parallel_force_coefficients_N_per_mm: list[float] = Field(

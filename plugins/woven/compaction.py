@@ -93,6 +93,13 @@ class BundleCompaction:
         if not 0.0 < self.packing_margin < 1.0:
             raise ValueError("packing_margin must lie in (0, 1)")
         cap = self.max_fraction * (1.0 - self.packing_margin)
+        if not cap < self.max_fraction:
+            # A margin below the float resolution puts the cap on the pole: σ and its slope
+            # there are infinite, so the "guarded" torque would be inf past the cap.
+            raise ValueError(
+                f"packing_margin {self.packing_margin:g} is too small to keep the cap below "
+                f"V_a = {self.max_fraction:g} in floating point"
+            )
         if not 0.0 < self.initial_fraction < cap:
             raise ValueError(
                 f"as-woven tow fraction {self.initial_fraction:.3f} must lie in (0, {cap:.3f})"
@@ -100,7 +107,24 @@ class BundleCompaction:
         if self.coupling_compliance != 0.0:
             grid = np.linspace(self.initial_fraction, cap, 4001)
             ok = self._denominator(grid) >= 0.1
-            cap = float(grid[np.argmin(ok)]) if not np.all(ok) else cap
+            if not np.all(ok):
+                first_bad = int(np.argmin(ok))
+                if first_bad == 0:
+                    raise ValueError(
+                        "coupling_compliance is so large that the Cai–Gutowski denominator "
+                        "F_bb·F11 − F_bl² is not positive at the as-woven fraction"
+                    )
+                # The cap is the last fraction where the denominator is still ≥ 10 %: the
+                # first grid point past it may lie beyond its zero, where σ_b's slope is
+                # negative or unbounded and the torque turns to noise. Bisect the crossing.
+                good, bad = float(grid[first_bad - 1]), float(grid[first_bad])
+                for _ in range(60):
+                    mid = 0.5 * (good + bad)
+                    if self._denominator(np.asarray(mid)) >= 0.1:
+                        good = mid
+                    else:
+                        bad = mid
+                cap = good
             cap = max(cap, self.initial_fraction * (1 + 1e-9))
         object.__setattr__(self, "cap_fraction", cap)
 

@@ -115,7 +115,7 @@ def crimp_angle(crossing_height: float, crossing_spacing: float) -> float:
 class FrictionCompactionParams(BaseModel):
     """Parameters of the woven ``friction_compaction`` law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     law: Literal["friction_compaction"] = Field(description="Selects this law.")
     friction_coefficient: float = Field(
