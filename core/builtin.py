@@ -19,17 +19,19 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 
 @hookimpl
 def preform_register_steps(register: StepRegistrar) -> None:
+    from preform.drape import search_steps
     from preform.drape import steps as drape_steps
     from preform.pipeline.core_steps import STEPS
 
-    for step in [*STEPS, *drape_steps.STEPS]:
+    for step in [*STEPS, *drape_steps.STEPS, *search_steps.STEPS]:
         register.add(step)
 
 
 @hookimpl
 def preform_register_exporters(register: ExporterRegistrar) -> None:
+    from preform.drape import search_steps
     from preform.drape import steps as drape_steps
     from preform.pipeline.core_steps import EXPORTERS
 
-    for step in [*EXPORTERS, *drape_steps.EXPORTERS]:
+    for step in [*EXPORTERS, *drape_steps.EXPORTERS, *search_steps.EXPORTERS]:
         register.add(step)

@@ -201,7 +201,7 @@ def _generators(
     start_xy: FloatArray,
     t_u: FloatArray,
     t_v: FloatArray,
-    kind: str | PlanPolylines,
+    kind: str | PlanPolylines | object,
     spacing: float,
     counts: tuple[int, int, int, int],
     substeps: int,
@@ -235,6 +235,11 @@ def _generators(
         return plan_generators(
             surface, start, lines, spacing, count, substeps=substeps, tolerance=tolerance
         )
+    if hasattr(kind, "nodes"):
+        # Paths that build their own nodes, e.g. preform.drape.curved.CurvedGenerators.
+        return kind.nodes(
+            surface, start, t_u, t_v, spacing, count, substeps=substeps, tolerance=tolerance
+        )
     assert polyline_halves is not None
     return plan_generators(
         surface, start, polyline_halves, spacing, count, substeps=substeps, tolerance=tolerance
@@ -254,7 +259,7 @@ def drape(
     start_point: ArrayLike | None = None,
     orientation_rad: float | None = 0.0,
     generator_angle_rad: float | None = 0.5 * np.pi,
-    generators: str | PlanPolylines = "geodesic",
+    generators: str | PlanPolylines | object = "geodesic",
     trim: Callable[[FloatArray], BoolArray] | None = None,
     tolerance: float = 1e-9,
     max_iterations: int = 30,
@@ -275,7 +280,8 @@ def drape(
     generator_angle_rad: angle α [rad] from +u to +v at the start, counter-clockwise seen from
         the outward normal, in the tangent plane; 0 < α < π.
     generators: "geodesic", "plan" (tool surface above straight plan lines), or
-        :class:`PlanPolylines` (then orientation and α follow from the polylines; pass None).
+        :class:`PlanPolylines` (then orientation and α follow from the polylines; pass None),
+        or paths with a ``nodes`` method (:class:`preform.drape.curved.CurvedGenerators`).
     trim: predicate on cell centroids (n, 3) [m] giving the part (default: every valid cell).
     tolerance: relative tolerance; every solve stops at ``tolerance``·d [m].
     max_iterations: cap on Newton steps per front on surfaces without a closed form.
@@ -336,7 +342,7 @@ def drape(
                 f"the second generator polyline is {np.degrees(alpha):.3g}° from the first; it "
                 "must be counter-clockwise from it (seen from the outward normal), 0 < α < 180°"
             )
-    elif generators in ("geodesic", "plan"):
+    elif hasattr(generators, "nodes") or generators in ("geodesic", "plan"):
         if orientation_rad is None or generator_angle_rad is None:
             raise DrapeError("orientation_rad and generator_angle_rad are required")
         theta, alpha = float(orientation_rad), float(generator_angle_rad)

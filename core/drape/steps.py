@@ -75,7 +75,15 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     settings = drape_settings(ctx.scene)
     optimum = ctx.products.get("optimum")
     if optimum is not None:
+        # the search may also have chosen the orientation, the start or curved generators
         alpha = float(optimum["generator_angle_rad"])
+        for key, setting in (
+            ("orientation_rad", "orientation_rad"),
+            ("start_xy_m", "start_xy_m"),
+            ("generators", "generators"),
+        ):
+            if optimum.get(key) is not None:
+                settings[setting] = optimum[key]
     else:
         assert ctx.scene.start is not None
         alpha = float(np.radians(ctx.scene.start.generator_angle_deg))

@@ -127,8 +127,9 @@ def energy_vs_angle_figure(
 
     ``curves`` maps a fabric name to (generator angle [deg], total energy [J]) pairs in any
     order; pairs with a non-finite energy (a failed drape) are left out. ``optima`` maps a
-    fabric name to its optimum generator angle [deg], marked with a star on the curve and
-    labelled. Returns the figure (already saved).
+    fabric name to its optimum generator angle [deg], marked with a star on the curve and given
+    in the legend. The energy axis turns logarithmic when the curves span more than a factor
+    100 (locking at extreme angles). Returns the figure (already saved).
     """
     from matplotlib import colormaps
 
@@ -136,38 +137,45 @@ def energy_vs_angle_figure(
         raise ValueError("curves is empty: nothing to draw")
     fig = new_figure(size_px)
     ax = fig.subplots()
-    palette = colormaps["tab10"]
+    palette = colormaps["tab10" if len(curves) <= 10 else "tab20"]
+    lowest, highest = np.inf, 0.0
     for n, (name, pairs) in enumerate(curves.items()):
         data = np.asarray(list(pairs), dtype=float).reshape(-1, 2)
         data = data[np.isfinite(data).all(axis=1)]
         data = data[np.argsort(data[:, 0])]
         colour = palette(n % palette.N)
-        ax.plot(data[:, 0], data[:, 1], "-o", color=colour, ms=3, lw=1.5, label=name)
+        label = name
+        if optima and name in optima:
+            label = f"{name}: optimum {float(optima[name]):.1f}°"
+        ax.plot(data[:, 0], data[:, 1], "-o", color=colour, ms=3, lw=1.5, label=label)
+        if len(data):
+            positive = data[:, 1][data[:, 1] > 0]
+            if positive.size:
+                lowest, highest = min(lowest, positive.min()), max(highest, positive.max())
         if optima and name in optima and len(data):
             best = float(optima[name])
             energy_at_best = float(np.interp(best, data[:, 0], data[:, 1]))
-            ax.plot(
-                best,
-                energy_at_best,
-                "*",
-                color=colour,
-                ms=16,
-                mec="k",
-                label=f"{name} optimum {best:.1f}°",
-            )
-            ax.annotate(
-                f"{best:.1f}°",
-                (best, energy_at_best),
-                textcoords="offset points",
-                xytext=(0, -18),
-                ha="center",
-                color=colour,
-            )
+            ax.plot(best, energy_at_best, "*", color=colour, ms=16, mec="k")
+            if len(curves) <= 3:  # labels beside the stars only while they cannot collide
+                ax.annotate(
+                    f"{best:.1f}°",
+                    (best, energy_at_best),
+                    textcoords="offset points",
+                    xytext=(0, -18),
+                    ha="center",
+                    color=colour,
+                )
+    if np.isfinite(lowest) and highest / lowest > 100:
+        # locking makes energies at extreme angles orders of magnitude larger than the optimum
+        ax.set_yscale("log")
     ax.set_xlabel("generator angle α [deg]")
     ax.set_ylabel("total shear strain energy [J]")
     ax.set_title(title or "Total strain energy against generator angle")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.grid(True, alpha=0.3, which="both")
+    if len(curves) > 3:
+        ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    else:
+        ax.legend(fontsize="small")
     fig.tight_layout()
     save_figure(fig, path)
     return fig

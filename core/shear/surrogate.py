@@ -52,12 +52,15 @@ class _SenseTable:
             limit = np.where((secant > 0) & (radius > 3.0), 3.0 / radius, 1.0)
         self.slope_left, self.slope_right = left * limit, right * limit
 
-    def __call__(self, u: FloatArray) -> FloatArray:
+    def _locate(self, u: FloatArray) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
         u = np.clip(u, 0.0, self.nodes[-1])
         k = np.clip(np.searchsorted(self.nodes, u, side="right") - 1, 0, len(self.nodes) - 2)
-        x0, x1 = self.nodes[k], self.nodes[k + 1]
-        h = x1 - x0
-        t = (u - x0) / h
+        h = self.nodes[k + 1] - self.nodes[k]
+        return k, (u - self.nodes[k]) / h, h
+
+    def __call__(self, u: FloatArray) -> FloatArray:
+        """W(u) [J/m²] by cubic Hermite interpolation."""
+        k, t, h = self._locate(u)
         t2, t3 = t * t, t * t * t
         h00, h10 = 2 * t3 - 3 * t2 + 1, t3 - 2 * t2 + t
         h01, h11 = -2 * t3 + 3 * t2, t3 - t2
@@ -70,9 +73,24 @@ class _SenseTable:
         # energy of a non-negative law never decreases: a cubic overshoot must not say so
         return np.maximum(w, np.minimum(self.energy[k], self.energy[k + 1]))
 
+    def slope(self, u: FloatArray) -> FloatArray:
+        """dW/du [N·m/m²] of the interpolant (consistent with ``__call__``, for gradients)."""
+        k, t, h = self._locate(u)
+        t2 = t * t
+        d00, d10 = 6 * t2 - 6 * t, 3 * t2 - 4 * t + 1
+        d01, d11 = -6 * t2 + 6 * t, 3 * t2 - 2 * t
+        dw = (
+            d00 * self.energy[k]
+            + d10 * h * self.slope_left[k]
+            + d01 * self.energy[k + 1]
+            + d11 * h * self.slope_right[k]
+        ) / h
+        beyond = np.abs(u) > self.nodes[-1]
+        return np.where(beyond, 0.0, np.maximum(dw, 0.0))
+
 
 class TabulatedSurrogate:
-    """A ``ShearLaw`` that evaluates ``law``'s energy from tables (torque stays exact).
+    """A ``ShearLaw`` that evaluates ``law``'s energy (and its slope, the torque) from tables.
 
     ``step_rad`` is the table spacing [rad]; the grid runs from 0 to 90° and also holds the
     law's locking and failure angles.
@@ -100,8 +118,14 @@ class TabulatedSurrogate:
         self._negative = _SenseTable(law, nodes, -1.0)
 
     def torque(self, gamma: ArrayLike) -> FloatArray:
-        """Torque per unit undeformed area [N·m/m²]: the wrapped law's, exactly."""
-        return np.asarray(self.law.torque(gamma), dtype=float)
+        """Torque per unit undeformed area [N·m/m²]: dW/dγ of the tabulated energy, so that
+        gradient-based solvers see the energy they minimise (equal to the law's torque at the
+        nodes, and to its accuracy between them)."""
+        g = np.asarray(gamma, dtype=float)
+        u = np.abs(g)
+        return np.where(
+            g > 0, self._positive.slope(u), np.where(g < 0, -self._negative.slope(u), 0.0 * g)
+        )
 
     def energy(self, gamma: ArrayLike) -> FloatArray:
         """Strain energy per unit area [J/m²] from the tables, at signed angles γ [rad]."""

@@ -51,7 +51,11 @@ def test_surrogate_is_still_a_law(library, name):
         w = s.energy(sense * g)
         assert np.all(np.isfinite(w)) and np.all(w >= 0)
         assert np.all(np.diff(w) >= -1e-12 * w.max())
-    np.testing.assert_array_equal(s.torque(g), law.torque(g))
+    # the surrogate's torque is the slope of its own energy, close to the law's torque
+    gm = g[(g > 0.01) & (g < math.radians(60))]
+    fd = (s.energy(gm + 1e-7) - s.energy(gm - 1e-7)) / 2e-7
+    np.testing.assert_allclose(s.torque(gm), fd, rtol=1e-5, atol=1e-9 * s.energy(1.0))
+    np.testing.assert_allclose(s.torque(gm), law.torque(gm), rtol=1e-3, atol=1e-6)
     assert s.locking_angle == law.locking_angle and s.failure_angle == law.failure_angle
 
 

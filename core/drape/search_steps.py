@@ -1,0 +1,350 @@
+"""Pipeline steps of the minimum-energy drape: E(α), the optimum, and the paper's Fig. 10.
+
+A scene with a ``search`` section asks for them (``outputs: [energy_vs_angle, optimum,
+energy_plot_png, ...]``); the drape step then drapes at the optimum. The search section's
+fidelity knobs (degrees, as in every scene; defaults in brackets):
+
+    search:
+      generator_angle_deg: {min: 30, max: 150, step: 5}   # range [30, 150]; step = scan step
+      scan_step_deg: 5            # same as generator_angle_deg.step [5]
+      tolerance_deg: 1            # refinement stops below this step [1]
+      max_drapes: 60              # budget of the angle search [60]
+      min_coverage: 0.0           # angles covering less of the part are infeasible [0]
+      part_area_mm2: null         # the part's area; default: the best coverage of the scan
+      uncovered_shear_deg: null   # shear charged on bare part area; default: locking, else 60
+      layout: {vary: [orientation, start_point], max_drapes: 60}   # Nelder–Mead [off]
+      curved_generators: {terms: 2, mirror_families: false, max_drapes: 120}      # [off]
+      relax: false                # beyond the paper; coarse nets only [off]; or
+                                  # {max_rounds: 8, max_iterations: 1500}
+
+Every knob used is recorded in the case summary (``search_settings``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from preform.drape.search import (
+    DEFAULT_MAX_DRAPES,
+    DEFAULT_SCAN_STEP_RAD,
+    DEFAULT_TOLERANCE_RAD,
+    AngleSearchResult,
+    DrapeObjective,
+    search_generator_angle,
+    search_layout,
+)
+from preform.drape.steps import drape_settings
+from preform.pipeline.step import CaseContext, Step
+
+if TYPE_CHECKING:
+    from preform.pipeline.scene import Scene
+
+MM = 1e-3
+
+
+@dataclass(frozen=True)
+class AngleStudy:
+    """The ``energy_vs_angle`` product: the search and the objective it used."""
+
+    search: AngleSearchResult
+    objective: DrapeObjective
+
+
+def search_knobs(scene: Scene) -> dict[str, Any]:
+    """The search section's knobs with their defaults filled in (degrees, mm², as written)."""
+    section = scene.search
+    if section is None:
+        raise ValueError("the angle search needs the scene section 'search'")
+    extra: dict[str, Any] = dict(section.model_extra or {})
+    span = section.generator_angle_deg
+    step = extra.get("scan_step_deg")
+    if step is None and span is not None and span.step is not None:
+        step = span.step
+    known = {
+        "scan_step_deg",
+        "tolerance_deg",
+        "max_drapes",
+        "min_coverage",
+        "part_area_mm2",
+        "uncovered_shear_deg",
+        "layout",
+        "curved_generators",
+        "relax",
+    }
+    unknown = sorted(set(extra) - known)
+    if unknown:
+        raise ValueError(
+            f"unknown search field(s) {', '.join(unknown)}; known: "
+            f"generator_angle_deg, {', '.join(sorted(known))}"
+        )
+    knobs: dict[str, Any] = {
+        "range_deg": [span.min, span.max] if span is not None else [30.0, 150.0],
+        "scan_step_deg": float(step) if step is not None else math.degrees(DEFAULT_SCAN_STEP_RAD),
+        "tolerance_deg": float(extra.get("tolerance_deg", math.degrees(DEFAULT_TOLERANCE_RAD))),
+        "max_drapes": int(extra.get("max_drapes", DEFAULT_MAX_DRAPES)),
+        "min_coverage": float(extra.get("min_coverage", 0.0)),
+        "part_area_mm2": extra.get("part_area_mm2"),
+        "uncovered_shear_deg": extra.get("uncovered_shear_deg"),
+        "layout": extra.get("layout"),
+        "curved_generators": extra.get("curved_generators"),
+        "relax": extra.get("relax", False),
+    }
+    return knobs
+
+
+def build_objective(ctx: CaseContext) -> DrapeObjective:
+    """The drape-and-judge objective of the case: its tool, ply, start and shear law."""
+    settings = drape_settings(ctx.scene)
+    if not isinstance(settings["generators"], str):
+        raise ValueError(
+            "the generator-angle search needs geodesic or plan generators, not "
+            "polylines (polylines fix the angle themselves)"
+        )
+    knobs = search_knobs(ctx.scene)
+    shear = knobs["uncovered_shear_deg"]
+    return DrapeObjective(
+        ctx.products["surface"],
+        ctx.products["shear_law"],
+        uncovered_shear_rad=None if shear is None else math.radians(float(shear)),
+        **settings,
+    )
+
+
+def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
+    knobs = search_knobs(ctx.scene)
+    objective = build_objective(ctx)
+    area = knobs["part_area_mm2"]
+    result = search_generator_angle(
+        objective,
+        angle_range_rad=(math.radians(knobs["range_deg"][0]), math.radians(knobs["range_deg"][1])),
+        scan_step_rad=math.radians(knobs["scan_step_deg"]),
+        tolerance_rad=math.radians(knobs["tolerance_deg"]),
+        max_drapes=knobs["max_drapes"],
+        min_coverage=knobs["min_coverage"],
+        part_area_m2=None if area is None else float(area) * MM * MM,
+    )
+    ctx.summary["energy_vs_angle"] = [[a, e] for a, e in result.curve_deg()]
+    ctx.summary["energy_vs_angle_coverage"] = [
+        [p.generator_angle_deg, p.coverage] for p in result.points
+    ]
+    ctx.summary["energy_vs_angle_feasible"] = [
+        [p.generator_angle_deg, p.feasible] for p in result.points
+    ]
+    ctx.summary["search_min_coverage"] = min(p.coverage for p in result.points)
+    ctx.summary["search_reference_area_m2"] = result.reference_area_m2
+    ctx.summary["search_uncovered_energy_density_J_per_m2"] = (
+        result.uncovered_energy_density_J_per_m2
+    )
+    ctx.summary["search_drapes"] = result.drapes
+    ctx.summary["search_settings"] = {**knobs, **result.settings}
+    return {"energy_vs_angle": AngleStudy(result, objective)}
+
+
+def run_optimum(ctx: CaseContext) -> dict[str, Any]:
+    study: AngleStudy = ctx.products["energy_vs_angle"]
+    search = study.search
+    knobs = search_knobs(ctx.scene)
+    optimum: dict[str, Any] = {
+        "generator_angle_rad": search.optimum_angle_rad,
+        "energy_J": search.optimum_energy_J,
+    }
+    ctx.summary.update(
+        {
+            "optimum_generator_angle_deg": search.optimum_angle_deg,
+            "optimum_energy_J": search.optimum_energy_J,
+            "optimum_bracket_deg": [math.degrees(a) for a in search.bracket_rad],
+            "optimum_bracket_half_width_deg": math.degrees(search.bracket_half_width_rad),
+            "optimum_vertex_std_deg": (
+                None if search.vertex_std_rad is None else math.degrees(search.vertex_std_rad)
+            ),
+            "optimum_at_boundary": search.at_boundary,
+            "optimum_noise_limited": search.noise_limited,
+        }
+    )
+    objective = study.objective
+    layout = knobs["layout"]
+    if layout:
+        _run_layout(ctx, objective, search, layout, optimum)
+    curved = knobs["curved_generators"]
+    if curved:
+        _run_curved(ctx, objective, search, curved, optimum)
+    relax = knobs["relax"]
+    if relax:
+        _run_relax(ctx, objective, optimum, relax if isinstance(relax, Mapping) else {})
+    return {"optimum": optimum}
+
+
+def _run_layout(
+    ctx: CaseContext,
+    objective: DrapeObjective,
+    search: AngleSearchResult,
+    layout: Mapping[str, Any],
+    optimum: dict[str, Any],
+) -> None:
+    settings = objective.drape_kwargs
+    start = settings.get("start_xy_m") or (0.0, 0.0)
+    vary = tuple(layout.get("vary", ("orientation", "start_point")))
+    found = search_layout(
+        objective,
+        generator_angle_rad=search.optimum_angle_rad,
+        orientation_rad=float(settings.get("orientation_rad") or 0.0),
+        start_xy_m=(float(start[0]), float(start[1])),
+        vary=vary,
+        reference_area_m2=search.reference_area_m2,
+        max_drapes=int(layout.get("max_drapes", 60)),
+    )
+    optimum.update(
+        generator_angle_rad=found.generator_angle_rad,
+        orientation_rad=found.orientation_rad,
+        start_xy_m=found.start_xy_m,
+        energy_J=found.energy_J,
+    )
+    ctx.summary.update(
+        {
+            "layout_varied": list(found.varied),
+            "layout_generator_angle_deg": math.degrees(found.generator_angle_rad),
+            "layout_orientation_deg": math.degrees(found.orientation_rad),
+            "layout_start_mm": [found.start_xy_m[0] / MM, found.start_xy_m[1] / MM],
+            "layout_energy_J": found.energy_J,
+            "layout_relative_saving": 1.0 - found.energy_J / found.initial_energy_J,
+            "layout_drapes": found.drapes,
+        }
+    )
+
+
+def _run_curved(
+    ctx: CaseContext,
+    objective: DrapeObjective,
+    search: AngleSearchResult,
+    curved: Any,
+    optimum: dict[str, Any],
+) -> None:
+    from preform.drape.curved import optimise_curved_generators
+
+    options = curved if isinstance(curved, Mapping) else {}
+    result = optimise_curved_generators(
+        objective,
+        generator_angle_rad=float(optimum["generator_angle_rad"]),
+        terms=int(options.get("terms", 2)),
+        mirror_families=bool(options.get("mirror_families", False)),
+        reference_area_m2=search.reference_area_m2,
+        max_drapes=int(options.get("max_drapes", 120)),
+    )
+    ctx.summary.update(result.summary())
+    if result.relative_saving > 0:
+        # The drape step drapes with these when it honours optimum["generators"].
+        optimum.update(
+            generators=result.generators,
+            generator_angle_rad=result.generator_angle_rad,
+            energy_J=result.energy_J,
+        )
+
+
+def _run_relax(
+    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any], options: Mapping[str, Any]
+) -> None:
+    from preform.drape.relax import relax_net
+
+    kinematic = objective.evaluate(
+        float(optimum["generator_angle_rad"]),
+        orientation_rad=optimum.get("orientation_rad"),
+        start_xy_m=optimum.get("start_xy_m"),
+        generators=optimum.get("generators"),
+        keep_result=True,
+    )
+    assert kinematic.result is not None
+    relaxed = relax_net(
+        kinematic.result,
+        objective.surface,
+        objective.law,
+        counted=objective.counted(kinematic.result),
+        max_rounds=int(options.get("max_rounds", 8)),
+        max_iterations=int(options.get("max_iterations", 1500)),
+    )
+    ctx.summary.update(relaxed.summary())
+
+
+def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.fig_curves import energy_vs_angle_figure
+
+    study: AngleStudy = ctx.products["energy_vs_angle"]
+    name = ctx.fabric.name
+    energy_vs_angle_figure(
+        {name: study.search.curve_deg()},
+        ctx.case_dir / "energy_vs_angle.png",
+        optima={name: math.degrees(float(ctx.products["optimum"]["generator_angle_rad"]))},
+        title=f"{name}: total shear strain energy against generator angle",
+    )
+    return {"energy_plot_png": "energy_vs_angle.png"}
+
+
+def energy_vs_angle_library(folder: Path, summaries: list[Mapping[str, Any]]) -> list[str]:
+    """The scene-wide figure (paper Fig. 10): one E(α) curve per fabric, optima marked.
+
+    Written to ``folder``/energy_vs_angle.png from the case summaries (``material``,
+    ``energy_vs_angle``, ``optimum_generator_angle_deg``); returns the file names written.
+    """
+    from preform.export.fig_curves import energy_vs_angle_figure
+
+    curves: dict[str, list[tuple[float, float]]] = {}
+    optima: dict[str, float] = {}
+    for summary in summaries:
+        pairs = summary.get("energy_vs_angle")
+        if not pairs:
+            continue
+        name = str(summary.get("material", f"case {len(curves) + 1}"))
+        curves[name] = [(float(a), float(e)) for a, e in pairs]
+        best = summary.get("optimum_generator_angle_deg")
+        if best is not None:
+            optima[name] = float(best)
+    if not curves:
+        return []
+    folder.mkdir(parents=True, exist_ok=True)
+    energy_vs_angle_figure(
+        curves,
+        folder / "energy_vs_angle.png",
+        optima=optima,
+        title="Total shear strain energy against generator angle",
+        size_px=(1200, 650),
+    )
+    return ["energy_vs_angle.png"]
+
+
+STEPS = [
+    Step(
+        "energy_vs_angle",
+        ("energy_vs_angle",),
+        ("surface", "shear_law"),
+        "1",
+        run_energy_vs_angle,
+        "Total shear strain energy of the drape against generator angle, with part coverage.",
+        scene_sections=("tool", "ply", "start", "search"),
+    ),
+    Step(
+        "optimum",
+        ("optimum",),
+        ("energy_vs_angle",),
+        "1",
+        run_optimum,
+        "The minimum-energy generator angle (and layout, curved generators, relaxation when "
+        "the search section asks).",
+        scene_sections=("search",),
+    ),
+]
+
+EXPORTERS = [
+    Step(
+        "energy_plot_png",
+        ("energy_plot_png",),
+        ("energy_vs_angle", "optimum"),
+        "1",
+        write_energy_plot_png,
+        "energy_vs_angle.png per case; the scene folder gets all fabrics on one figure",
+        writes_files=True,
+        aggregate=energy_vs_angle_library,
+    ),
+]

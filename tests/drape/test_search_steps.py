@@ -1,0 +1,179 @@
+"""The minimum-energy pipeline steps: knobs, the bundled scene, a run with the library-wide
+figure, and the optional stages (layout, curved generators, relaxation) in a case."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from preform.drape import search_steps
+from preform.drape.search_steps import EXPORTERS, STEPS, search_knobs
+from preform.pipeline.runner import make_cases, run_cases
+from preform.pipeline.scene import Scene, bundled_scene_dir, load_scene
+from preform.pipeline.step import CaseContext
+from preform.plugin_manager import hookimpl
+
+ISSUE_SCENE = """\
+name: hemisphere-min-energy
+tool:
+  surface: hemisphere
+  radius_mm: 100
+ply:
+  node_spacing_mm: 2.5
+  size_mm: [360, 360]
+start:
+  point_mm: [0, 0]
+  orientation_deg: 0
+search:
+  generator_angle_deg: {min: 30, max: 150}
+outputs: [energy_vs_angle, optimum, fibre_pattern_png, energy_plot_png, cells_csv]
+"""
+
+
+class SearchStepsPlugin:
+    """Registers this module's steps, as core/builtin.py will."""
+
+    @hookimpl
+    def preform_register_steps(self, register: Any) -> None:
+        for step in STEPS:
+            register.add(step)
+
+    @hookimpl
+    def preform_register_exporters(self, register: Any) -> None:
+        for step in EXPORTERS:
+            register.add(step)
+
+
+@pytest.fixture
+def sandbox(preform_plugins):
+    preform_plugins.load_builtins()
+    if "energy_vs_angle" not in preform_plugins.registry.names("steps"):
+        preform_plugins.register(SearchStepsPlugin(), name="search-steps")
+    return preform_plugins
+
+
+def coarse_scene(tmp_path: Path, **search: Any) -> Path:
+    data = yaml.safe_load(ISSUE_SCENE)
+    data["ply"]["node_spacing_mm"] = 10
+    data["search"].update(search)
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_bundled_scene_is_the_issues():
+    path = bundled_scene_dir() / "hemisphere-min-energy.yaml"
+    assert yaml.safe_load(path.read_text()) == yaml.safe_load(ISSUE_SCENE)
+
+
+def test_bundled_scene_plans(sandbox):
+    scene, _ = load_scene(bundled_scene_dir() / "hemisphere-min-energy.yaml", sandbox.registry)
+    assert scene.search is not None
+
+
+def test_knob_defaults_and_overrides():
+    base = {"name": "s", "outputs": ["optimum"]}
+    knobs = search_knobs(
+        Scene.model_validate({**base, "search": {"generator_angle_deg": {"min": 40, "max": 140}}})
+    )
+    assert knobs["range_deg"] == [40, 140]
+    assert knobs["scan_step_deg"] == 5.0 and knobs["tolerance_deg"] == 1.0
+    assert knobs["max_drapes"] == 60 and knobs["relax"] is False
+    knobs = search_knobs(
+        Scene.model_validate(
+            {
+                **base,
+                "search": {
+                    "generator_angle_deg": {"min": 40, "max": 140, "step": 10},
+                    "tolerance_deg": 0.25,
+                    "curved_generators": {"terms": 3},
+                },
+            }
+        )
+    )
+    assert knobs["scan_step_deg"] == 10 and knobs["tolerance_deg"] == 0.25
+    assert knobs["curved_generators"] == {"terms": 3}
+    with pytest.raises(ValueError, match="unknown search field"):
+        search_knobs(Scene.model_validate({**base, "search": {"scan_stepdeg": 3}}))
+
+
+def test_run_writes_curves_optima_and_the_library_figure(sandbox, tmp_path):
+    lib = sandbox.library(bundled=True)
+    scene = load_scene(coarse_scene(tmp_path), sandbox.registry)
+    out = tmp_path / "out"
+    report = run_cases(
+        make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-*"),
+        out,
+        sandbox.host,
+        engine="serial",
+    )
+    assert len(report.results) == 2
+    assert [r.status for r in report.results] == ["ok", "ok"], [r.error for r in report.results]
+    folder = out / "hemisphere-min-energy"
+    for result in report.results:
+        summary = json.loads((Path(folder) / result.material / "summary.json").read_text())
+        curve = summary["energy_vs_angle"]
+        assert curve[0][0] == pytest.approx(30.0) and curve[-1][0] == pytest.approx(150.0)
+        assert [a for a, _ in curve] == sorted(a for a, _ in curve)
+        # Woven laws are symmetric: the optimum is 90° and the drape step used it.
+        assert summary["optimum_generator_angle_deg"] == pytest.approx(90.0, abs=1e-6)
+        assert summary["generator_angle_deg"] == pytest.approx(90.0, abs=1e-6)
+        assert summary["optimum_energy_J"] == pytest.approx(min(e for _, e in curve), rel=1e-9)
+        assert len(summary["energy_vs_angle_coverage"]) == len(curve)
+        assert summary["search_settings"]["scan_step_deg"] == 5.0
+        assert "energy_vs_angle.png" in summary["files"]
+        assert (Path(folder) / result.material / "energy_vs_angle.png").stat().st_size > 0
+    assert (folder / "energy_vs_angle.png").stat().st_size > 0
+
+
+def test_library_figure_skips_cases_without_a_curve(tmp_path):
+    assert search_steps.energy_vs_angle_library(tmp_path, [{"material": "x"}]) == []
+    files = search_steps.energy_vs_angle_library(
+        tmp_path / "new",
+        [
+            {
+                "material": "a",
+                "energy_vs_angle": [[60, 2.0], [90, 1.0], [120, 2.0]],
+                "optimum_generator_angle_deg": 90.0,
+            },
+            {"material": "b", "energy_vs_angle": [[60, 1.0], [90, 1.5], [120, 3.0]]},
+        ],
+    )
+    assert files == ["energy_vs_angle.png"]
+    assert (tmp_path / "new" / "energy_vs_angle.png").stat().st_size > 0
+
+
+def test_optional_stages_report_in_the_summary(sandbox, tmp_path):
+    lib = sandbox.library(bundled=True)
+    scene, _ = load_scene(
+        coarse_scene(
+            tmp_path,
+            generator_angle_deg={"min": 60, "max": 120, "step": 15},
+            tolerance_deg=5,
+            layout={"vary": ["orientation"], "max_drapes": 6},
+            curved_generators={"terms": 1, "mirror_families": True, "max_drapes": 8},
+            relax={"max_rounds": 1, "max_iterations": 20},
+        ),
+        sandbox.registry,
+    )
+    ctx = CaseContext(
+        fabric=lib.fabric("plain-weave-150"),
+        scene=scene,
+        registry=sandbox.registry,
+        case_dir=tmp_path,
+    )
+    steps = {s.name: s for s in sandbox.registry.all_steps()}
+    for name in ("surface", "shear_law", "energy_vs_angle", "optimum", "energy_plot_png"):
+        ctx.products.update(steps[name].run(ctx))
+    summary = ctx.summary
+    assert summary["layout_varied"] == ["orientation"] and summary["layout_drapes"] <= 7
+    assert summary["curved_drapes"] <= 9 and "curved_relative_saving" in summary
+    assert summary["relaxed_energy_J"] <= summary["relaxed_kinematic_energy_J"] * (1 + 1e-9)
+    assert summary["search_settings"]["tolerance_deg"] == 5
+    assert 0 < math.degrees(ctx.products["optimum"]["generator_angle_rad"]) < 180
+    assert (tmp_path / "energy_vs_angle.png").exists()
