@@ -137,8 +137,9 @@ def test_search_energy_table_reproduces_a_quadratic_law(gamma):
     reproduces a piecewise-quadratic W to round-off, kink at γ = 0 included."""
     law = QuadraticLaw(80.0, 20.0)
     table = objective(law).energy_density
-    assert table(np.array([gamma]))[0] == pytest.approx(float(law.energy(gamma)), rel=1e-12,
-                                                        abs=1e-12)
+    assert table(np.array([gamma]))[0] == pytest.approx(
+        float(law.energy(gamma)), rel=1e-12, abs=1e-12
+    )
 
 
 def test_uncovered_part_is_charged_at_locked_energy_density():
