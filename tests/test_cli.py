@@ -112,3 +112,34 @@ def test_pipeline_unit_cell_scene_runs_only_the_unit_cell(tmp_path):
     summary = json.loads((out / "unit-cell" / "plain-weave-150" / "summary.json").read_text())
     assert set(summary["step_times_s"]) == {"unit_cell", "unit_cell_png", "unit_cell_vtu"}
     assert summary["areal_density_g_m2"] == pytest.approx(150, rel=0.01)
+
+
+def test_pipeline_run_without_arguments_is_the_papers_study(tmp_path, monkeypatch):
+    """README's first command: the bundled library through the minimum-energy hemisphere
+    study into ./preform-results, with the paper's figures and a row per fabric."""
+    import pandas as pd
+
+    monkeypatch.chdir(tmp_path)
+    run("pipeline", "run")
+    out = tmp_path / "preform-results"
+    table = pd.read_csv(out / "results.csv")
+    assert (table["status"] == "ok").all()
+    assert len(table) >= 10
+    by_name = table.set_index("material")
+    # symmetric woven laws: exactly 90 degrees; warp-knits: below 90, chain stitch furthest
+    assert by_name.loc["plain-weave-600", "optimum_generator_angle_deg"] == pytest.approx(90.0)
+    assert (
+        by_name.loc["E-BX-318", "optimum_generator_angle_deg"]
+        < by_name.loc["E-BXhd-936", "optimum_generator_angle_deg"]
+        < 90.0
+    )
+    assert (by_name["fidelity"] == "standard").all()
+    assert (by_name["knob_node_spacing_mm"] == 2.5).all()
+    scene_dir = out / "hemisphere-min-energy"
+    assert (scene_dir / "energy_vs_angle.png").exists()  # Fig. 10, one curve per fabric
+    case = scene_dir / "E-BX-318"
+    for name in ("fibre_pattern.png", "energy_vs_angle.png", "cells.csv", "summary.json"):
+        assert (case / name).exists(), name
+    summary = json.loads((case / "summary.json").read_text())
+    assert {"optimum_generator_angle_deg", "optimum_energy_J", "energy_vs_angle"} <= set(summary)
+    assert all(len(pair) == 2 for pair in summary["energy_vs_angle"])

@@ -29,15 +29,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from preform.drape.search import (
-    DEFAULT_MAX_DRAPES,
-    DEFAULT_SCAN_STEP_RAD,
-    DEFAULT_TOLERANCE_RAD,
     AngleSearchResult,
     DrapeObjective,
     search_generator_angle,
     search_layout,
 )
-from preform.drape.steps import drape_settings
+from preform.drape.steps import drape_settings, record_knobs
+from preform.pipeline import fidelity
 from preform.pipeline.step import CaseContext, Step
 
 if TYPE_CHECKING:
@@ -54,68 +52,51 @@ class AngleStudy:
     objective: DrapeObjective
 
 
-def search_knobs(scene: Scene) -> dict[str, Any]:
-    """The search section's knobs with their defaults filled in (degrees, mm², as written)."""
+def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, Any]:
+    """The search section's settings with the fidelity knobs resolved (degrees, mm²)."""
     section = scene.search
     if section is None:
         raise ValueError("the angle search needs the scene section 'search'")
-    extra: dict[str, Any] = dict(section.model_extra or {})
+    knobs = fidelity.resolve(scene, tool_size_m)
     span = section.generator_angle_deg
-    step = extra.get("scan_step_deg")
-    if step is None and span is not None and span.step is not None:
-        step = span.step
-    known = {
-        "scan_step_deg",
-        "tolerance_deg",
-        "max_drapes",
-        "min_coverage",
-        "part_area_mm2",
-        "uncovered_shear_deg",
-        "layout",
-        "curved_generators",
-        "relax",
-    }
-    unknown = sorted(set(extra) - known)
-    if unknown:
-        raise ValueError(
-            f"unknown search field(s) {', '.join(unknown)}; known: "
-            f"generator_angle_deg, {', '.join(sorted(known))}"
-        )
-    knobs: dict[str, Any] = {
+    return {
         "range_deg": [span.min, span.max] if span is not None else [30.0, 150.0],
-        "scan_step_deg": float(step) if step is not None else math.degrees(DEFAULT_SCAN_STEP_RAD),
-        "tolerance_deg": float(extra.get("tolerance_deg", math.degrees(DEFAULT_TOLERANCE_RAD))),
-        "max_drapes": int(extra.get("max_drapes", DEFAULT_MAX_DRAPES)),
-        "min_coverage": float(extra.get("min_coverage", 0.0)),
-        "part_area_mm2": extra.get("part_area_mm2"),
-        "uncovered_shear_deg": extra.get("uncovered_shear_deg"),
-        "layout": extra.get("layout"),
-        "curved_generators": extra.get("curved_generators"),
-        "relax": extra.get("relax", False),
+        "scan_step_deg": knobs.scan_step_deg,
+        "tolerance_deg": knobs.tolerance_deg,
+        "max_drapes": knobs.max_drapes,
+        "energy_table_step_deg": knobs.energy_table_step_deg,
+        "min_coverage": section.min_coverage,
+        "part_area_mm2": section.part_area_mm2,
+        "uncovered_shear_deg": section.uncovered_shear_deg,
+        "layout": section.layout,
+        "curved_generators": section.curved_generators,
+        "relax": section.relax,
     }
-    return knobs
 
 
 def build_objective(ctx: CaseContext) -> DrapeObjective:
     """The drape-and-judge objective of the case: its tool, ply, start and shear law."""
-    settings = drape_settings(ctx.scene)
+    settings = drape_settings(ctx.scene, ctx.products["surface"])
     if not isinstance(settings["generators"], str):
         raise ValueError(
             "the generator-angle search needs geodesic or plan generators, not "
             "polylines (polylines fix the angle themselves)"
         )
-    knobs = search_knobs(ctx.scene)
+    knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
     shear = knobs["uncovered_shear_deg"]
+    table = knobs["energy_table_step_deg"]
     return DrapeObjective(
         ctx.products["surface"],
         ctx.products["shear_law"],
         uncovered_shear_rad=None if shear is None else math.radians(float(shear)),
+        energy_table_step_rad=math.radians(table) if table > 0 else None,
         **settings,
     )
 
 
 def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
-    knobs = search_knobs(ctx.scene)
+    knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
+    record_knobs(ctx, ctx.products["surface"])
     objective = build_objective(ctx)
     area = knobs["part_area_mm2"]
     result = search_generator_angle(
@@ -147,7 +128,7 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
 def run_optimum(ctx: CaseContext) -> dict[str, Any]:
     study: AngleStudy = ctx.products["energy_vs_angle"]
     search = study.search
-    knobs = search_knobs(ctx.scene)
+    knobs = search_knobs(ctx.scene, float(study.objective.surface.size))
     optimum: dict[str, Any] = {
         "generator_angle_rad": search.optimum_angle_rad,
         "energy_J": search.optimum_energy_J,

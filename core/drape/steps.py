@@ -15,6 +15,7 @@ from preform.drape.fields import energy_field, summary
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
 from preform.drape.result import DrapeResult, EnergyField
+from preform.pipeline import fidelity
 from preform.pipeline.step import CaseContext, Step
 
 if TYPE_CHECKING:
@@ -37,11 +38,14 @@ def build_surface(scene: Scene, registry: Any) -> Any:
     return registry.surface_type(tool.surface).build(tool, scene.base_dir)
 
 
-def drape_settings(scene: Scene) -> dict[str, Any]:
-    """Keyword arguments of :func:`preform.drape.net.drape` from a scene (SI units)."""
+def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
+    """Keyword arguments of :func:`preform.drape.net.drape` from a scene (SI units), with the
+    fidelity knobs resolved against the tool (``preform.pipeline.fidelity``)."""
     ply, start = scene.ply, scene.start
     if ply is None or start is None:
         raise ValueError("a drape needs the scene sections 'ply' and 'start'")
+    knobs = fidelity.resolve(scene, float(surface.size))
+    assert knobs.node_spacing_mm is not None
     if ply.outline_mm is not None:
         outline = PlyOutline.polygon(np.asarray(ply.outline_mm, dtype=float) * MM)
     else:
@@ -50,11 +54,13 @@ def drape_settings(scene: Scene) -> dict[str, Any]:
             (size[0] * MM, size[1] * MM), offset_m=(-ply.offset_mm[0] * MM, -ply.offset_mm[1] * MM)
         )
     settings: dict[str, Any] = {
-        "node_spacing_m": ply.node_spacing_mm * MM,
+        "node_spacing_m": knobs.node_spacing_mm * MM,
         "ply": outline,
         "start_xy_m": (start.point_mm[0] * MM, start.point_mm[1] * MM),
         "orientation_rad": float(np.radians(start.orientation_deg)),
         "generators": start.generators,
+        "tolerance": knobs.solver_tolerance,
+        "substeps": knobs.generator_substeps,
     }
     if start.generators == "polyline":
         from preform.drape.generators import PlanPolylines
@@ -67,12 +73,21 @@ def drape_settings(scene: Scene) -> dict[str, Any]:
     return settings
 
 
+def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:
+    """Resolve the scene's fidelity knobs and record them as scalar results of the case."""
+    knobs = fidelity.resolve(ctx.scene, float(surface.size))
+    for key, value in knobs.as_dict().items():
+        ctx.summary[key if key == "fidelity" else f"knob_{key}"] = value
+    return knobs
+
+
 def run_surface(ctx: CaseContext) -> dict[str, Any]:
     return {"surface": build_surface(ctx.scene, ctx.registry)}
 
 
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
-    settings = drape_settings(ctx.scene)
+    settings = drape_settings(ctx.scene, ctx.products["surface"])
+    record_knobs(ctx, ctx.products["surface"])
     optimum = ctx.products.get("optimum")
     if optimum is not None:
         # the search may also have chosen the orientation, the start or curved generators

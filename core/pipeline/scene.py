@@ -25,7 +25,12 @@ class PlySection(BaseModel):
     """The fabric ply: its node spacing and its outline in the flat."""
 
     model_config = _STRICT
-    node_spacing_mm: float = Field(gt=0, description="Pin-jointed net node spacing d [mm].")
+    node_spacing_mm: float | None = Field(
+        default=None,
+        gt=0,
+        description="Pin-jointed net node spacing d [mm]; when absent the fidelity preset "
+        "chooses it from the tool's size.",
+    )
     size_mm: tuple[float, float] | None = Field(
         default=None, description="Rectangular ply size [mm] along the two fibre families."
     )
@@ -97,10 +102,70 @@ class RangeDeg(BaseModel):
 
 
 class SearchSection(BaseModel):
-    """The minimum-energy search over generator choices."""
+    """The minimum-energy search over generator choices (see ``preform.drape.search``)."""
 
-    model_config = ConfigDict(extra="allow", frozen=True, allow_inf_nan=False)
-    generator_angle_deg: RangeDeg | None = None
+    model_config = _STRICT
+    generator_angle_deg: RangeDeg | None = Field(
+        default=None, description="Range of generator angles to search [deg] (default 30-150)."
+    )
+    scan_step_deg: float | None = Field(
+        default=None, gt=0, description="Step of the global scan [deg] (fidelity knob)."
+    )
+    tolerance_deg: float | None = Field(
+        default=None, gt=0, description="Refinement tolerance on the optimum [deg] (knob)."
+    )
+    max_drapes: int | None = Field(
+        default=None, ge=3, description="Most drapes the search may run (fidelity knob)."
+    )
+    min_coverage: float = Field(
+        default=0.0,
+        ge=0,
+        le=1,
+        description="Angles whose drape covers less of the part than this are infeasible.",
+    )
+    part_area_mm2: float | None = Field(
+        default=None,
+        gt=0,
+        description="Area of the part [mm²]; uncovered part area is charged at the locking "
+        "energy density (default: the largest area any scanned drape covers).",
+    )
+    uncovered_shear_deg: float | None = Field(
+        default=None,
+        gt=0,
+        lt=90,
+        description="Shear [deg] at which uncovered part area is charged (default: locking).",
+    )
+    layout: dict[str, Any] | None = Field(
+        default=None,
+        description="Also search the orientation and start point (Nelder-Mead): "
+        "{orientation: true, start_point: true, ...}; see preform.drape.search.",
+    )
+    curved_generators: dict[str, Any] | None = Field(
+        default=None,
+        description="Optimise curved generators after the angle: {terms: 2, ...}.",
+    )
+    relax: bool | dict[str, Any] = Field(
+        default=False,
+        description="Beyond the paper: relax the whole net towards least energy afterwards.",
+    )
+
+
+class NumericsSection(BaseModel):
+    """Hand-set numerical knobs; each overrides the fidelity preset (preform.pipeline.fidelity)."""
+
+    model_config = _STRICT
+    solver_tolerance: float | None = Field(
+        default=None, gt=0, lt=1e-2, description="Solver tolerance relative to the spacing d."
+    )
+    generator_substeps: int | None = Field(
+        default=None, ge=1, le=1024, description="Sub-steps per d when marching generators."
+    )
+    energy_table_step_deg: float | None = Field(
+        default=None,
+        ge=0,
+        le=10,
+        description="Step of the shear law's energy table while searching [deg]; 0 = exact.",
+    )
 
 
 class ShearSection(BaseModel):
@@ -123,7 +188,11 @@ class Scene(BaseModel):
     start: StartSection | None = None
     search: SearchSection | None = None
     shear: ShearSection | None = None
-    fidelity: Literal["draft", "standard", "fine"] | None = None
+    fidelity: Literal["draft", "standard", "fine"] | None = Field(
+        default=None,
+        description="Preset of the numerical knobs (default standard); hand-set knobs win.",
+    )
+    numerics: NumericsSection | None = None
     materials: str | None = Field(
         default=None, description="Glob of fabric names this scene applies to (default all)."
     )
@@ -153,12 +222,19 @@ def bundled_scene_dir() -> Path:
     return Path(str(resources.files("preform.materials") / "scenes"))
 
 
+#: The scene ``preform pipeline run`` runs when given none: the founding paper's study, the
+#: minimum-energy drape of every fabric over a hemisphere.
+DEFAULT_SCENE = "hemisphere-min-energy"
+
+
 def default_scene_path() -> Path:
-    return bundled_scene_dir() / "default.yaml"
+    return bundled_scene_dir() / f"{DEFAULT_SCENE}.yaml"
 
 
 def resolve_scene_path(spec: str) -> Path:
-    """A scene file path, or the name of a bundled scene (``hemisphere``)."""
+    """A scene file path, or the name of a bundled scene (``hemisphere``; ``default``)."""
+    if spec == "default":
+        return default_scene_path()
     path = Path(spec)
     if path.exists() or path.suffix in (".yaml", ".yml"):
         return path

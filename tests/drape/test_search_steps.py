@@ -10,6 +10,7 @@ from typing import Any
 
 import pytest
 import yaml
+from pydantic import ValidationError
 
 from preform.drape import search_steps
 from preform.drape.search_steps import EXPORTERS, STEPS, search_knobs
@@ -98,8 +99,14 @@ def test_knob_defaults_and_overrides():
     )
     assert knobs["scan_step_deg"] == 10 and knobs["tolerance_deg"] == 0.25
     assert knobs["curved_generators"] == {"terms": 3}
-    with pytest.raises(ValueError, match="unknown search field"):
-        search_knobs(Scene.model_validate({**base, "search": {"scan_stepdeg": 3}}))
+    # a misspelt knob is refused when the scene is validated, not when the case runs
+    with pytest.raises(ValidationError, match="scan_stepdeg"):
+        Scene.model_validate({**base, "search": {"scan_stepdeg": 3}})
+    # a preset moves every knob the scene leaves alone; hand-set ones stay
+    draft = search_knobs(
+        Scene.model_validate({**base, "fidelity": "draft", "search": {"tolerance_deg": 0.5}})
+    )
+    assert draft["scan_step_deg"] == 10.0 and draft["tolerance_deg"] == 0.5
 
 
 def test_run_writes_curves_optima_and_the_library_figure(sandbox, tmp_path):

@@ -1,0 +1,113 @@
+"""Fidelity: every knob that trades time for accuracy, its presets, and how a scene sets it.
+
+A scene may name a preset (``fidelity: draft | standard | fine``; ``standard`` when absent) and
+may set any knob by hand; a hand-set value always wins over the preset. The resolved knobs are
+recorded in every case's summary. The preset values were chosen from the measured
+speed/accuracy front (``preform bench tradeoff``; table and command in ``benchmarks/README.md``).
+
+Knobs (units in the names):
+
+- ``node_spacing_mm``: pin-jointed net spacing d. Hand-set in ``ply.node_spacing_mm``; else the
+  preset's fraction of the tool's typical length (``Surface.size``: the radius of a sphere).
+- ``solver_tolerance``: placement and generator solves stop at this × d (relative, never
+  absolute, so refining the net does not degrade it).
+- ``generator_substeps``: sub-steps per node spacing when marching geodesic generators on
+  surfaces without a closed form.
+- ``energy_table_step_deg``: step of the tabulated surrogate of the shear law used while
+  searching (cubic Hermite, error ∝ step⁴); ``0`` uses the law itself.
+- ``scan_step_deg``, ``tolerance_deg``, ``max_drapes``: the generator-angle search's global
+  scan step, refinement tolerance and drape budget.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+if TYPE_CHECKING:
+    from preform.pipeline.scene import Scene
+
+Preset = Literal["draft", "standard", "fine"]
+
+
+@dataclass(frozen=True)
+class Knobs:
+    """Resolved fidelity knobs of a scene (the units are in the names)."""
+
+    fidelity: str
+    node_spacing_mm: float | None
+    solver_tolerance: float
+    generator_substeps: int
+    energy_table_step_deg: float
+    scan_step_deg: float
+    tolerance_deg: float
+    max_drapes: int
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @property
+    def energy_table_step_rad(self) -> float | None:
+        """The surrogate's step [rad], or None for the law itself."""
+        step = self.energy_table_step_deg
+        return math.radians(step) if step > 0 else None
+
+
+#: d as a fraction of the tool's typical length, when the scene does not set it.
+SPACING_FRACTION: dict[str, float] = {"draft": 1 / 20, "standard": 1 / 40, "fine": 1 / 80}
+
+PRESETS: dict[str, dict[str, Any]] = {
+    "draft": {
+        "solver_tolerance": 1e-6,
+        "generator_substeps": 8,
+        "energy_table_step_deg": 1.0,
+        "scan_step_deg": 10.0,
+        "tolerance_deg": 2.0,
+        "max_drapes": 30,
+    },
+    "standard": {
+        "solver_tolerance": 1e-9,
+        "generator_substeps": 16,
+        "energy_table_step_deg": 0.25,
+        "scan_step_deg": 5.0,
+        "tolerance_deg": 1.0,
+        "max_drapes": 60,
+    },
+    "fine": {
+        "solver_tolerance": 1e-11,
+        "generator_substeps": 32,
+        "energy_table_step_deg": 0.0,
+        "scan_step_deg": 2.5,
+        "tolerance_deg": 0.25,
+        "max_drapes": 120,
+    },
+}
+
+
+def resolve(scene: Scene, tool_size_m: float | None = None) -> Knobs:
+    """The knobs of ``scene``: hand-set values, else its preset's (``standard`` by default).
+
+    ``tool_size_m`` [m] is needed only when the scene leaves the node spacing to the preset.
+    """
+    preset = scene.fidelity or "standard"
+    values = dict(PRESETS[preset])
+    numerics = scene.numerics
+    if numerics is not None:
+        for key, value in numerics.model_dump(exclude_none=True).items():
+            values[key] = value
+    search = scene.search
+    if search is not None:
+        for key in ("scan_step_deg", "tolerance_deg", "max_drapes"):
+            value = getattr(search, key, None)
+            if value is not None:
+                values[key] = value
+        span = search.generator_angle_deg
+        if search.scan_step_deg is None and span is not None and span.step is not None:
+            values["scan_step_deg"] = span.step
+    spacing: float | None = None
+    if scene.ply is not None and scene.ply.node_spacing_mm is not None:
+        spacing = scene.ply.node_spacing_mm
+    elif tool_size_m is not None:
+        spacing = SPACING_FRACTION[preset] * tool_size_m * 1e3
+    return Knobs(fidelity=preset, node_spacing_mm=spacing, **values)
