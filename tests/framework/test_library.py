@@ -164,3 +164,25 @@ def test_cli_validate_reports_and_exits_nonzero(toy, tmp_path):
     assert res.exit_code == 1
     assert f"{bad}:2:17: z.architecture: unknown architecture 'nope'" in res.output
     assert "Traceback" not in res.output
+
+
+def test_preform_library_environment_adds_directories(toy, tmp_path, monkeypatch):
+    import os
+
+    from preform.library import load_library
+
+    first, second = tmp_path / "lab-a", tmp_path / "lab-b"
+    first.mkdir()
+    second.mkdir()
+    write(first, "a.yaml", GOOD)
+    write(
+        second,
+        "b.yml",
+        "name: felt-z\narchitecture: toy\nsource: s\nnote: n\nareal_density_g_m2: 5\n",
+    )
+    monkeypatch.setenv("PREFORM_LIBRARY", f"{first}{os.pathsep}{second}")
+    lib = load_library(bundled=False, registry=toy.registry)
+    assert sorted(lib.names()) == ["felt-a", "felt-b", "felt-z"]
+    # the environment's fabrics clash with the same names given again on the command line
+    with pytest.raises(LibraryError, match="duplicate fabric name 'felt-a'"):
+        load_library([first / "a.yaml"], bundled=False, registry=toy.registry)
