@@ -346,9 +346,11 @@ def pipeline_run(
 
 def _add_physics_commands() -> None:
     from preform.shear.commands import fit_command, shear_command
+    from preform.tradeoff import bench
 
     cli.add_command(shear_command, "shear")
     cli.add_command(fit_command, "fit")
+    cli.add_command(bench, "bench")
 
 
 _add_physics_commands()

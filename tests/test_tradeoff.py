@@ -1,0 +1,51 @@
+"""`preform bench tradeoff --quick`: it writes the table and the figure, and the numbers in them
+behave (a behaviour test, not a timed one)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from preform.tradeoff import bench, pareto_front
+
+
+def test_quick_tradeoff_writes_a_sensible_table_and_figure(tmp_path: Path) -> None:
+    out = tmp_path / "bench"
+    result = CliRunner().invoke(bench, ["tradeoff", "--quick", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    table, figure = out / "tradeoff.csv", out / "tradeoff.png"
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with table.open(newline="", encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    labels = [row["label"] for row in rows]
+    assert labels[0] == "reference" and "standard" in labels and "draft" in labels
+
+    errors = ("energy_rel_error", "angle_error_deg", "max_shear_error_deg")
+    for row in rows:
+        for column in ("wall_s", "peak_mb", *errors, "chebyshev_max_shear_error_deg"):
+            assert math.isfinite(float(row[column])), (row["label"], column)
+        assert float(row["wall_s"]) > 0 and float(row["peak_mb"]) > 0
+    reference = rows[0]
+    assert all(float(reference[column]) == 0.0 for column in errors)
+
+    # Coarser nets err more in energy, on the measured points (standard varies none but d).
+    by_spacing = sorted(
+        (
+            (float(row["node_spacing_mm"]), float(row["energy_rel_error"]))
+            for row in rows
+            if row["knob"] == "node_spacing_mm" or row["label"] == "standard"
+        ),
+    )
+    assert len(by_spacing) >= 3
+    energy_errors = [error for _, error in by_spacing]
+    assert energy_errors == sorted(energy_errors)
+    assert energy_errors[-1] > energy_errors[0]
+
+
+def test_pareto_front_keeps_only_undominated_points() -> None:
+    times = [1.0, 2.0, 3.0, 2.5, 0.5]
+    errors = [0.1, 0.05, 0.0, 0.2, math.nan]
+    assert pareto_front(times, errors) == [True, True, True, False, False]
