@@ -133,17 +133,19 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
         "generator_angle_rad": search.optimum_angle_rad,
         "energy_J": search.optimum_energy_J,
     }
+    record = search.summary()
     ctx.summary.update(
         {
-            "optimum_generator_angle_deg": search.optimum_angle_deg,
-            "optimum_energy_J": search.optimum_energy_J,
-            "optimum_bracket_deg": [math.degrees(a) for a in search.bracket_rad],
-            "optimum_bracket_half_width_deg": math.degrees(search.bracket_half_width_rad),
-            "optimum_vertex_std_deg": (
-                None if search.vertex_std_rad is None else math.degrees(search.vertex_std_rad)
-            ),
-            "optimum_at_boundary": search.at_boundary,
-            "optimum_noise_limited": search.noise_limited,
+            key if key.startswith("optimum_") else f"optimum_{key}": record[key]
+            for key in (
+                "optimum_generator_angle_deg",
+                "optimum_energy_J",
+                "bracket_deg",
+                "bracket_half_width_deg",
+                "vertex_std_deg",
+                "at_boundary",
+                "noise_limited",
+            )
         }
     )
     objective = study.objective

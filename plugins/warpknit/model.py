@@ -8,6 +8,8 @@ written.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from functools import cached_property
 from typing import Annotated, Any, Literal
 
@@ -187,7 +189,10 @@ class WarpKnitFabric(FabricBase):
         if problems:
             loc, message = problems[0]
             raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
-        return self.geometry.unit_cell()
+        cell = self.geometry.unit_cell()
+        return dataclasses.replace(
+            cell, reference_direction=math.radians(self.reference_direction_deg())
+        )
 
     def derived(self) -> dict[str, Any]:
         """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow
@@ -203,7 +208,8 @@ class WarpKnitFabric(FabricBase):
             "areal_density_layers_g_m2": layers,
             "areal_density_stitch_g_m2": sum(stitch),
             "areal_density_stitch_levels_g_m2": stitch,
-            "stitch_direction_deg": self.reference_direction_deg(),
+            "stitch_direction_deg": 0.0,  # the machine direction, x of the cell
+            "reference_direction_deg": self.reference_direction_deg(),
             "stitch": [t.sequence.describe() for t in geo.thread_levels],
             "needle_distance_mm": [t.needle_pitch / MM for t in geo.thread_levels],
             "thickness_mm": geo.thickness / MM,
@@ -241,6 +247,14 @@ class WarpKnitFabric(FabricBase):
         return out
 
     def reference_direction_deg(self) -> float:
-        """The stitch (machine) direction, 0 deg: positive shear lengthens the fabric along the
-        stitch ("parallel" shear, stitch in tension)."""
-        return 0.0
+        """The bisector [deg] of the two fibre families along which positive shear lengthens
+        the fabric. For ±θ layers the stitch (machine direction, 0°) bisects them: positive
+        shear is then "parallel" shear, stitch in tension. When the stitch runs along a fibre
+        family (0/90 layers) no bisector is the stitch and shear does not stretch it to first
+        order: the reference is then the bisector of the first two layers (45° for 0/90)."""
+        if len(self.tow_layers) < 2:
+            return 0.0
+        first, second = (layer.orientation_deg for layer in self.tow_layers[:2])
+        if abs(first + second) < 1e-9:  # ±θ about the stitch
+            return 0.0
+        return 0.5 * (first + second)
