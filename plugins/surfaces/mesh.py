@@ -45,6 +45,14 @@ def _dot(u: FloatArray, v: FloatArray) -> FloatArray:
     return np.einsum("...i,...i->...", u, v)
 
 
+def _cross(u: FloatArray, v: FloatArray) -> FloatArray:
+    """Cross products of (..., 3) arrays: np.cross's axis shuffling costs more than the
+    arithmetic on the small arrays a marching generator sends."""
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack((u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0), axis=-1)
+
+
 def _closest_on_segments(p: FloatArray, start: FloatArray, end: FloatArray) -> FloatArray:
     edge = end - start
     length_sq = _dot(edge, edge)
@@ -60,11 +68,11 @@ def _closest_on_triangles(p: FloatArray, a: FloatArray, b: FloatArray, c: FloatA
     (all barycentric weights ≥ 0); otherwise the nearest point is on the boundary, i.e. the
     nearest of the three edge projections. Exact, branch-free, vectorised.
     """
-    normal = np.cross(b - a, c - a)
+    normal = _cross(b - a, c - a)
     normal_sq = _dot(normal, normal)
     foot = p - (_dot(p - a, normal) / normal_sq)[..., None] * normal
-    weight_a = _dot(np.cross(b - foot, c - foot), normal) / normal_sq
-    weight_b = _dot(np.cross(c - foot, a - foot), normal) / normal_sq
+    weight_a = _dot(_cross(b - foot, c - foot), normal) / normal_sq
+    weight_b = _dot(_cross(c - foot, a - foot), normal) / normal_sq
     inside = (weight_a >= 0.0) & (weight_b >= 0.0) & (weight_a + weight_b <= 1.0)
     edges = np.stack(
         (
@@ -236,7 +244,10 @@ class TriangleMesh:
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
-        closest, distance, _ = self.closest_faces(points)
+        closest, distance, face = self.closest_faces(points)
+        # Callers usually ask next for the normals at exactly these points (project, then
+        # orient): remember which triangle each lies on so normal() need not search again.
+        self._last_feet = (closest, face)
         return closest, distance
 
     def barycentric(self, points: FloatArray, face: IntArray) -> FloatArray:
@@ -253,7 +264,15 @@ class TriangleMesh:
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3) at surface points (n, 3) [m]: the closest triangle's face
         normal, or the interpolated vertex normal with ``smooth_normals``."""
-        closest, _, face = self.closest_faces(points)
+        last = getattr(self, "_last_feet", None)
+        if (
+            last is not None
+            and last[0].shape == np.shape(points)
+            and np.array_equal(last[0], points, equal_nan=True)
+        ):
+            closest, face = last
+        else:
+            closest, _, face = self.closest_faces(points)
         if not self.smooth_normals:
             normals = self.face_normals[face]
         else:
