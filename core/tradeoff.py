@@ -65,6 +65,8 @@ DEFAULT_MATERIAL = "E-BX-318"
 #: the standard row). Node spacing as a fraction of the tool's size (a hemisphere's radius).
 SPACING_FRACTIONS: tuple[float, ...] = (1 / 10, 1 / 20, 1 / 40, 1 / 80, 1 / 160)
 SOLVER_TOLERANCES: tuple[float, ...] = (1e-4, 1e-6, 1e-9, 1e-12)
+#: Sub-steps per node spacing when marching geodesic generators (tools without closed forms).
+GENERATOR_SUBSTEPS: tuple[int, ...] = (4, 8, 32)
 TABLE_STEPS_DEG: tuple[float, ...] = (2.0, 1.0, 0.5, 0.25, 0.0)
 SCAN_STEPS_DEG: tuple[float, ...] = (15.0, 10.0, 5.0, 2.5)
 REFINE_TOLERANCES_DEG: tuple[float, ...] = (4.0, 2.0, 1.0, 0.25, 0.0625)
@@ -323,6 +325,7 @@ def tradeoff_settings(scene: Scene, tool_size_m: float, *, quick: bool = False) 
         return settings
     numerics_ladders: tuple[tuple[str, Sequence[float], str], ...] = (
         ("solver_tolerance", SOLVER_TOLERANCES, "tol={:g}"),
+        ("generator_substeps", GENERATOR_SUBSTEPS, "substeps={:g}"),
         ("energy_table_step_deg", TABLE_STEPS_DEG, "table={:g}deg"),
     )
     for knob, ladder, fmt in numerics_ladders:
