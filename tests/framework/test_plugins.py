@@ -115,3 +115,30 @@ def test_testing_fixture_blocks_discovery(preform_plugins, third_party_site):
 
     preform_plugins.register(toyplug, "toy")
     assert preform_plugins.registry.names("architectures") == ["toy"]
+
+
+def test_plugins_add_commands_and_a_failing_one_is_recorded():
+    import click
+
+    from preform import hookimpl
+
+    class Greeter:
+        @hookimpl
+        def preform_register_commands(self, cli):
+            @cli.command("hello")
+            def hello() -> None:
+                click.echo("hello from a plugin")
+
+    class Broken:
+        @hookimpl
+        def preform_register_commands(self, cli):
+            raise RuntimeError("no commands today")
+
+    host = PluginHost()
+    host.add(Greeter(), "greeter")
+    host.add(Broken(), "broken-commands")
+    group = click.Group("preform")
+    host.register_commands(group)
+    assert CliRunner().invoke(group, ["hello"]).output == "hello from a plugin\n"
+    assert "no commands today" in host.records["broken-commands"].error
+    assert host.records["greeter"].error is None
