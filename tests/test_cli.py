@@ -143,3 +143,49 @@ def test_pipeline_run_without_arguments_is_the_papers_study(tmp_path, monkeypatc
     summary = json.loads((case / "summary.json").read_text())
     assert {"optimum_generator_angle_deg", "optimum_energy_J", "energy_vs_angle"} <= set(summary)
     assert all(len(pair) == 2 for pair in summary["energy_vs_angle"])
+
+
+def test_hemisphere_scene_writes_what_issue_5_lists(tmp_path):
+    """The bundled single-drape scene, accepted as written, with its files and columns."""
+    import meshio
+    import pandas as pd
+
+    out = tmp_path / "out"
+    run(
+        "pipeline",
+        "run",
+        "--scene",
+        "hemisphere",
+        "--materials",
+        "E-BXhd-936",
+        "--engine",
+        "serial",
+        "--out",
+        str(out),
+    )
+    case = out / "hemisphere" / "E-BXhd-936"
+    cells = pd.read_csv(case / "cells.csv")
+    assert {"i", "j", "x_mm", "y_mm", "z_mm", "shear_deg", "energy_J_per_m2", "status"} <= set(
+        cells.columns
+    )
+    summary = json.loads((case / "summary.json").read_text())
+    for key in (
+        "nodes_total",
+        "nodes_placed",
+        "max_abs_shear_deg",
+        "mean_abs_shear_deg",
+        "total_energy_J",
+        "cells_past_locking",
+        "cells_past_failure",
+    ):
+        assert key in summary, key
+    assert summary["nodes_total"] == 145 * 145
+    valid = cells[cells["status"] == "VALID"]
+    # the summary's energy is the cells' energy densities times the undeformed cell area d²
+    assert summary["total_energy_J"] == pytest.approx(
+        valid["energy_J_per_m2"].sum() * 0.0025**2, rel=1e-9
+    )
+    assert summary["max_abs_shear_deg"] == pytest.approx(valid["shear_deg"].abs().max())
+    mesh = meshio.read(case / "drape.vtu")
+    assert len(mesh.cells[0].data) == len(valid)
+    assert (case / "fibre_pattern.png").stat().st_size > 10_000
