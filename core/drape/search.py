@@ -69,7 +69,6 @@ DEFAULT_UNCOVERED_SHEAR_RAD = math.radians(60.0)
 DEFAULT_SCAN_STEP_RAD = math.radians(5.0)
 DEFAULT_TOLERANCE_RAD = math.radians(1.0)
 DEFAULT_MAX_DRAPES = 60
-#: Spacing of the W(γ) table the objective interpolates [rad], and how far it reaches.
 #: Step of the shear law's energy table during a search [rad] (a fidelity knob; see
 #: ``preform.shear.surrogate`` for its measured error, below 3e-7 of W at this step).
 DEFAULT_ENERGY_TABLE_STEP_RAD = math.radians(0.25)
