@@ -168,18 +168,24 @@ def _check_callable(build: Any, what: str, arity: int) -> None:
         raise RegistrationError(f"{what}: build must accept {arity} arguments ({exc})") from None
 
 
+def _check_tagged(what: str, name: str, params: Any, tag_field: str, build: Any) -> None:
+    """A params model tagged ``tag_field: Literal[name]`` and a two-argument builder."""
+    label = f"{what} {name!r}"
+    if not (inspect.isclass(params) and issubclass(params, BaseModel)):
+        raise RegistrationError(f"{label}: params must be a pydantic model")
+    tag = _literal_tag(params, tag_field)
+    if tag != name:
+        raise RegistrationError(f"{label}: params.{tag_field} is Literal[{tag!r}]")
+    _check_callable(build, label, 2)
+
+
 class ShearLawRegistrar(Registrar[ShearLawType]):
     kind = "shear_laws"
 
     def add(self, name: str, params: type[BaseModel], build: Callable[..., Any]) -> None:
         """Register a law: ``params`` validates the YAML block (``law: Literal[name]``);
         ``build(params, fabric)`` returns an object satisfying ``preform.ShearLaw``."""
-        if not (inspect.isclass(params) and issubclass(params, BaseModel)):
-            raise RegistrationError(f"shear law {name!r}: params must be a pydantic model")
-        tag = _literal_tag(params, "law")
-        if tag != name:
-            raise RegistrationError(f"shear law {name!r}: params.law is Literal[{tag!r}]")
-        _check_callable(build, f"shear law {name!r}", 2)
+        _check_tagged("shear law", name, params, "law", build)
         self._put(name, ShearLawType(name, params, build))
 
 
@@ -189,12 +195,7 @@ class SurfaceRegistrar(Registrar[SurfaceType]):
     def add(self, name: str, params: type[BaseModel], build: Callable[..., Any]) -> None:
         """Register a tool surface: ``params`` validates the scene's ``tool`` block
         (``surface: Literal[name]``); ``build(params, base_dir)`` returns a Surface [m]."""
-        if not (inspect.isclass(params) and issubclass(params, BaseModel)):
-            raise RegistrationError(f"surface {name!r}: params must be a pydantic model")
-        tag = _literal_tag(params, "surface")
-        if tag != name:
-            raise RegistrationError(f"surface {name!r}: params.surface is Literal[{tag!r}]")
-        _check_callable(build, f"surface {name!r}", 2)
+        _check_tagged("surface", name, params, "surface", build)
         self._put(name, SurfaceType(name, params, build))
 
 

@@ -142,3 +142,39 @@ def test_plugins_add_commands_and_a_failing_one_is_recorded():
     assert CliRunner().invoke(group, ["hello"]).output == "hello from a plugin\n"
     assert "no commands today" in host.records["broken-commands"].error
     assert host.records["greeter"].error is None
+
+
+@pytest.mark.parametrize(
+    ("kind", "message"),
+    [
+        ("not-a-model", "params must be a pydantic model"),
+        ("wrong-tag", "params.law is Literal"),
+        ("bad-build", "build must accept 2 arguments"),
+    ],
+)
+def test_invalid_shear_law_registrations_are_refused(kind, message):
+    from typing import Literal
+
+    from pydantic import BaseModel, create_model
+
+    from preform import hookimpl
+
+    tag = "other" if kind == "wrong-tag" else "mine"
+    params_model = create_model("Params", __base__=BaseModel, law=(Literal[tag], ...))
+
+    def build(params, fabric):
+        return None
+
+    def bad_build(params):
+        return None
+
+    class Plugin:
+        @hookimpl
+        def preform_register_shear_laws(self, register):
+            params = dict if kind == "not-a-model" else params_model
+            register.add("mine", params, bad_build if kind == "bad-build" else build)
+
+    host = PluginHost()
+    record = host.add(Plugin(), "lawful")
+    assert message in record.error
+    assert "mine" not in host.registry.names("shear_laws")
