@@ -8,6 +8,7 @@ from typing import Any
 __version__ = "0.1.0"
 
 from preform.material import FabricBase, Location
+from preform.pipeline.status import CaseFailure, CaseStatus
 from preform.pipeline.step import CaseContext, Step
 from preform.plugin_manager import PluginHost, default_host, hookimpl
 from preform.registry import RegistrationError, Registry
@@ -23,6 +24,8 @@ def load_library(*args: Any, **kwargs: Any) -> Any:
 
 __all__ = [
     "CaseContext",
+    "CaseFailure",
+    "CaseStatus",
     "FabricBase",
     "Location",
     "PluginHost",

@@ -168,6 +168,31 @@ class NumericsSection(BaseModel):
     )
 
 
+class LimitsSection(BaseModel):
+    """Resource limits of one case. Each protects the machine from an input that would take it
+    over (a ply of 10^10 nodes, a 2 GB mesh, a case that never ends). Raise one on purpose here;
+    the value in force is recorded with the case (``limit_*`` in its summary)."""
+
+    model_config = _STRICT
+    case_timeout_s: float | None = Field(
+        default=None,
+        gt=0,
+        description="Wall-time limit of one case [s]; past it the case is stopped and recorded "
+        "timed_out. Default: the run's --case-timeout.",
+    )
+    max_nodes: int = Field(
+        default=20_000_000,
+        ge=1,
+        description="Most pin-jointed-net nodes one drape may have (ply size / node spacing, "
+        "squared) [-]; about 130 bytes each.",
+    )
+    max_mesh_mb: float = Field(
+        default=512.0,
+        gt=0,
+        description="Largest tool mesh file read [MB]; larger files are refused before reading.",
+    )
+
+
 class ShearSection(BaseModel):
     """Angles at which shear curves are tabulated."""
 
@@ -193,6 +218,10 @@ class Scene(BaseModel):
         description="Preset of the numerical knobs (default standard); hand-set knobs win.",
     )
     numerics: NumericsSection | None = None
+    limits: LimitsSection = Field(
+        default_factory=LimitsSection,
+        description="Resource limits of a case (time, net size, mesh file size).",
+    )
     materials: str | None = Field(
         default=None, description="Glob of fabric names this scene applies to (default all)."
     )

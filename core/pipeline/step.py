@@ -28,6 +28,32 @@ class CaseContext:
     summary: dict[str, Any] = field(default_factory=dict)
     #: Files written by the case, relative to case_dir.
     files: list[str] = field(default_factory=list)
+    #: Why the result covers less than the scene asked, in words; any makes the case
+    #: ``partial`` (see ``preform.pipeline.status``). Set through :meth:`partial`.
+    partial_reasons: list[str] = field(default_factory=list)
+    #: What the user must know about a result that is still complete (cells past locking,
+    #: angles outside the law's data range), in words. Set through :meth:`warn`.
+    warnings: list[str] = field(default_factory=list)
+
+    def partial(self, reason: str, covered_fraction: float | None = None) -> None:
+        """Mark the result partial: it is finite but does not cover what the scene asked.
+
+        ``covered_fraction`` (0..1) is the share of what was asked that the result covers
+        (e.g. of the part's area); the smallest one given is recorded as ``covered_fraction``.
+        """
+        if reason not in self.partial_reasons:
+            self.partial_reasons.append(reason)
+        if covered_fraction is not None:
+            previous = self.summary.get("covered_fraction")
+            value = float(covered_fraction)
+            self.summary["covered_fraction"] = (
+                value if previous is None else min(float(previous), value)
+            )
+
+    def warn(self, message: str) -> None:
+        """Say something the user must know about this case's result, in words."""
+        if message not in self.warnings:
+            self.warnings.append(message)
 
 
 #: A step's body: reads ``ctx.products`` (its requirements), returns what it provides.
