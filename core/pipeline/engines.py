@@ -1,22 +1,58 @@
-"""Where cases run: ``concurrent.futures`` executors, nothing home-made.
+"""Where cases run: an executor per engine, nothing home-made.
 
-``serial`` runs each case when it is submitted (debugging, exact tracebacks), ``process`` is a
-local process pool (the default), ``dask`` hands cases to a Dask cluster through
-``Client.get_executor()`` (optional extra ``preform[dask]``).
+``serial`` runs each case in this process when it is submitted (debugging, exact tracebacks);
+``process`` is a local pool of worker processes (the default), built on ``pebble`` because it
+does what ``concurrent.futures.ProcessPoolExecutor`` cannot: a worker that dies (segfault,
+``os._exit``, the OOM killer) fails only its own case and is replaced, and a case past its time
+limit is stopped by killing its worker. ``dask`` hands cases to a Dask cluster through
+``Client.get_executor()`` (optional extra ``preform[dask]``); there a time limit is enforced by
+the runner and by the case itself between steps, since Dask cannot stop a running task.
+
+Every engine gives back ``concurrent.futures.Future`` objects, and :meth:`Engine.stop` ends
+everything at once (Ctrl-C). Worker processes watch their parent and exit when it is gone, so a
+``kill -9`` of the main process does not leave them computing into the results directory.
 """
 
 from __future__ import annotations
 
-import contextlib
-import multiprocessing
 import os
-from collections.abc import Callable, Iterator
-from concurrent.futures import Executor, Future, ProcessPoolExecutor
+import signal
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import Executor, Future
 from typing import Any, TypeVar
 
 T = TypeVar("T")
 
 ENGINES = ("serial", "process", "dask")
+
+#: How often a worker checks that its parent process is still alive [s].
+PARENT_POLL_S = 0.2
+
+
+class CaseTimeout(BaseException):
+    """Raised inside a case that ran past its time limit (a BaseException, so the case's own
+    ``except Exception`` handlers cannot swallow it)."""
+
+
+class Engine:
+    """An executor of cases, how many cases to keep in flight, and a way to stop at once."""
+
+    #: Cases the runner keeps submitted at a time (more only queue, and a queued case would
+    #: have to be cancelled on an interrupt).
+    capacity: int = 1
+    #: Whether ``submit(..., timeout_s=)`` is enforced by the engine itself.
+    enforces_timeout: bool = False
+
+    def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
+        raise NotImplementedError  # each engine below implements it
+
+    def stop(self) -> None:
+        """Stop every running and queued case now (interrupt)."""
+
+    def close(self) -> None:
+        """Release the engine's resources after a normal end."""
 
 
 class SerialExecutor(Executor):
@@ -26,49 +62,137 @@ class SerialExecutor(Executor):
         future: Future[T] = Future()
         try:
             future.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # delivered through the future, like any executor
+        except (Exception, CaseTimeout) as exc:  # delivered through the future, like any executor
             future.set_exception(exc)
         return future
 
 
-@contextlib.contextmanager
-def open_executor(
-    engine: str, *, workers: int | None = None, scheduler: str | None = None
-) -> Iterator[Executor]:
-    """An executor for ``engine``, closed on exit."""
-    if engine == "serial":
-        yield SerialExecutor()
-    elif engine == "process":
+def _raise_timeout(_signum: int, _frame: Any) -> None:
+    raise CaseTimeout()
+
+
+class SerialEngine(Engine):
+    """In this process, one case at a time. A time limit uses SIGALRM (main thread only), so
+    it interrupts Python code; a single long call into compiled code ends before it fires.
+    A crash of this process ends the run; what finished is already recorded."""
+
+    capacity = 1
+
+    def __init__(self) -> None:
+        self._executor = SerialExecutor()
+        self.enforces_timeout = (
+            hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
+        )
+
+    def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
+        if timeout_s is None or not self.enforces_timeout:
+            return self._executor.submit(fn, *args)
+        previous = signal.signal(signal.SIGALRM, _raise_timeout)
+        signal.setitimer(signal.ITIMER_REAL, timeout_s)
+        try:
+            return self._executor.submit(fn, *args)
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
+
+
+def watch_parent(parent_pid: int) -> None:
+    """Worker initializer: exit at once when the parent process is gone (kill -9, crash).
+
+    A daemon thread polls the parent pid; when the worker is re-parented, its results would go
+    nowhere and it might still write into the results directory, so it ends itself.
+    """
+
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent_pid:
+                os._exit(1)
+            time.sleep(PARENT_POLL_S)
+
+    threading.Thread(target=watch, name="preform-parent-watch", daemon=True).start()
+
+
+class ProcessEngine(Engine):
+    """A pebble process pool (spawn start method: safe with threads in the parent, and each
+    worker sees the parent's current sys.path and environment)."""
+
+    enforces_timeout = True
+
+    def __init__(self, workers: int | None = None) -> None:
+        import multiprocessing
+
+        from pebble import ProcessPool
+
         n = workers or max(1, os.cpu_count() or 1)
-        # spawn: safe with threads in the parent, and each worker sees the parent's current
-        # sys.path and environment (plugins installed since start-up included); the import
-        # cost is paid once per worker, not per case
-        ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-            yield pool
-    elif engine == "dask":
+        self.capacity = 2 * n  # one running and one queued per worker keeps them busy
+        self._pool = ProcessPool(
+            max_workers=n,
+            initializer=watch_parent,
+            initargs=(os.getpid(),),
+            context=multiprocessing.get_context("spawn"),
+        )
+
+    def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
+        future: Future[T] = self._pool.schedule(fn, args=args, timeout=timeout_s)
+        return future
+
+    def stop(self) -> None:
+        self._pool.stop()
+        self._pool.join(timeout=10)
+
+    def close(self) -> None:
+        self._pool.close()
+        self._pool.join()
+
+
+class DaskEngine(Engine):
+    """A Dask cluster: a LocalCluster of worker processes, or the scheduler at ``address``."""
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
         try:
             from distributed import Client, LocalCluster
         except ImportError:
             raise RuntimeError(
                 'the dask engine needs the optional extra: pip install "preform[dask]"'
             ) from None
+        self._cluster = None
         if scheduler:
-            client = Client(scheduler)
-            cluster = None
+            self._client = Client(scheduler)
         else:
-            cluster = LocalCluster(
+            self._cluster = LocalCluster(
                 n_workers=workers or 2,
                 threads_per_worker=1,
                 processes=True,
                 dashboard_address=None,
             )
-            client = Client(cluster)
-        try:
-            yield client.get_executor()
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-    else:
-        raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")
+            self._client = Client(self._cluster)
+        threads = sum(self._client.nthreads().values()) or 1
+        self.capacity = max(1, threads)
+        self._executor = self._client.get_executor()
+        self._futures: list[Future[Any]] = []
+
+    def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
+        future: Future[T] = self._executor.submit(fn, *args)
+        self._futures.append(future)
+        return future
+
+    def stop(self) -> None:
+        for future in self._futures:
+            future.cancel()
+        self.close()
+
+    def close(self) -> None:
+        self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def open_engine(engine: str, *, workers: int | None = None, scheduler: str | None = None) -> Engine:
+    """The engine named ``engine``; the caller closes (or stops) it."""
+    if engine == "serial":
+        return SerialEngine()
+    if engine == "process":
+        return ProcessEngine(workers)
+    if engine == "dask":
+        return DaskEngine(workers, scheduler)
+    raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")

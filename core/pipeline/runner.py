@@ -1,14 +1,10 @@
 """Run every (material, scene) case of a library into a results directory.
 
-Layout of a run directory::
-
-    manifest.json        inputs and their hashes, versions, settings, status of every case
-    results.csv          one row per case: status, error, step wall times, scalar results
-    results.parquet      the same, when pyarrow is installed (extra ``preform[parquet]``)
-    <scene>/<material>/  summary.json and the files the scene asked for
-
-Every file is written atomically. A case that fails is recorded and the others go on. A rerun
-into the same directory skips cases whose inputs are unchanged and that already succeeded.
+The directory's layout, lock, manifest and tables are ``preform.pipeline.rundir``'s; the
+engines are ``preform.pipeline.engines``'; what a status means is ``preform.pipeline.status``.
+Here: what a case is (and the hash that says when its result can be reused), how one case runs
+and what its status is, and the loop that runs a set of cases so that a case that fails, dies,
+hangs or is interrupted costs only itself, and everything that finished is kept.
 """
 
 from __future__ import annotations
@@ -16,26 +12,40 @@ from __future__ import annotations
 import fnmatch
 import hashlib
 import json
+import math
 import re
+import signal
+import threading
 import time
 import traceback
-from collections.abc import Callable, Sequence
-from concurrent.futures import Future
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import asdict, dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
 from preform import __version__
-from preform.export.atomic import atomic_open, atomic_path
 from preform.library import Library, fabric_from_data
-from preform.pipeline.engines import SerialExecutor, open_executor
+from preform.pipeline.engines import CaseTimeout, Engine, open_engine
 from preform.pipeline.planner import plan
+from preform.pipeline.rundir import (
+    RunDirectory,
+    RunDirectoryError,
+    now_utc,
+    read_json,
+    write_json,
+)
+from preform.pipeline.rundir import clean_json as _clean_json
 from preform.pipeline.scene import Scene, scene_from_data
+from preform.pipeline.status import REUSABLE, CaseFailure, CaseStatus
 from preform.pipeline.step import CaseContext
 from preform.plugin_manager import PluginHost
+
+#: Wall-time limit of a case when neither the scene (``limits.case_timeout_s``) nor the
+#: command line (``--case-timeout``) sets one [s]. The bundled studies take seconds a case.
+DEFAULT_CASE_TIMEOUT_S = 3600.0
+#: Extra time the runner allows an engine that cannot stop a case itself (Dask) [s].
+TIMEOUT_GRACE_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -53,6 +63,8 @@ class Case:
     #: Plugins to load in a worker besides entry-point discovery: (name, module).
     plugins: tuple[tuple[str, str], ...] = ()
     discover: bool = True
+    #: Wall-time limit [s]; None for none.
+    timeout_s: float | None = None
 
 
 @dataclass
@@ -60,16 +72,43 @@ class CaseResult:
     case_id: str
     material: str
     scene: str
-    status: str  # "ok", "failed" or "skipped" (done in an earlier run)
+    status: str  # a CaseStatus value
     error: str | None = None
     wall_time_s: float = 0.0
     step_times_s: dict[str, float] = field(default_factory=dict)
     results: dict[str, Any] = field(default_factory=dict)
     files: list[str] = field(default_factory=list)
+    #: Why the result is partial (or what stopped it), in words.
+    reasons: list[str] = field(default_factory=list)
+    #: What the user must know about the result, in words.
+    warnings: list[str] = field(default_factory=list)
+    #: True when an earlier run's result was kept (this run's "skipped").
+    reused: bool = False
 
 
-def _slug(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("_") or "unnamed"
+# -- folders and hashes ----------------------------------------------------------------------
+
+_SAFE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,79}")
+_RESERVED = {"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(10))}
+_RESERVED |= {f"LPT{i}" for i in range(10)}
+
+
+def folder_name(name: str) -> str:
+    """A safe, unique folder name for a fabric or scene name.
+
+    A name that is already a plain file name (letters, digits, ``._-``, not starting with a dot,
+    at most 80 characters) is used as it is. Any other name is reduced to such characters and
+    given a hash of the full name, so ``a b`` and ``a_b`` get different folders and ``..`` never
+    walks out of the results directory.
+    """
+    if (
+        _SAFE_NAME.fullmatch(name)
+        and not name.endswith(".")
+        and name.split(".")[0].upper() not in _RESERVED
+    ):
+        return name
+    base = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("._-")[:60] or "unnamed"
+    return f"{base}-{hashlib.sha256(name.encode()).hexdigest()[:8]}"
 
 
 def _sha256_file(path: Path) -> str:
@@ -80,36 +119,73 @@ def _sha256_file(path: Path) -> str:
     return h.hexdigest()
 
 
-def _json_default(obj: Any) -> Any:
-    if hasattr(obj, "item"):
-        return obj.item()
-    if hasattr(obj, "tolist"):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+def _referenced_files(data: Any, base_dir: Path) -> Iterator[tuple[str, Path]]:
+    """Strings in scene data that name an existing regular file (a tool mesh), resolved."""
+    if isinstance(data, dict):
+        for value in data.values():
+            yield from _referenced_files(value, base_dir)
+    elif isinstance(data, list):
+        for value in data:
+            yield from _referenced_files(value, base_dir)
+    elif isinstance(data, str) and data and len(data) < 4096 and "\n" not in data:
+        path = base_dir / data
+        try:
+            if path.is_file():
+                yield data, path
+        except (OSError, ValueError):
+            return
 
 
-def _clean_json(obj: Any) -> Any:
-    """NaN/inf → None so that every JSON we write is strict JSON."""
-    if isinstance(obj, float):
-        return obj if obj == obj and abs(obj) != float("inf") else None
-    if isinstance(obj, dict):
-        return {str(k): _clean_json(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_clean_json(v) for v in obj]
-    if hasattr(obj, "tolist"):
-        return _clean_json(obj.tolist())
-    if hasattr(obj, "item"):
-        return _clean_json(obj.item())
-    return obj
+def input_hash(
+    fabric_data: Mapping[str, Any],
+    scene: Scene,
+    scene_data: Mapping[str, Any],
+    host: PluginHost,
+) -> str:
+    """The hash of everything that determines a case's result, and nothing else.
 
+    The fabric's and the scene's canonical data (key order does not matter), the content of the
+    files the scene references (a tool mesh, by its bytes, not its path), the name and version of
+    each step that runs, and the plugin and version providing each of them, the architecture,
+    the shear law and the surface. Stable across processes (no set or hash-seed order) and
+    across unrelated plugins being installed.
+    """
+    registry = host.registry
+    providers: set[tuple[str, str, str, str]] = set()
 
-def write_json(path: Path, obj: Any) -> None:
-    """Write strict JSON atomically."""
-    with atomic_open(path) as f:
-        json.dump(_clean_json(obj), f, indent=2, sort_keys=True, default=_json_default)
-        f.write("\n")
+    def provider(kind: str, name: Any) -> None:
+        entry = registry.entries(kind).get(str(name)) if name is not None else None
+        if entry is not None:
+            providers.add((kind, entry.name, entry.plugin, entry.version))
+
+    steps = sorted((s.name, s.version) for s in plan(scene, registry))
+    for name, _ in steps:
+        provider("steps", name)
+        provider("exporters", name)
+    provider("architectures", fabric_data.get("architecture"))
+    law = fabric_data.get("shear_law")
+    if isinstance(law, Mapping):
+        provider("shear_laws", law.get("law"))
+    tool = scene_data.get("tool")
+    if isinstance(tool, Mapping):
+        provider("surfaces", tool.get("surface"))
+    files = sorted(
+        (text, _sha256_file(path))
+        for text, path in _referenced_files(dict(scene_data), Path(scene.base_dir))
+    )
+    blob = json.dumps(
+        {
+            "fabric": fabric_data,
+            "scene": scene_data,
+            "files": files,
+            "steps": steps,
+            "providers": sorted(providers),
+            "preform": __version__,
+        },
+        sort_keys=True,
+        default=str,
+    )
+    return hashlib.sha256(blob.encode()).hexdigest()
 
 
 # -- executing one case (runs in a worker) ---------------------------------------------------
@@ -129,11 +205,64 @@ def _worker_host(case: Case) -> PluginHost:
     return host
 
 
+def non_finite_values(data: Any, prefix: str = "") -> list[str]:
+    """``key = value`` of every non-finite float in a (nested) result mapping."""
+    found: list[str] = []
+    if isinstance(data, Mapping):
+        for key, value in data.items():
+            found += non_finite_values(value, f"{prefix}.{key}" if prefix else str(key))
+    elif isinstance(data, list | tuple):
+        for i, value in enumerate(data):
+            found += non_finite_values(value, f"{prefix}[{i}]")
+    elif isinstance(data, float) and not math.isfinite(data):
+        found.append(f"{prefix} = {data}")
+    elif hasattr(data, "dtype") and hasattr(data, "tolist"):
+        found += non_finite_values(data.tolist(), prefix)
+    return found
+
+
+def case_record(case: Case, result: CaseResult) -> dict[str, Any]:
+    """The case's summary.json: its identity, status in words, timings, and results."""
+    return {
+        **result.results,
+        "case_id": case.case_id,
+        "material": case.material,
+        "scene": case.scene,
+        "status": result.status,
+        "error": result.error,
+        "reasons": result.reasons,
+        "warnings": result.warnings,
+        "input_hash": case.input_hash,
+        "finished": now_utc(),
+        "wall_time_s": round(result.wall_time_s, 6),
+        "step_times_s": result.step_times_s,
+        "files": result.files,
+    }
+
+
+def _error_text(exc: BaseException) -> str:
+    tb = traceback.extract_tb(exc.__traceback__)
+    where = f" (at {Path(tb[-1].filename).name}:{tb[-1].lineno})" if tb else ""
+    return f"{type(exc).__name__}: {exc}{where}"
+
+
 def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
-    """Run one case and write its folder. Never raises for a failure of the case itself."""
+    """Run one case and write its folder. Never raises for a failure of the case itself.
+
+    The status: ``failed`` on an error, a ``CaseFailure`` or a non-finite number in the results;
+    ``timed_out`` past the case's time limit (checked between steps here; the process engine
+    also kills a worker that overruns inside a step); else ``partial`` when a step said the
+    result covers less than asked; else ``ok``.
+    """
     started = time.perf_counter()
-    result = CaseResult(case.case_id, case.material, case.scene, "ok")
+    result = CaseResult(case.case_id, case.material, case.scene, CaseStatus.OK.value)
     case_dir = Path(case.case_dir)
+    ctx: CaseContext | None = None
+
+    def check_time() -> None:
+        if case.timeout_s is not None and time.perf_counter() - started > case.timeout_s:
+            raise CaseTimeout()
+
     try:
         host = host or _worker_host(case)
         registry = host.registry
@@ -141,7 +270,10 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
         scene = scene_from_data(case.scene_data, case.scene_base_dir, registry)
         case_dir.mkdir(parents=True, exist_ok=True)
         ctx = CaseContext(fabric=fabric, scene=scene, registry=registry, case_dir=case_dir)
+        if case.timeout_s is not None:
+            ctx.summary["limit_case_timeout_s"] = case.timeout_s
         for step in plan(scene, registry):
+            check_time()
             t0 = time.perf_counter()
             out = dict(step.run(ctx))
             missing = [p for p in step.provides if p not in out]
@@ -153,31 +285,35 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
                     value = out[product]
                     ctx.files.extend([value] if isinstance(value, str) else list(value))
             result.step_times_s[step.name] = time.perf_counter() - t0
+        check_time()
         result.results = dict(ctx.summary)
         result.files = list(dict.fromkeys(ctx.files))
-    except Exception as exc:
-        result.status = "failed"
-        tb = traceback.extract_tb(exc.__traceback__)
-        where = f" (at {Path(tb[-1].filename).name}:{tb[-1].lineno})" if tb else ""
-        result.error = f"{type(exc).__name__}: {exc}{where}"
+        result.warnings = list(ctx.warnings)
+        bad = non_finite_values(result.results)
+        if bad:
+            result.status = CaseStatus.FAILED.value
+            result.error = "the result holds non-finite numbers: " + "; ".join(bad[:10])
+        elif ctx.partial_reasons:
+            result.status = CaseStatus.PARTIAL.value
+            result.reasons = list(ctx.partial_reasons)
+    except CaseTimeout:
+        result.status = CaseStatus.TIMED_OUT.value
+        result.error = f"stopped at the case time limit of {case.timeout_s:g} s"
+    except CaseFailure as exc:
+        result.status = CaseStatus.FAILED.value
+        result.error = str(exc)
+    except (Exception, SystemExit) as exc:  # a plugin's sys.exit() fails its case only
+        result.status = CaseStatus.FAILED.value
+        result.error = _error_text(exc)
+    if ctx is not None and result.status != CaseStatus.OK.value:
+        # what the steps said before it stopped still helps to read the failure
+        result.warnings = list(ctx.warnings)
+        result.reasons = result.reasons or list(ctx.partial_reasons)
     result.wall_time_s = time.perf_counter() - started
     try:
-        write_json(
-            case_dir / "summary.json",
-            {
-                "material": case.material,
-                "scene": case.scene,
-                "status": result.status,
-                "error": result.error,
-                "input_hash": case.input_hash,
-                "wall_time_s": result.wall_time_s,
-                "step_times_s": result.step_times_s,
-                "files": result.files,
-                **result.results,
-            },
-        )
+        write_json(case_dir / "summary.json", case_record(case, result))
     except Exception as exc:  # e.g. disk full: the case failed, the run goes on
-        result.status = "failed"
+        result.status = CaseStatus.FAILED.value
         result.error = f"could not write summary.json: {exc}"
     return result
 
@@ -185,23 +321,8 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
 # -- planning a run --------------------------------------------------------------------------
 
 
-def _input_hash(
-    fabric_data: dict[str, Any], scene: Scene, scene_data: dict[str, Any], host: PluginHost
-) -> str:
-    steps = [(s.name, s.version) for s in plan(scene, host.registry)]
-    plugins = sorted((r.name, r.version or "") for r in host.records.values() if not r.error)
-    blob = json.dumps(
-        {
-            "fabric": fabric_data,
-            "scene": scene_data,
-            "steps": steps,
-            "plugins": plugins,
-            "preform": __version__,
-        },
-        sort_keys=True,
-        default=_json_default,
-    )
-    return hashlib.sha256(blob.encode()).hexdigest()
+class CaseSetError(ValueError):
+    """The cases cannot be laid out in the results directory (two share a folder)."""
 
 
 def make_cases(
@@ -211,113 +332,130 @@ def make_cases(
     host: PluginHost,
     materials_glob: str | None = None,
     discover: bool = True,
+    timeout_s: float | None = None,
 ) -> list[Case]:
-    """Every (material, scene) case, in a stable order."""
+    """Every (material, scene) case, in a stable order.
+
+    ``timeout_s`` is the run's case time limit; a scene's ``limits.case_timeout_s`` wins.
+    """
     cases = []
     plugin_modules = tuple(
         (name, module)
         for name, module in host.plugin_modules()
         if host.records[name].origin != "entry point"
     )
+    folders: dict[str, str] = {}
     for scene, scene_data in scenes:
+        limit = scene.limits.case_timeout_s or timeout_s
         for fabric in library:
             if materials_glob and not fnmatch.fnmatchcase(fabric.name, materials_glob):
                 continue
             if scene.materials and not fnmatch.fnmatchcase(fabric.name, scene.materials):
                 continue
             data = fabric.model_dump(mode="json", exclude_none=True)
+            case_id = f"{scene.name}/{fabric.name}"
+            folder = f"{folder_name(scene.name)}/{folder_name(fabric.name)}"
+            if folders.setdefault(folder, case_id) != case_id:
+                raise CaseSetError(
+                    f"cases {folders[folder]!r} and {case_id!r} would share the folder "
+                    f"{folder!r}; rename one of the fabrics or scenes"
+                )
             cases.append(
                 Case(
-                    case_id=f"{scene.name}/{fabric.name}",
+                    case_id=case_id,
                     material=fabric.name,
                     scene=scene.name,
                     fabric_data=data,
                     scene_data=scene_data,
                     scene_base_dir=scene.base_dir,
-                    case_dir=str(out_dir / _slug(scene.name) / _slug(fabric.name)),
-                    input_hash=_input_hash(data, scene, scene_data, host),
+                    case_dir=str(out_dir / folder),
+                    input_hash=input_hash(data, scene, scene_data, host),
                     plugins=plugin_modules,
                     discover=discover,
+                    timeout_s=limit,
                 )
             )
     return cases
 
 
 def previous_result(case: Case) -> CaseResult | None:
-    """The result of an earlier run of this case, if it succeeded with the same inputs."""
-    path = Path(case.case_dir) / "summary.json"
-    try:
-        summary = json.loads(path.read_text())
-    except (OSError, ValueError):
+    """The result of an earlier run of this case, if it is complete (ok or partial) with the
+    same inputs and every file it wrote is still there."""
+    summary = read_json(Path(case.case_dir) / "summary.json")
+    if not isinstance(summary, dict):
         return None
-    if summary.get("status") != "ok" or summary.get("input_hash") != case.input_hash:
+    if summary.get("status") not in REUSABLE or summary.get("input_hash") != case.input_hash:
         return None
     files = summary.get("files", [])
-    if not all((Path(case.case_dir) / f).exists() for f in files):
+    if not all((Path(case.case_dir) / f).is_file() for f in files):
         return None
-    reserved = {
-        "material",
-        "scene",
-        "status",
-        "error",
-        "input_hash",
-        "wall_time_s",
-        "step_times_s",
-        "files",
-    }
+    from preform.pipeline.rundir import RECORD_KEYS
+
     return CaseResult(
         case.case_id,
         case.material,
         case.scene,
-        "skipped",
-        None,
-        float(summary.get("wall_time_s", 0.0)),
-        dict(summary.get("step_times_s", {})),
-        {k: v for k, v in summary.items() if k not in reserved},
+        str(summary["status"]),
+        summary.get("error"),
+        float(summary.get("wall_time_s") or 0.0),
+        dict(summary.get("step_times_s") or {}),
+        {k: v for k, v in summary.items() if k not in RECORD_KEYS},
         list(files),
+        list(summary.get("reasons") or []),
+        list(summary.get("warnings") or []),
+        reused=True,
     )
+
+
+# -- running ---------------------------------------------------------------------------------
 
 
 @dataclass
 class RunReport:
     out_dir: Path
+    #: This run's cases, in order.
     results: list[CaseResult]
+    #: True when the run was interrupted (Ctrl-C, SIGTERM) and did not finish.
+    interrupted: bool = False
 
     @property
     def failed(self) -> list[CaseResult]:
-        return [r for r in self.results if r.status == "failed"]
+        return [r for r in self.results if r.status == CaseStatus.FAILED]
+
+    def counts(self) -> dict[str, int]:
+        """Cases of this run by what happened to them (``skipped``: kept from earlier)."""
+        out: dict[str, int] = {}
+        for r in self.results:
+            key = CaseStatus.SKIPPED.value if r.reused else r.status
+            out[key] = out.get(key, 0) + 1
+        return out
 
 
-def results_table(results: Sequence[CaseResult]) -> pd.DataFrame:
-    """One row per case: identity, status, timings and the scalar results."""
-    rows = []
-    for r in results:
-        row: dict[str, Any] = {
-            "material": r.material,
-            "scene": r.scene,
-            "status": r.status,
-            "error": r.error or "",
-            "wall_time_s": r.wall_time_s,
-        }
-        for step, seconds in r.step_times_s.items():
-            row[f"time_{step}_s"] = seconds
-        for key, value in r.results.items():
-            if isinstance(value, bool | int | float | str) or value is None:
-                row[key] = value
-        rows.append(row)
-    return pd.DataFrame(rows)
+def _engine_failure(case: Case, exc: BaseException, timeout_s: float | None) -> CaseResult:
+    """The result of a case whose worker did not return one."""
+    result = CaseResult(case.case_id, case.material, case.scene, CaseStatus.FAILED.value)
+    if isinstance(exc, TimeoutError | CaseTimeout):
+        result.status = CaseStatus.TIMED_OUT.value
+        result.error = f"stopped at the case time limit of {timeout_s:g} s"
+        return result
+    code = getattr(exc, "exitcode", None)
+    if code is not None:  # pebble.ProcessExpired: the worker process died
+        how = f"exit code {code}"
+        if code < 0:
+            try:
+                how = f"killed by {signal.Signals(-code).name}"
+            except ValueError:
+                how = f"killed by signal {-code}"
+            if code == -signal.SIGKILL:
+                how += " (out of memory? the OOM killer sends it)"
+        result.error = f"the worker process running this case died ({how})"
+    else:
+        result.error = f"worker failed: {type(exc).__name__}: {exc}"
+    return result
 
 
-def _write_tables(out_dir: Path, results: Sequence[CaseResult]) -> None:
-    table = results_table(results)
-    with atomic_path(out_dir / "results.csv") as tmp:
-        table.to_csv(tmp, index=False)
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
-        return
-    with atomic_path(out_dir / "results.parquet") as tmp:
-        table.to_parquet(tmp, index=False)
+def _raise_interrupt(_signum: int, _frame: Any) -> None:
+    raise KeyboardInterrupt
 
 
 def run_cases(
@@ -332,105 +470,155 @@ def run_cases(
     inputs: dict[str, Any] | None = None,
     on_done: Callable[[CaseResult], None] | None = None,
 ) -> RunReport:
-    """Run the cases on an engine, skipping those already done; write manifest and tables."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    for stale in out_dir.rglob(".*.tmp*"):
-        stale.unlink(missing_ok=True)  # left by an interrupted earlier run
-    manifest: dict[str, Any] = {
-        "preform_version": __version__,
-        "started": datetime.now(UTC).isoformat(timespec="seconds"),
-        "settings": {"engine": engine, "workers": workers, "scheduler": scheduler, "force": force},
-        "inputs": inputs or {},
-        "plugins": [r.as_json() for r in host.records.values()],
-        "cases": {
-            c.case_id: {
-                "status": "pending",
-                "case_dir": str(Path(c.case_dir).relative_to(out_dir)),
-                "input_hash": c.input_hash,
-            }
-            for c in cases
-        },
-    }
-    write_json(out_dir / "manifest.json", manifest)
-    results: dict[str, CaseResult] = {}
+    """Run the cases on an engine, keeping finished ones; keep manifest and tables current.
 
-    def record(result: CaseResult) -> None:
-        results[result.case_id] = result
-        manifest["cases"][result.case_id].update(
-            {
-                "status": result.status,
-                "error": result.error,
-                "wall_time_s": round(result.wall_time_s, 6),
-            }
-        )
-        write_json(out_dir / "manifest.json", manifest)
-        if on_done is not None:
-            on_done(result)
+    A case that fails, whose worker dies, or that passes its time limit is recorded and the
+    others go on. On Ctrl-C or SIGTERM the engine is stopped at once, what finished is kept,
+    the rest is recorded ``interrupted``, and the report says so. Raises ``RunDirectoryError``
+    when ``out_dir`` cannot be used (a file, or another run holds it).
+    """
+    with RunDirectory(out_dir) as rundir:
+        run: dict[str, Any] = {
+            "preform_version": __version__,
+            "started": now_utc(),
+            "settings": {
+                "engine": engine,
+                "workers": workers,
+                "scheduler": scheduler,
+                "force": force,
+                "case_timeout_s": sorted({c.timeout_s for c in cases}, key=str),
+            },
+            "inputs": inputs or {},
+            "plugins": [r.as_json() for r in host.records.values()],
+            "cases": [c.case_id for c in cases],
+        }
+        for case in cases:
+            rundir.expect(case.case_id, Path(case.case_dir), case.input_hash)
+        rundir.write_manifest(run)
+        results: dict[str, CaseResult] = {}
 
-    todo = []
-    for case in cases:
-        done = None if force else previous_result(case)
-        if done is not None:
-            record(done)
-        else:
-            todo.append(case)
-    if todo:
-        with open_executor(engine, workers=workers, scheduler=scheduler) as executor:
-            futures: dict[Future[CaseResult], Case] = {}
-            for case in todo:
-                if isinstance(executor, SerialExecutor):
+        def record(case: Case, result: CaseResult, *, write: bool = False) -> None:
+            results[case.case_id] = result
+            if write:  # the worker could not write it (it died, or was stopped)
+                write_json(Path(case.case_dir) / "summary.json", case_record(case, result))
+            rec = read_json(Path(case.case_dir) / "summary.json")
+            if not isinstance(rec, dict) or rec.get("case_id") != case.case_id:
+                rec = case_record(case, result)
+            rundir.record(rec, Path(case.case_dir))
+            rundir.write_manifest(run)
+            rundir.write_tables(force=False)
+            if on_done is not None:
+                on_done(result)
+
+        todo = []
+        for case in cases:
+            done = None if force else previous_result(case)
+            if done is not None:
+                record(case, done)
+            else:
+                todo.append(case)
+        interrupted = False
+        if todo:
+            interrupted = _run_on_engine(todo, host, engine, workers, scheduler, record)
+        for case in cases:
+            if case.case_id not in results:
+                res = CaseResult(
+                    case.case_id,
+                    case.material,
+                    case.scene,
+                    CaseStatus.INTERRUPTED.value,
+                    "the run was interrupted before this case finished; rerun to compute it",
+                )
+                record(case, res, write=True)
+        ordered = [results[c.case_id] for c in cases]
+        report = RunReport(out_dir, ordered, interrupted)
+        if not interrupted:
+            run["aggregates"] = _run_aggregates(cases, rundir, host)
+        run["finished"] = now_utc()
+        run["status"] = "interrupted" if interrupted else "finished"
+        run["counts"] = report.counts()
+        rundir.write_manifest(run)
+        rundir.write_tables()
+        return report
+
+
+def _run_on_engine(
+    todo: Sequence[Case],
+    host: PluginHost,
+    engine_name: str,
+    workers: int | None,
+    scheduler: str | None,
+    record: Callable[..., None],
+) -> bool:
+    """Run ``todo`` on the engine, recording each case as it ends; True if interrupted."""
+    in_main = threading.current_thread() is threading.main_thread()
+    previous_term = signal.signal(signal.SIGTERM, _raise_interrupt) if in_main else None
+    engine: Engine | None = None
+    pending: dict[Future[CaseResult], tuple[Case, float]] = {}
+    queue = list(todo)
+    try:
+        engine = open_engine(engine_name, workers=workers, scheduler=scheduler)
+        while queue or pending:
+            while queue and len(pending) < engine.capacity:
+                case = queue.pop(0)
+                if engine_name == "serial":
                     # in-process: use this host, so plugins registered by code are seen
-                    fut = executor.submit(execute_case, case, host)
+                    fut = engine.submit(execute_case, case, host, timeout_s=case.timeout_s)
                 else:
-                    fut = executor.submit(execute_case, case)
-                futures[fut] = case
-            from concurrent.futures import as_completed
-
-            for fut in as_completed(futures):
-                case = futures[fut]
+                    fut = engine.submit(execute_case, case, timeout_s=case.timeout_s)
+                pending[fut] = (case, time.monotonic())
+            done, _ = wait(list(pending), timeout=0.5, return_when=FIRST_COMPLETED)
+            for fut in done:
+                case, _started = pending.pop(fut)
                 try:
-                    res = fut.result()
-                except Exception as exc:  # the worker died (killed, out of memory, ...)
-                    res = CaseResult(
-                        case.case_id,
-                        case.material,
-                        case.scene,
-                        "failed",
-                        f"worker failed: {type(exc).__name__}: {exc}",
-                    )
-                record(res)
-    ordered = [results[c.case_id] for c in cases]
-    manifest["aggregates"] = _run_aggregates(cases, ordered, out_dir, host)
-    manifest["finished"] = datetime.now(UTC).isoformat(timespec="seconds")
-    write_json(out_dir / "manifest.json", manifest)
-    _write_tables(out_dir, ordered)
-    return RunReport(out_dir, ordered)
+                    record(case, fut.result())
+                except (Exception, CaseTimeout) as exc:  # the worker did not return a result
+                    record(case, _engine_failure(case, exc, case.timeout_s), write=True)
+            if not engine.enforces_timeout:
+                now = time.monotonic()
+                for fut, (case, started) in list(pending.items()):
+                    if case.timeout_s is not None and now - started > case.timeout_s + (
+                        TIMEOUT_GRACE_S
+                    ):
+                        fut.cancel()
+                        del pending[fut]
+                        record(case, _engine_failure(case, CaseTimeout(), case.timeout_s), True)
+    except KeyboardInterrupt:
+        if engine is not None:
+            engine.stop()
+            engine = None
+        return True
+    finally:
+        if engine is not None:
+            engine.close()
+        if previous_term is not None:
+            signal.signal(signal.SIGTERM, previous_term)
+    return False
 
 
 def _run_aggregates(
-    cases: Sequence[Case], results: Sequence[CaseResult], out_dir: Path, host: PluginHost
+    cases: Sequence[Case], rundir: RunDirectory, host: PluginHost
 ) -> dict[str, Any]:
-    """Run-level outputs of steps that define ``aggregate``, once per scene."""
+    """Run-level outputs of steps that define ``aggregate``, once per scene of this run, over
+    every complete case of that scene in the directory (earlier runs' too)."""
     written: dict[str, Any] = {}
-    by_scene: dict[str, list[tuple[Case, CaseResult]]] = {}
-    for case, res in zip(cases, results, strict=True):
-        by_scene.setdefault(case.scene, []).append((case, res))
-    for scene_name, members in by_scene.items():
-        first = members[0][0]
+    first_of_scene: dict[str, Case] = {}
+    for case in cases:
+        first_of_scene.setdefault(case.scene, case)
+    for scene_name, first in first_of_scene.items():
         try:
             scene = scene_from_data(first.scene_data, first.scene_base_dir, host.registry)
             steps = [s for s in plan(scene, host.registry) if s.aggregate is not None]
         except Exception as exc:
             written[scene_name] = {"error": f"{type(exc).__name__}: {exc}"}
             continue
-        summaries = []
-        for case, res in members:
-            if res.status in ("ok", "skipped"):
-                try:
-                    summaries.append(json.loads((Path(case.case_dir) / "summary.json").read_text()))
-                except (OSError, ValueError):
-                    continue
-        folder = out_dir / _slug(scene_name)
+        summaries = [
+            rec
+            for rec in rundir.records.values()
+            if rec.get("scene") == scene_name and rec.get("status") in REUSABLE
+        ]
+        summaries.sort(key=lambda rec: str(rec.get("material")))
+        folder = Path(first.case_dir).parent
         for step in steps:
             assert step.aggregate is not None
             try:
@@ -455,9 +643,15 @@ def input_files_record(paths: Sequence[Path]) -> list[dict[str, str]]:
 __all__ = [
     "Case",
     "CaseResult",
+    "CaseSetError",
+    "RunDirectoryError",
     "RunReport",
+    "_clean_json",
     "asdict",
     "execute_case",
+    "folder_name",
+    "input_hash",
     "make_cases",
     "run_cases",
+    "write_json",
 ]

@@ -12,6 +12,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from preform.export.atomic import is_temporary_name
 from preform.pipeline.planner import PlanError, plan
 from preform.pipeline.runner import make_cases, run_cases
 from preform.pipeline.scene import SceneError, load_scene
@@ -84,7 +85,8 @@ def test_plan_error_lists_available_outputs(toy, tmp_path):
 
 def read_results(out: Path) -> pd.DataFrame:
     df = pd.read_csv(out / "results.csv")
-    return df.drop(columns=[c for c in df.columns if c.startswith("time_") or c == "wall_time_s"])
+    timing = ("wall_time_s", "finished")
+    return df.drop(columns=[c for c in df.columns if c.startswith("time_") or c in timing])
 
 
 @pytest.mark.parametrize("engine", ["process", "dask"])
@@ -147,6 +149,15 @@ def test_interrupted_run_resumes_without_redoing_or_corrupting(toy, tmp_path):
     # nothing half-written: every JSON parses, no temporary files are left to be mistaken
     for f in out.rglob("*.json"):
         json.loads(f.read_text())
+    # what finished before the crash is recorded, and the tables are current
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert {k: v["status"] for k, v in manifest["cases"].items()} == {
+        "toy-scene/felt-a": "ok",
+        "toy-scene/felt-b": "ok",
+        "toy-scene/explodes": "failed",
+        "toy-scene/felt-c": "pending",
+    }
+    assert list(pd.read_csv(out / "results.csv")["material"]) == ["explodes", "felt-a", "felt-b"]
     log.unlink()
     env.pop("TOY_CRASH_ON")
     second = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120)
@@ -156,15 +167,17 @@ def test_interrupted_run_resumes_without_redoing_or_corrupting(toy, tmp_path):
     manifest = json.loads((out / "manifest.json").read_text())
     statuses = {k: v["status"] for k, v in manifest["cases"].items()}
     assert statuses == {
-        "toy-scene/felt-a": "skipped",
-        "toy-scene/felt-b": "skipped",
+        "toy-scene/felt-a": "ok",
+        "toy-scene/felt-b": "ok",
         "toy-scene/explodes": "failed",
         "toy-scene/felt-c": "ok",
     }
-    assert not list(out.rglob(".*.tmp*"))
+    assert manifest["runs"][-1]["counts"] == {"skipped": 2, "failed": 1, "ok": 1}
+    assert "2 skipped" in second.stdout
+    assert not [f for f in out.rglob("*") if is_temporary_name(f.name)]
     table = pd.read_csv(out / "results.csv")
-    assert list(table["material"]) == ["felt-a", "felt-b", "explodes", "felt-c"]
-    assert list(table["mass_g"].fillna(-1)) == [200.0, 400.0, -1, 800.0]
+    assert list(table["material"]) == ["explodes", "felt-a", "felt-b", "felt-c"]
+    assert list(table["mass_g"].fillna(-1)) == [-1, 200.0, 400.0, 800.0]
     # --force redoes everything
     log.unlink()
     subprocess.run([*cmd, "--force"], env=env, capture_output=True, text=True, timeout=120)
