@@ -249,7 +249,7 @@ def pipeline() -> None:
     default="preform-results",
     type=click.Path(),
     show_default=True,
-    help="Results directory.",
+    help="Results directory (created; runs into it add to it).",
 )
 @click.option(
     "--engine",
@@ -264,6 +264,14 @@ def pipeline() -> None:
     default=None,
     help="Worker processes (default: all cores).",
 )
+@click.option(
+    "--case-timeout",
+    "case_timeout_s",
+    type=click.FloatRange(min=0, min_open=True),
+    default=None,
+    help="Wall-time limit of one case [s] (default 3600; a scene's limits.case_timeout_s "
+    "wins). A case past it is stopped and recorded timed_out.",
+)
 @click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
 def pipeline_run(
@@ -274,12 +282,26 @@ def pipeline_run(
     engine: str,
     scheduler: str | None,
     workers: int | None,
+    case_timeout_s: float | None,
     force: bool,
     explain: bool,
 ) -> None:
-    """Run every (material, scene) case. LIBRARY paths replace the bundled library when given."""
+    """Run every (material, scene) case. LIBRARY paths replace the bundled library when given.
+
+    Each case ends with a status: ok (complete and finite), partial (finite, but covers less
+    than the scene asked: see covered_fraction and reasons), failed, timed_out, interrupted;
+    skipped counts cases kept from an earlier run with identical inputs. Exit code 0 when no
+    case failed or timed out, 1 otherwise, 130 when interrupted.
+    """
     from preform.pipeline.planner import explain as explain_plan
-    from preform.pipeline.runner import input_files_record, make_cases, run_cases
+    from preform.pipeline.runner import (
+        DEFAULT_CASE_TIMEOUT_S,
+        CaseSetError,
+        RunDirectoryError,
+        input_files_record,
+        make_cases,
+        run_cases,
+    )
     from preform.pipeline.scene import (
         SceneError,
         default_scene_path,
@@ -306,7 +328,17 @@ def pipeline_run(
                 click.echo(f"  {line}")
         return
     out = Path(out_dir)
-    cases = make_cases(lib, loaded, out, host, materials_glob)
+    try:
+        cases = make_cases(
+            lib,
+            loaded,
+            out,
+            host,
+            materials_glob,
+            timeout_s=case_timeout_s or DEFAULT_CASE_TIMEOUT_S,
+        )
+    except CaseSetError as exc:
+        _fail([f"error: {exc}; nothing was run."])
     if not cases:
         _fail(
             [
@@ -318,30 +350,63 @@ def pipeline_run(
     inputs = {"libraries": input_files_record(lib.files), "scenes": input_files_record(scene_paths)}
     from rich.progress import Progress
 
-    with Progress(transient=False, disable=not sys.stderr.isatty()) as progress:
-        task = progress.add_task("cases", total=len(cases))
-        report = run_cases(
-            cases,
-            out,
-            host,
-            engine=engine,
-            workers=workers,
-            scheduler=scheduler,
-            force=force,
-            inputs=inputs,
-            on_done=lambda r: progress.advance(task),
-        )
-    counts: dict[str, int] = {}
-    for r in report.results:
-        counts[r.status] = counts.get(r.status, 0) + 1
-    click.echo(
-        f"{len(report.results)} case(s) -> {out}/: "
-        + ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-    )
-    for r in report.failed:
-        click.echo(f"FAILED {r.case_id}: {r.error}", err=True)
-    if report.failed:
+    try:
+        with Progress(transient=False, disable=not sys.stderr.isatty()) as progress:
+            task = progress.add_task("cases", total=len(cases))
+            report = run_cases(
+                cases,
+                out,
+                host,
+                engine=engine,
+                workers=workers,
+                scheduler=scheduler,
+                force=force,
+                inputs=inputs,
+                on_done=lambda r: progress.advance(task),
+            )
+    except RunDirectoryError as exc:
+        _fail([f"error: {exc}; nothing was run."])
+    except OSError as exc:  # the results directory became unwritable (disk full, ...)
+        _fail([f"error: could not write the results into {out}/: {exc}"], code=1)
+    for line in run_report_lines(report):
+        click.echo(line, err=line.startswith(("FAILED", "TIMED OUT", "INTERRUPTED")))
+    if report.interrupted:
+        sys.exit(130)
+    if any(r.status in ("failed", "timed_out") for r in report.results):
         sys.exit(1)
+
+
+def run_report_lines(report: Any) -> list[str]:
+    """The end of a run in words: counts by status, then every case that is not plainly ok."""
+    from preform.pipeline.status import MEANING, CaseStatus
+
+    counts = report.counts()
+    lines = [
+        f"{len(report.results)} case(s) -> {report.out_dir}/: "
+        + ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
+    ]
+    for r in report.results:
+        kept = " (kept from an earlier run)" if r.reused else ""
+        if r.status == CaseStatus.PARTIAL:
+            covered = r.results.get("covered_fraction")
+            share = f" covers {100 * covered:.1f} % of what the scene asked;" if covered else ""
+            lines.append(f"PARTIAL {r.case_id}{kept}:{share} " + "; ".join(r.reasons))
+        elif r.status == CaseStatus.FAILED:
+            lines.append(f"FAILED {r.case_id}: {r.error}")
+        elif r.status == CaseStatus.TIMED_OUT:
+            lines.append(f"TIMED OUT {r.case_id}: {r.error}")
+        elif r.status == CaseStatus.INTERRUPTED:
+            lines.append(f"INTERRUPTED {r.case_id}: not finished; rerun to compute it")
+        for warning in r.warnings:
+            lines.append(f"WARNING {r.case_id}{kept}: {warning}")
+    shown = sorted({CaseStatus(r.status) for r in report.results} - {CaseStatus.OK})
+    if shown:
+        lines.append("status: " + "; ".join(f"{s.value} = {MEANING[s]}" for s in shown))
+    if report.interrupted:
+        lines.append(
+            "INTERRUPTED: finished cases are kept; run the same command again to do the rest."
+        )
+    return lines
 
 
 def _add_physics_commands() -> None:
