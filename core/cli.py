@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import copy
 import json
 import sys
 from pathlib import Path
@@ -67,6 +69,7 @@ def plugins_list(as_json: bool) -> None:
         _echo_json(records)
         return
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     table = Table(title="preform plugins")
@@ -74,7 +77,11 @@ def plugins_list(as_json: bool) -> None:
         table.add_column(col)
     for r in records:
         reg = "; ".join(f"{k}: {', '.join(v)}" for k, v in r["registered"].items())
-        table.add_row(r["name"], r["version"] or "-", reg or "-", r["error"] or "")
+        name = r["name"] + (" (built-in)" if r["builtin"] else "")
+        problems = "\n".join(r["problems"])
+        # errors quote plugin text: escape it, so "[...]" in a message is not taken for markup
+        error = "\n".join(p for p in (r["error"], problems) if p)
+        table.add_row(escape(name), r["version"] or "-", reg or "-", escape(error))
     Console().print(table)
 
 
@@ -222,7 +229,11 @@ def schema(for_scene: bool) -> None:
     from preform.schema import library_schema, scene_schema
 
     registry = _host().registry
-    _echo_json(scene_schema(registry) if for_scene else library_schema(registry))
+    # Building the schema runs plugins' pydantic models (custom schema hooks are plugin code);
+    # anything they print must not end up inside the JSON.
+    with contextlib.redirect_stdout(sys.stderr):
+        document = scene_schema(registry) if for_scene else library_schema(registry)
+    _echo_json(document)
 
 
 # -- pipeline -------------------------------------------------------------------------------
@@ -422,10 +433,23 @@ _add_physics_commands()
 
 
 def build_cli() -> click.Group:
-    """The command group with every plugin's commands added."""
-    _host().register_commands(cli)
-    return cli
+    """The command group with every plugin's commands added.
+
+    Plugins add to a copy of ``cli``: the module's group keeps only preform's own commands, so
+    building twice (tests, embedding) never stacks plugin commands, and the host can tell a
+    plugin replacing a built-in command (refused) from one adding a new command.
+    """
+    group = copy.copy(cli)
+    group.commands = dict(cli.commands)
+    _host().register_commands(group)
+    return group
 
 
 def main() -> None:
-    build_cli()(prog_name="preform")
+    try:
+        group = build_cli()
+    except KeyboardInterrupt:
+        # Ctrl-C while plugins load (a slow import): stop, as click does inside a command
+        click.echo("Aborted!", err=True)
+        sys.exit(130)
+    group(prog_name="preform")

@@ -299,19 +299,18 @@ def validate_files(
 
 
 def _material_lint_hooks(registry: Registry) -> Any:
-    """Collect warnings from every plugin's ``preform_check_material`` hook."""
+    """Collect warnings from every plugin's ``preform_check_material`` hook.
+
+    The calls go through the registry's PluginHost, which calls each plugin on its own and
+    turns a hook that raises or returns something malformed into a warning naming the plugin
+    and the fabric: a broken lint must never stop a library from loading.
+    """
 
     def lint(fabric: FabricBase) -> list[str]:
-        if registry.hook is None:
+        if registry.host is None:
             return []
-        out: list[str] = []
-        for result in registry.hook.preform_check_material(material=fabric):
-            for item in result or []:
-                if isinstance(item, tuple):
-                    out.append(f"{format_path(tuple(item[0]))}: {item[1]}")
-                else:
-                    out.append(str(item))
-        return out
+        messages: list[str] = registry.host.check_material(fabric)
+        return messages
 
     return lint
 

@@ -22,6 +22,20 @@ class RegistrationError(ValueError):
     """A plugin tried to register something invalid or already taken."""
 
 
+class NameConflict(RegistrationError):
+    """A plugin tried to register a name (or a step product) that another plugin holds.
+
+    ``owner`` is the plugin holding it: the host uses it to let a built-in plugin displace a
+    third-party one that was registered before it (built-in names always win).
+    """
+
+    def __init__(self, message: str, *, kind: str, name: str, owner: str) -> None:
+        super().__init__(message)
+        self.kind = kind
+        self.name = name
+        self.owner = owner
+
+
 @dataclass(frozen=True)
 class Entry:
     """One registered thing, with the plugin that provided it."""
@@ -76,6 +90,11 @@ class Registry:
         self._entries: dict[str, dict[str, Entry]] = {kind: {} for kind in self.KINDS}
         #: The plugin manager's hook relay, for collecting hooks (set by the PluginHost).
         self.hook: Any = None
+        #: The PluginHost that fills this registry (set by it): the library calls plugin
+        #: hooks through it, so each call is contained and attributed.
+        self.host: Any = None
+        #: Plugins shipped with preform; their names cannot be taken by any other plugin.
+        self.builtin_plugins: set[str] = set()
 
     # -- reading ------------------------------------------------------------------------------
     def entries(self, kind: str) -> dict[str, Entry]:
@@ -118,13 +137,31 @@ class Registry:
         return out
 
     # -- writing (through registrars) ----------------------------------------------------------
+    def describe_owner(self, plugin: str, requester: str) -> str:
+        """How a conflict names the plugin that holds a name."""
+        if plugin == requester:
+            return "this same plugin (registered twice)"
+        if plugin in self.builtin_plugins:
+            return f"built-in plugin {plugin!r} (preform's own names cannot be taken over)"
+        return f"plugin {plugin!r}, loaded earlier"
+
+    def _namespace(self, kind: str) -> tuple[str, ...]:
+        # Steps and exporters share one namespace: the planner and the per-step timings key
+        # on the step name whatever its kind.
+        return ("steps", "exporters") if kind in ("steps", "exporters") else (kind,)
+
     def _add(self, entry: Entry) -> None:
-        existing = self._entries[entry.kind].get(entry.name)
-        if existing is not None:
-            raise RegistrationError(
-                f"{entry.kind[:-1].replace('_', ' ')} {entry.name!r} is already registered "
-                f"by plugin {existing.plugin!r}"
-            )
+        for kind in self._namespace(entry.kind):
+            existing = self._entries[kind].get(entry.name)
+            if existing is not None:
+                label = entry.kind[:-1].replace("_", " ")
+                raise NameConflict(
+                    f"{label} {entry.name!r} is already registered by "
+                    f"{self.describe_owner(existing.plugin, entry.plugin)}",
+                    kind=entry.kind,
+                    name=entry.name,
+                    owner=existing.plugin,
+                )
         self._entries[entry.kind][entry.name] = entry
 
     def remove_plugin(self, plugin: str) -> None:
@@ -213,12 +250,17 @@ class StepRegistrar(Registrar[Step]):
                 f"step {step.name!r}: run must be a module-level function (picklable)"
             )
         for product in step.provides:
-            for other in self._registry.all_steps():
-                if product in other.provides:
-                    raise RegistrationError(
-                        f"step {step.name!r}: product {product!r} is already provided by "
-                        f"step {other.name!r}"
-                    )
+            for kind in ("steps", "exporters"):
+                for other in self._registry.entries(kind).values():
+                    if product in other.obj.provides:
+                        raise NameConflict(
+                            f"step {step.name!r}: product {product!r} is already provided by "
+                            f"step {other.name!r} of "
+                            f"{self._registry.describe_owner(other.plugin, self._plugin)}",
+                            kind="products",
+                            name=product,
+                            owner=other.plugin,
+                        )
         self._put(step.name, step)
 
 
