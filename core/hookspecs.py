@@ -6,8 +6,21 @@ registered objects directly. That keeps errors attributable to a plugin, keeps e
 picklable for worker processes, and lets each registry entry carry its plugin's name and version.
 
 A plugin is a module (or object) with functions decorated by ``preform.hookimpl`` and named
-exactly as below; a misspelled name is an error that fails that plugin. Plugins are found through
-the ``preform`` entry-point group.
+exactly as below; a misspelled name is an error that fails that plugin, and so is a hook wrapper
+(``hookwrapper=True``/``wrapper=True``): preform calls each plugin's implementation itself.
+Plugins are found through the ``preform`` entry-point group.
+
+What preform guarantees about every call into a plugin (its import and each hook below):
+
+- It is contained: any exception, ``SystemExit`` included, is recorded against the plugin (its
+  error in ``preform plugins list``) and the others go on; only ``KeyboardInterrupt`` stops the
+  program. A registration hook that fails unloads its plugin with everything it registered.
+- It is kept off stdout: what a plugin prints (or writes to file descriptor 1) goes to stderr,
+  each line prefixed with ``plugin NAME:``, so ``--json`` and ``schema`` output stays valid.
+- Names are first come, first served, except that preform's own plugins (``core``, ``woven``,
+  ``warpknit``, ``surfaces``) load first and always keep theirs: registering a name another
+  plugin holds (a law, architecture, surface, step or exporter name, a step product, a command)
+  fails the plugin, naming the holder.
 """
 
 from __future__ import annotations
@@ -65,10 +78,14 @@ def preform_register_exporters(register: ExporterRegistrar) -> None:
 
 @hookspec
 def preform_register_commands(cli: click.Group) -> None:
-    """Add click commands to the ``preform`` command group."""
+    """Add click commands to the ``preform`` command group. New names only: replacing one of
+    preform's commands or another plugin's fails the plugin (and the original stays)."""
 
 
 @hookspec
 def preform_check_material(material: FabricBase) -> list[Any] | None:
-    """Lint a validated fabric: return warnings, each a message or a ``(location, message)``
-    pair where location is a path inside the entry. All plugins' warnings are collected."""
+    """Lint a validated fabric: return None or a list of warnings, each a message (``str``) or
+    a ``(location, message)`` pair where location is a key or a path (tuple of ``str``/``int``)
+    inside the entry. All plugins' warnings are collected, each plugin called on its own; one
+    that raises or returns anything else is reported as a warning naming the plugin and the
+    fabric (and in its ``problems`` in ``preform plugins list --json`` of that process)."""

@@ -38,7 +38,7 @@ from typing import Any
 import pluggy
 
 from preform import hookspecs
-from preform.registry import REGISTRARS, NameConflict, Registry
+from preform.registry import REGISTRARS, NameConflict, RegistrationError, Registry
 
 ENTRY_POINT_GROUP = "preform"
 hookimpl = pluggy.HookimplMarker("preform")
@@ -89,8 +89,13 @@ class PluginRecord:
 
 
 def _short_error(exc: BaseException) -> str:
-    # format_exception_only survives an exception whose __str__ itself raises
-    text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+    if type(exc) in (RegistrationError, NameConflict):
+        # preform's own refusal (not a plugin's subclass, whose __str__ could be anything):
+        # the message says it all, the class path would be noise
+        text = str(exc)
+    else:
+        # format_exception_only survives an exception whose __str__ itself raises
+        text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
     if len(text) > MAX_ERROR_LENGTH:
         text = text[:MAX_ERROR_LENGTH] + f"... [{len(text) - MAX_ERROR_LENGTH} more characters]"
     return text

@@ -7,6 +7,11 @@ process-wide host for the duration of one test. Register exactly the plugins the
         preform_plugins.register(my_plugin_module)          # your plugin, for this test only
         preform_plugins.load_builtins("core", "woven")       # and any built-ins you need
         lib = preform_plugins.library(["my-fabrics.yaml"], bundled=False)
+
+The sandbox applies the same rules as a real installation: a plugin that fails (import,
+registration, a name conflict) is recorded, not raised (``preform_plugins.register(...)``
+returns its record; check ``record.error``), and built-in names win in whatever order plugins
+are added, so a plugin registering a built-in's name is unloaded when the built-in loads.
 """
 
 from __future__ import annotations

@@ -86,7 +86,10 @@ def test_duplicate_registration_is_attributed(third_party_site):
     h = PluginHost()
     h.add(toyplug, "toy")
     rec = h.add(Copycat(), "copycat")
-    assert "already registered by plugin 'toy'" in rec.error
+    assert rec.error == (
+        "registration failed: architecture 'toy' is already registered by plugin 'toy', "
+        "loaded earlier"
+    )
 
 
 def test_plugins_list_json(host):
@@ -103,7 +106,10 @@ def test_plugins_list_json(host):
     assert listing["toy"]["error"] is None
     assert listing["broken"]["error"] and listing["broken"]["registered"] == {}
     for p in listing.values():
-        assert {"name", "version", "registered", "error"} <= set(p)
+        assert {"name", "version", "registered", "error", "builtin", "problems"} <= set(p)
+    assert listing["core"]["builtin"] is True
+    assert listing["toy"]["builtin"] is False
+    assert listing["toy"]["problems"] == []
 
 
 def test_testing_fixture_blocks_discovery(preform_plugins, third_party_site):

@@ -176,10 +176,14 @@ def test_a_plugin_cannot_take_over_a_builtin_name(site, case, plugin_name):
     _assert_builtins_intact(host)
     _, thing, name, owner = TAKEOVERS[case]
     record = host.records[plugin_name]
-    assert record.error is not None
-    assert record.error.startswith("registration failed: ")
-    assert f"{thing} {name!r}" in record.error
-    assert f"built-in plugin {owner!r}" in record.error
+    held = f"built-in plugin {owner!r} (preform's own names cannot be taken over)"
+    if thing == "product":
+        expected = (
+            f"step 'intruder_step': product {name!r} is already provided by step {name!r} of {held}"
+        )
+    else:
+        expected = f"{thing} {name!r} is already registered by {held}"
+    assert record.error == "registration failed: " + expected
     assert record.registered == {}
     assert not record.builtin
     # the rolled-back plugin's hooks are gone too
@@ -257,6 +261,23 @@ def test_a_plugin_registered_before_the_builtin_is_displaced(preform_plugins, si
     assert "shear law 'friction_compaction' belongs to built-in plugin 'woven'" in record.error
     assert record.registered == {}
     assert "intruder_own_law" not in preform_plugins.registry.names("shear_laws")
+
+
+def test_an_entry_point_named_like_another_third_party_one_is_refused(site):
+    site.install("toy", "", module="hp_toy_one", dist="preform-toy-one")
+    site.install(
+        "toy",
+        "raise SystemExit('must not be imported')",
+        module="hp_toy_two",
+        dist="preform-toy-two",
+    )
+    host = discover()
+    assert host.records["toy"].error is None
+    assert host.records["toy"].distribution == "preform-toy-one"
+    assert host.records["toy (preform-toy-two)"].error == (
+        "not loaded: the plugin name 'toy' is already taken by plugin 'toy' (preform-toy-one); "
+        "rename the entry point"
+    )
 
 
 def test_an_entry_point_named_like_a_builtin_is_refused(site):
