@@ -74,7 +74,8 @@ def plugins_list(as_json: bool) -> None:
 
     table = Table(title="preform plugins")
     for col in ("name", "version", "registered", "error"):
-        table.add_column(col)
+        # fold, never elide: a name cut to "friction_compactio…" would hide the reason
+        table.add_column(col, overflow="fold")
     for r in records:
         reg = "; ".join(f"{k}: {', '.join(v)}" for k, v in r["registered"].items())
         name = r["name"] + (" (built-in)" if r["builtin"] else "")
