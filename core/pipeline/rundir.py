@@ -276,14 +276,14 @@ class RunDirectory:
     def write_manifest(self, run: dict[str, Any] | None = None) -> None:
         """The manifest: every case in the directory and the runs (``run`` is the current one,
         whose settings are also repeated at the top level)."""
-        runs = [r for r in self.runs if run is None or r.get("started") != run.get("started")]
+        runs = [r for r in self.runs if run is None or r.get("id") != run.get("id")]
         if run is not None:
             runs.append(run)
         runs = runs[-RUNS_KEPT:]
         manifest: dict[str, Any] = {"cases": dict(sorted(self.cases.items())), "runs": runs}
         if run is not None:
             manifest.update(
-                {k: v for k, v in run.items() if k not in ("cases", "counts", "status")}
+                {k: v for k, v in run.items() if k not in ("id", "cases", "counts", "status")}
             )
         write_json(self.path / MANIFEST, manifest)
 

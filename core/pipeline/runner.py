@@ -13,6 +13,7 @@ import fnmatch
 import hashlib
 import json
 import math
+import os
 import re
 import signal
 import threading
@@ -279,6 +280,12 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
             missing = [p for p in step.provides if p not in out]
             if missing:
                 raise RuntimeError(f"step {step.name!r} did not provide {', '.join(missing)}")
+            # a non-finite result fails the case before any exporter writes it into a file
+            bad = non_finite_values(ctx.summary)
+            if bad:
+                raise CaseFailure(
+                    f"step {step.name!r} gave non-finite numbers: " + "; ".join(bad[:10])
+                )
             ctx.products.update(out)
             if step.writes_files:
                 for product in step.provides:
@@ -289,11 +296,7 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
         result.results = dict(ctx.summary)
         result.files = list(dict.fromkeys(ctx.files))
         result.warnings = list(ctx.warnings)
-        bad = non_finite_values(result.results)
-        if bad:
-            result.status = CaseStatus.FAILED.value
-            result.error = "the result holds non-finite numbers: " + "; ".join(bad[:10])
-        elif ctx.partial_reasons:
+        if ctx.partial_reasons:
             result.status = CaseStatus.PARTIAL.value
             result.reasons = list(ctx.partial_reasons)
     except CaseTimeout:
@@ -479,6 +482,7 @@ def run_cases(
     """
     with RunDirectory(out_dir) as rundir:
         run: dict[str, Any] = {
+            "id": f"{now_utc()}-{os.getpid()}-{os.urandom(3).hex()}",
             "preform_version": __version__,
             "started": now_utc(),
             "settings": {
