@@ -492,7 +492,7 @@ def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig):
     assert _wait_for(lambda: len(_finished(runenv.out)) >= 2)
     proc.send_signal(sig)
     t0 = time.monotonic()
-    out, err = proc.communicate(timeout=30)
+    _, err = proc.communicate(timeout=30)
     assert time.monotonic() - t0 < 8, "the interrupt was not prompt"
     assert proc.returncode == 130, err
     assert "Traceback" not in err
