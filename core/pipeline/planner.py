@@ -82,8 +82,13 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
         # keep one message per distinct problem
         unique = list(dict.fromkeys(problems))
         raise PlanError(unique)
+    # sorted insertion: the order must not depend on set iteration (the hash seed), so that
+    # every process plans the same scene the same way
+    sorter: graphlib.TopologicalSorter[str] = graphlib.TopologicalSorter()
+    for name in sorted(graph):
+        sorter.add(name, *sorted(graph[name]))
     try:
-        order = list(graphlib.TopologicalSorter(graph).static_order())
+        order = list(sorter.static_order())
     except graphlib.CycleError as exc:
         raise PlanError([(None, f"steps depend on each other in a cycle: {exc.args[1]}")]) from None
     return [needed[name] for name in order]

@@ -650,3 +650,26 @@ def test_atomic_write_that_raises_leaves_the_old_file(tmp_path):
         raise RuntimeError("writer failed")
     assert target.read_text() == "old"
     assert [p.name for p in tmp_path.iterdir()] == ["keep.json"]
+
+
+def test_plan_order_does_not_depend_on_the_hash_seed():
+    code = (
+        "from preform.plugin_manager import default_host\n"
+        "from preform.pipeline.scene import load_scene, default_scene_path\n"
+        "from preform.pipeline.planner import plan\n"
+        "h = default_host()\n"
+        "s, _ = load_scene(default_scene_path(), h.registry)\n"
+        "print(' '.join(x.name for x in plan(s, h.registry)))\n"
+    )
+    orders = {
+        subprocess.run(
+            [sys.executable, "-c", code],
+            env={**os.environ, "PYTHONHASHSEED": seed},
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=True,
+        ).stdout
+        for seed in ("1", "2", "3", "4", "5")
+    }
+    assert len(orders) == 1
