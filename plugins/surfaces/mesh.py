@@ -10,6 +10,8 @@ Outward is defined by the winding: counter-clockwise seen from outside, the STL 
 
 from __future__ import annotations
 
+import os
+import stat
 import warnings
 from pathlib import Path
 
@@ -25,7 +27,9 @@ BoolArray = NDArray[np.bool_]
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 __all__ = [
+    "MeshFileError",
     "TriangleMesh",
+    "check_mesh_file",
     "read_obj",
     "read_stl",
     "tessellate_hemisphere",
@@ -447,14 +451,86 @@ def tessellate_hemisphere(radius_m: float, divisions: int) -> TriangleMesh:
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
 
 
-def read_stl(path: str | Path, units_to_m: float = 1e-3, **mesh_options: object) -> TriangleMesh:
+class MeshFileError(ValueError):
+    """A tool mesh file that cannot be read safely: missing, not a regular file, too large."""
+
+
+#: Bytes per MB in ``limits.max_mesh_mb`` (decimal megabytes, as file managers show them).
+MB = 1_000_000
+
+
+def check_mesh_file(path: str | Path, max_bytes: int | None = None) -> int:
+    """Refuse a mesh path before anything reads it; returns its size [bytes].
+
+    Only a regular file is read: a device (``/dev/zero`` never ends), a FIFO (reading blocks
+    until a writer appears, possibly forever) or a directory is refused, as is a file larger
+    than ``max_bytes`` (a scene's ``limits.max_mesh_mb``), judged by ``stat`` so that a 2 GB
+    file costs nothing to refuse. ``stat`` follows symbolic links, so a link to a device is
+    refused like the device.
+    """
+    file = Path(path)
+    try:
+        info = os.stat(file)
+    except FileNotFoundError:
+        raise MeshFileError(f"{file}: no such file") from None
+    except OSError as error:
+        raise MeshFileError(f"{file}: cannot be read: {error.strerror or error}") from None
+    mode = info.st_mode
+    if not stat.S_ISREG(mode):
+        kind = (
+            "a directory"
+            if stat.S_ISDIR(mode)
+            else "a FIFO (named pipe)"
+            if stat.S_ISFIFO(mode)
+            else "a character device"
+            if stat.S_ISCHR(mode)
+            else "a block device"
+            if stat.S_ISBLK(mode)
+            else "a socket"
+            if stat.S_ISSOCK(mode)
+            else "not a regular file"
+        )
+        raise MeshFileError(
+            f"{file}: is {kind}, not a regular file; a tool mesh must be an STL or OBJ file"
+        )
+    if max_bytes is not None and info.st_size > max_bytes:
+        raise MeshFileError(
+            f"{file}: {info.st_size / MB:.1f} MB, larger than the limit of {max_bytes / MB:g} MB "
+            "(limits.max_mesh_mb); decimate the mesh or raise limits.max_mesh_mb in the scene"
+        )
+    return int(info.st_size)
+
+
+def _read_limited(file: Path, max_bytes: int | None) -> bytes:
+    """The bytes of a checked mesh file, never more than ``max_bytes`` (+1 to detect growth)."""
+    check_mesh_file(file, max_bytes)
+    with open(file, "rb") as handle:
+        data = handle.read() if max_bytes is None else handle.read(max_bytes + 1)
+    if max_bytes is not None and len(data) > max_bytes:
+        raise MeshFileError(
+            f"{file}: grew past the limit of {max_bytes / MB:g} MB (limits.max_mesh_mb) while "
+            "being read"
+        )
+    return data
+
+
+def read_stl(
+    path: str | Path,
+    units_to_m: float = 1e-3,
+    *,
+    max_bytes: int | None = None,
+    **mesh_options: object,
+) -> TriangleMesh:
     """Read an ASCII or binary STL file whose coordinates are in units of ``units_to_m`` metres
     (1e-3: millimetres). Binary vs ASCII is decided by content, not by the leading "solid"
     (binary headers often start with it too): a file that starts with "solid" and contains no NUL
     byte is ASCII; otherwise it is binary if its size is 84 + 50·N for the N triangles its header
-    declares. Malformed files raise ``ValueError`` naming the file (and line, for ASCII)."""
+    declares. Malformed files raise ``ValueError`` naming the file (and line, for ASCII).
+
+    Only regular files are read, and none larger than ``max_bytes`` (:func:`check_mesh_file`);
+    ``MeshFileError`` (a ``ValueError``) says which limit refused it."""
     file = Path(path)
-    data = file.read_bytes()
+    data = _read_limited(file, max_bytes)
     if data.lstrip()[:5].lower() == b"solid" and b"\x00" not in data:
         corners = _parse_ascii_stl(file, data)
     else:
@@ -609,7 +685,13 @@ def write_stl(
 _OBJ_IGNORED = {"vt", "vn", "vp", "g", "o", "s", "usemtl", "mtllib", "l", "p", "mg", "lod"}
 
 
-def read_obj(path: str | Path, units_to_m: float = 1e-3, **mesh_options: object) -> TriangleMesh:
+def read_obj(
+    path: str | Path,
+    units_to_m: float = 1e-3,
+    *,
+    max_bytes: int | None = None,
+    **mesh_options: object,
+) -> TriangleMesh:
     """Read the polygon faces of a Wavefront OBJ file whose coordinates are in units of
     ``units_to_m`` metres (1e-3: millimetres).
 
@@ -617,12 +699,13 @@ def read_obj(path: str | Path, units_to_m: float = 1e-3, **mesh_options: object)
     ``v/vt/vn`` corners; indices are 1-based, negative ones count back from the last vertex read
     so far. Polygons are fan-triangulated from their first corner (fine for the convex polygons
     CAD writes). Texture, normal, grouping and material statements are ignored. Malformed lines
-    raise ``ValueError`` with file:line and what is wrong."""
+    raise ``ValueError`` with file:line and what is wrong. Only regular files no larger than
+    ``max_bytes`` are read (:func:`check_mesh_file`)."""
     file = Path(path)
     vertices: list[list[float]] = []
     triangles: list[tuple[int, int, int]] = []
     triangle_lines: list[int] = []
-    text = file.read_text(encoding="utf-8", errors="replace")
+    text = _read_limited(file, max_bytes).decode("utf-8", errors="replace")
     for line_no, raw in enumerate(text.splitlines(), start=1):
         tokens = raw.split("#", 1)[0].split()
         if not tokens:

@@ -3,25 +3,54 @@
 Dimensions are millimetres in YAML (the unit is in every field name); builders return surfaces
 in metres. Mesh files are resolved against the scene file's directory, then against the bundled
 ``preform/materials/tools``.
+
+Every tool block also has ``preflight(base_dir, limits)``, which scene validation calls (and the
+surface step again, just before building): it returns the built surface when building is cheap
+(the analytic tools: a few numbers) so the scene's start point and node spacing can be checked
+against it, and a list of problems ``(path inside the tool block, message)``. A mesh is not
+read there (it may be large and is read once, by the step); only its file is checked: it exists,
+is a regular file (not a device, FIFO or directory) and is no larger than
+``limits.max_mesh_mb``.
 """
 
 from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane
 from preform.plugins.surfaces.domes import Cone, EllipsoidDome, FlangedHemisphere, ParaboloidDome
-from preform.plugins.surfaces.mesh import TriangleMesh, read_obj, read_stl
+from preform.plugins.surfaces.mesh import (
+    MB,
+    MeshFileError,
+    TriangleMesh,
+    check_mesh_file,
+    read_obj,
+    read_stl,
+)
 
 MM = 1e-3
 _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
+#: A problem found before running: (path inside the tool block, message).
+Problem = tuple[tuple[str | int, ...], str]
 
-class PlaneTool(BaseModel):
+
+class _Analytic(BaseModel):
+    """An analytic tool: building it costs microseconds, so preflight builds it."""
+
+    def preflight(self, base_dir: str, limits: Any = None) -> tuple[Any, list[Problem]]:
+        """The built surface and no problems, or no surface and why it cannot be built."""
+        try:
+            return _BUILDERS[type(self)](self, base_dir), []
+        except ValueError as error:
+            return None, [((), str(error))]
+
+
+class PlaneTool(_Analytic):
     model_config = _STRICT
     surface: Literal["plane"]
     size_mm: tuple[float, float] = Field(
@@ -35,7 +64,7 @@ class PlaneTool(BaseModel):
         return self
 
 
-class HemisphereTool(BaseModel):
+class HemisphereTool(_Analytic):
     model_config = _STRICT
     surface: Literal["hemisphere"]
     radius_mm: float = Field(gt=0, description="Sphere radius [mm]; pole at (0, 0, R).")
@@ -62,7 +91,7 @@ class HemisphereTool(BaseModel):
         return self
 
 
-class CylinderTool(BaseModel):
+class CylinderTool(_Analytic):
     model_config = _STRICT
     surface: Literal["cylinder"]
     radius_mm: float = Field(gt=0, description="Cylinder radius [mm].")
@@ -70,7 +99,7 @@ class CylinderTool(BaseModel):
     axis: Literal["x", "y"] = Field(default="x", description="Horizontal axis direction.")
 
 
-class ConeTool(BaseModel):
+class ConeTool(_Analytic):
     model_config = _STRICT
     surface: Literal["cone"]
     base_radius_mm: float = Field(gt=0, description="Base radius [mm] (on z = 0).")
@@ -78,7 +107,7 @@ class ConeTool(BaseModel):
     top_radius_mm: float = Field(default=0.0, ge=0, description="Truncation radius [mm].")
 
 
-class EllipsoidTool(BaseModel):
+class EllipsoidTool(_Analytic):
     model_config = _STRICT
     surface: Literal["ellipsoid"]
     semi_axes_mm: tuple[float, float, float] = Field(
@@ -86,7 +115,7 @@ class EllipsoidTool(BaseModel):
     )
 
 
-class ParaboloidTool(BaseModel):
+class ParaboloidTool(_Analytic):
     model_config = _STRICT
     surface: Literal["paraboloid"]
     radius_mm: float = Field(gt=0, description="Base radius R [mm].")
@@ -99,8 +128,22 @@ class MeshTool(BaseModel):
     file: str = Field(description="STL or OBJ file, relative to the scene file (or bundled).")
     units: Literal["mm", "m", "in"] = Field(default="mm", description="Length unit of the file.")
 
+    def preflight(self, base_dir: str, limits: Any = None) -> tuple[Any, list[Problem]]:
+        """No surface (reading waits for the step) and the problems of the mesh file."""
+        try:
+            path = resolve_tool_file(self.file, base_dir)
+            check_mesh_file(path, _max_bytes(limits))
+        except (FileNotFoundError, MeshFileError) as error:
+            return None, [(("file",), str(error))]
+        return None, []
+
 
 _UNITS_TO_M = {"mm": 1e-3, "m": 1.0, "in": 0.0254}
+
+
+def _max_bytes(limits: Any) -> int | None:
+    max_mb = getattr(limits, "max_mesh_mb", None)
+    return None if max_mb is None else int(float(max_mb) * MB)
 
 
 def build_plane(p: PlaneTool, base_dir: str) -> Plane:
@@ -147,13 +190,25 @@ def resolve_tool_file(name: str, base_dir: str) -> Path:
     return path
 
 
-def build_mesh(p: MeshTool, base_dir: str) -> TriangleMesh:
+def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> TriangleMesh:
+    """Read the tool mesh; ``limits`` (a scene's ``limits``) caps the file size, which is
+    checked with ``stat`` before reading (see ``check_mesh_file``)."""
     path = resolve_tool_file(p.file, base_dir)
     scale = _UNITS_TO_M[p.units]
+    max_bytes = _max_bytes(limits)
     if path.suffix.lower() == ".obj":
-        return read_obj(path, scale)
-    return read_stl(path, scale)
+        return read_obj(path, scale, max_bytes=max_bytes)
+    return read_stl(path, scale, max_bytes=max_bytes)
 
+
+_BUILDERS: dict[type, Any] = {
+    PlaneTool: build_plane,
+    HemisphereTool: build_hemisphere,
+    CylinderTool: build_cylinder,
+    ConeTool: build_cone,
+    EllipsoidTool: build_ellipsoid,
+    ParaboloidTool: build_paraboloid,
+}
 
 SURFACES = [
     ("plane", PlaneTool, build_plane),
