@@ -106,6 +106,22 @@ class PlyOutline:
             return float(x_lo), float(x_hi), float(y_lo), float(y_hi)
         return None
 
+    def _index_range(self, spacing_m: float) -> tuple[int, int, int, int]:
+        """(i_lo, i_hi, j_lo, j_hi): node indices (from the start node) the outline spans."""
+        d = float(spacing_m)
+        eps = _EDGE_TOLERANCE * d
+        x_lo, y_lo = self.vertices.min(axis=0)
+        x_hi, y_hi = self.vertices.max(axis=0)
+        i_lo, i_hi = int(np.ceil((x_lo - eps) / d)), int(np.floor((x_hi + eps) / d))
+        j_lo, j_hi = int(np.ceil((y_lo - eps) / d)), int(np.floor((y_hi + eps) / d))
+        return i_lo, i_hi, j_lo, j_hi
+
+    def grid_shape(self, spacing_m: float) -> tuple[int, int]:
+        """Nodes (along u, along v) of :meth:`node_grid` at ``spacing_m`` [m], computed without
+        building the grid: a resource limit can then refuse a ply of 10¹⁰ nodes up front."""
+        i_lo, i_hi, j_lo, j_hi = self._index_range(spacing_m)
+        return max(i_hi - i_lo + 1, 0), max(j_hi - j_lo + 1, 0)
+
     def node_grid(self, spacing_m: float) -> PlyGrid:
         """The smallest node grid at spacing ``spacing_m`` [m] that covers the outline.
 
@@ -114,10 +130,7 @@ class PlyOutline:
         """
         d = float(spacing_m)
         eps = _EDGE_TOLERANCE * d
-        x_lo, y_lo = self.vertices.min(axis=0)
-        x_hi, y_hi = self.vertices.max(axis=0)
-        i_lo, i_hi = int(np.ceil((x_lo - eps) / d)), int(np.floor((x_hi + eps) / d))
-        j_lo, j_hi = int(np.ceil((y_lo - eps) / d)), int(np.floor((y_hi + eps) / d))
+        i_lo, i_hi, j_lo, j_hi = self._index_range(d)
         if not self.contains(np.zeros((1, 2)), eps)[0] or i_lo > 0 or j_lo > 0:
             raise ValueError("the start point lies outside the ply outline")
         xi = np.arange(i_lo, i_hi + 1) * d

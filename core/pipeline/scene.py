@@ -12,6 +12,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
 from preform.registry import Registry
@@ -309,6 +310,8 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
                 scene = scene.model_copy(update={"tool": params.model_validate(tool)})
             except ValidationError as exc:
                 errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
+    if not errors:
+        errors += _preflight(scene, err)
     from preform.pipeline.planner import PlanError, plan
 
     try:
@@ -320,6 +323,78 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
     if errors:
         raise SceneError(errors)
     return scene
+
+
+def _preflight(scene: Scene, err: Any) -> list[SourceError]:
+    """Problems a scene's tool, ply and start have before anything runs, located.
+
+    Cheap checks only: the ply's node count against ``limits.max_nodes`` (arithmetic, no
+    array), a node spacing that leaves the ply or the tool without a cell, the start point
+    outside the ply or off the tool, and the tool's own preflight (an analytic tool is built,
+    microseconds; a mesh file is checked for existence, type and size, not read).
+    """
+    from preform.drape.steps import (
+        node_budget_problem,
+        ply_outline,
+        ply_too_coarse_problem,
+        start_problem,
+    )
+    from preform.pipeline import fidelity
+
+    errors: list[SourceError] = []
+    surface = None
+    tool = scene.tool
+    preflight = getattr(tool, "preflight", None)
+    if preflight is not None:
+        surface, problems = preflight(scene.base_dir, scene.limits)
+        for where, message in problems:
+            label = ".".join(str(p) for p in ("tool", *where))
+            errors.append(err(("tool", *where), label, message))
+    ply = scene.ply
+    if ply is None:
+        return errors
+    outline = ply_outline(scene)
+    spacing_at: tuple[str | int, ...] = ("ply", "node_spacing_mm")
+    spacing = ply.node_spacing_mm
+    if spacing is None and surface is not None:
+        # The preset chooses d from the tool's size: check the ply against that d.
+        spacing = fidelity.resolve(scene, float(surface.size)).node_spacing_mm
+        spacing_at = ("ply",)
+    if spacing is not None:
+        label = ".".join(str(p) for p in spacing_at)
+        problem = node_budget_problem(outline, spacing, scene.limits.max_nodes)
+        if problem is not None:
+            return [*errors, err(spacing_at, label, problem)]
+        problem = ply_too_coarse_problem(outline, spacing)
+        if problem is not None:
+            errors.append(err(spacing_at, label, problem))
+        elif surface is not None and spacing * 1e-3 > float(surface.size):
+            errors.append(
+                err(
+                    spacing_at,
+                    label,
+                    f"the node spacing {spacing:g} mm is larger than the tool (its typical "
+                    f"length is {float(surface.size) * 1e3:.4g} mm), so the net has no cell on "
+                    "it; use a spacing well below the tool's size (the standard preset uses "
+                    "1/40 of it)",
+                ),
+            )
+    if not bool(outline.contains(np.zeros((1, 2)), 1e-9)[0]):
+        at = ("ply", "outline_mm") if ply.outline_mm is not None else ("ply", "offset_mm")
+        errors.append(
+            err(
+                at,
+                ".".join(at),
+                "the start point (the flat origin) lies outside the ply; the generators run "
+                "through it, so it must be fabric",
+            )
+        )
+    if surface is not None and scene.start is not None:
+        point = scene.start.point_mm
+        problem = start_problem(surface, (point[0] * 1e-3, point[1] * 1e-3))
+        if problem is not None:
+            errors.append(err(("start", "point_mm"), "start.point_mm", problem))
+    return errors
 
 
 def load_scene(path: str | Path, registry: Registry) -> tuple[Scene, dict[str, Any]]:
