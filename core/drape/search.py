@@ -247,6 +247,9 @@ class SearchPoint:
     feasible: bool
     #: "scan", "refine" or "optimum".
     stage: str
+    #: Largest |γ| over the counted cells of this drape [rad] (to say where E(α) leaves the
+    #: law's trustworthy range).
+    max_abs_shear_rad: float = 0.0
 
     @property
     def generator_angle_deg(self) -> float:
@@ -422,6 +425,7 @@ def search_generator_angle(
             coverage,
             ev.draped and coverage >= min_coverage,
             stage,
+            ev.max_abs_shear_rad,
         )
 
     def feasible_samples() -> tuple[FloatArray, FloatArray]:

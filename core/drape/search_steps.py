@@ -18,6 +18,13 @@ fidelity knobs (degrees, as in every scene; defaults in brackets):
                                   # {max_rounds: 8, max_iterations: 1500}
 
 Every knob used is recorded in the case summary (``search_settings``).
+
+The steps say what the search is worth (``docs/results.md``): an optimum at an end of the
+searched range or one the energy's staircase kept from resolving is a warning; a drape at the
+optimum that does not cover the ply where it lies over the tool makes the case partial; angles
+whose drape shears cells past the law's packing limit or data range are named, since E(α) there
+is the law's continuation, not a measured or physical energy; a law that returns NaN, or a start
+point off the tool, fails the case with the reason.
 """
 
 from __future__ import annotations
@@ -31,11 +38,14 @@ from typing import TYPE_CHECKING, Any
 from preform.drape.search import (
     AngleSearchResult,
     DrapeObjective,
+    SearchError,
     search_generator_angle,
     search_layout,
 )
-from preform.drape.steps import drape_settings, record_knobs
+from preform.drape.steps import drape_settings, record_knobs, start_problem
+from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
 from preform.pipeline import fidelity
+from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext, Step
 
 if TYPE_CHECKING:
@@ -98,16 +108,40 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
     record_knobs(ctx, ctx.products["surface"])
     objective = build_objective(ctx)
+    where = objective.drape_kwargs.get("start_xy_m")
+    if where is not None:
+        problem = start_problem(objective.surface, where)
+        if problem is not None:
+            raise CaseFailure(f"the search cannot drape: {problem}")
     area = knobs["part_area_mm2"]
-    result = search_generator_angle(
-        objective,
-        angle_range_rad=(math.radians(knobs["range_deg"][0]), math.radians(knobs["range_deg"][1])),
-        scan_step_rad=math.radians(knobs["scan_step_deg"]),
-        tolerance_rad=math.radians(knobs["tolerance_deg"]),
-        max_drapes=knobs["max_drapes"],
-        min_coverage=knobs["min_coverage"],
-        part_area_m2=None if area is None else float(area) * MM * MM,
-    )
+    try:
+        result = search_generator_angle(
+            objective,
+            angle_range_rad=(
+                math.radians(knobs["range_deg"][0]),
+                math.radians(knobs["range_deg"][1]),
+            ),
+            scan_step_rad=math.radians(knobs["scan_step_deg"]),
+            tolerance_rad=math.radians(knobs["tolerance_deg"]),
+            max_drapes=knobs["max_drapes"],
+            min_coverage=knobs["min_coverage"],
+            part_area_m2=None if area is None else float(area) * MM * MM,
+        )
+    except SearchError as error:
+        broken = law_nonfinite_angle(objective.law)
+        if broken is not None:
+            raise CaseFailure(f"{broken}: no drape of the search has a finite energy") from None
+        raise CaseFailure(f"the generator-angle search failed: {error}") from None
+    bad = [p for p in result.points if p.coverage > 0 and not math.isfinite(p.energy_J)]
+    if bad:
+        broken = law_nonfinite_angle(objective.law)
+        angles = ", ".join(f"{p.generator_angle_deg:.4g}°" for p in bad[:5])
+        lead = broken or "total energy is not finite"
+        raise CaseFailure(
+            f"{lead}: E(α) is not finite at generator angle(s) {angles}"
+            + (f" and {len(bad) - 5} more" if len(bad) > 5 else "")
+        )
+    _warn_law_range(ctx, result)
     ctx.summary["energy_vs_angle"] = [[a, e] for a, e in result.curve_deg()]
     ctx.summary["energy_vs_angle_coverage"] = [
         [p.generator_angle_deg, p.coverage] for p in result.points
@@ -123,6 +157,85 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     ctx.summary["search_drapes"] = result.drapes
     ctx.summary["search_settings"] = {**knobs, **result.settings}
     return {"energy_vs_angle": AngleStudy(result, objective)}
+
+
+def _angles_text(angles_deg: list[float]) -> str:
+    shown = ", ".join(f"{a:.4g}°" for a in angles_deg[:6])
+    return shown + (f" and {len(angles_deg) - 6} more" if len(angles_deg) > 6 else "")
+
+
+def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
+    """Name the searched angles whose drape leaves the law's physical or measured range."""
+    law = ctx.products["shear_law"]
+    block = getattr(ctx.fabric, "shear_law", None)
+    if block is None and hasattr(ctx.fabric, "default_shear_law"):
+        block = ctx.fabric.default_shear_law()
+    limits = law_range(law, block)
+    points = [p for p in result.points if p.coverage > 0]
+    if limits.packing is not None:
+        past = [p for p in points if p.max_abs_shear_rad > limits.packing]
+        ctx.summary["search_angles_past_packing"] = len(past)
+        if past:
+            worst = max(p.energy_J for p in past)
+            ctx.warn(
+                f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
+                f"the drape shears cells past {math.degrees(limits.packing):.1f}°, where the "
+                "law's tows are packed solid: E(α) there (up to "
+                f"{worst:.3g} J) is the law's continuation past that physical limit, not a "
+                "physical energy"
+            )
+    ends = [e for e in (limits.data_positive, limits.data_negative) if e is not None]
+    if ends:
+        # The search keeps only |γ|, so the smaller end of the two senses is the safe bound.
+        end = min(ends)
+        past = [p for p in points if p.max_abs_shear_rad > end]
+        ctx.summary["search_angles_outside_law_data"] = len(past)
+        if past:
+            ctx.warn(
+                f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
+                f"the drape shears cells beyond the shear law's data range (up to "
+                f"{math.degrees(end):.1f}° in one sense at least): E(α) there rests on the "
+                "law's continuation past its data, not on measurements"
+            )
+
+
+def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
+    lo, hi = search.settings.get("range_deg", [None, None])
+    if search.at_boundary:
+        ctx.warn(
+            f"the least-energy generator angle {search.optimum_angle_deg:.4g}° lies at an end "
+            f"of the searched range [{lo:.4g}°, {hi:.4g}°]: the true optimum may lie outside "
+            "it; widen search.generator_angle_deg"
+        )
+    if search.noise_limited:
+        a, b = (math.degrees(v) for v in search.bracket_rad)
+        ctx.warn(
+            "the angle refinement stopped noise-limited: the energy's staircase (rim cells "
+            "appearing and disappearing as α changes) hid its curvature, so the optimum "
+            f"{search.optimum_angle_deg:.4g}° is resolved only to [{a:.4g}°, {b:.4g}°]; a "
+            "finer node spacing resolves it better"
+        )
+
+
+def _judge_optimum_drape(
+    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any]
+) -> None:
+    """Drape once at the optimum and mark the case partial when it does not cover the ply
+    where it lies over the tool (the same words the drape step uses for the same net)."""
+    evaluation = objective.evaluate(
+        float(optimum["generator_angle_rad"]),
+        orientation_rad=optimum.get("orientation_rad"),
+        start_xy_m=optimum.get("start_xy_m"),
+        generators=optimum.get("generators"),
+        keep_result=True,
+    )
+    if evaluation.result is None:
+        raise CaseFailure("the drape at the least-energy generator angle cannot start")
+    start = optimum.get("start_xy_m") or objective.drape_kwargs.get("start_xy_m") or (0.0, 0.0)
+    cover = coverage(evaluation.result, objective.surface, (float(start[0]), float(start[1])))
+    ctx.summary["optimum_covered_fraction"] = cover.covered_fraction
+    if not cover.complete:
+        ctx.partial(cover.reason(), cover.covered_fraction)
 
 
 def run_optimum(ctx: CaseContext) -> dict[str, Any]:
@@ -158,6 +271,8 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
     relax = knobs["relax"]
     if relax:
         _run_relax(ctx, objective, optimum, relax if isinstance(relax, Mapping) else {})
+    _warn_resolution(ctx, search)
+    _judge_optimum_drape(ctx, objective, optimum)
     return {"optimum": optimum}
 
 

@@ -2,26 +2,43 @@
 
 The drape step uses the scene's generator angle, or the minimum-energy search's optimum when
 the scene has a ``search`` section. Scenes give mm and degrees; everything here is SI.
+
+The steps say what their result is worth (``preform.drape.verdict``, ``docs/results.md``): a
+non-finite energy or a net without a cell raises ``CaseFailure``; a net that does not cover the
+ply where it lies over the tool marks the case partial with the covered fraction and why; cells
+past the law's locking, stitch-failure or packing angle, or outside its data range, are counted
+and said in words. A ply too large for ``limits.max_nodes`` is refused before any array exists.
 """
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from preform.drape.fields import energy_field, summary
-from preform.drape.net import drape
+from preform.drape.net import DrapeError, drape
 from preform.drape.ply import PlyOutline
 from preform.drape.result import DrapeResult, EnergyField
+from preform.drape.verdict import (
+    coverage,
+    first_nonfinite_energy,
+    law_range,
+    shear_limit_warnings,
+)
 from preform.pipeline import fidelity
+from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext, Step
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene
 
 MM = 1e-3
+#: Memory one net node costs while draping, roughly [bytes] (positions, statuses, residuals,
+#: cell fields and temporaries); used to say what a refused ply would have needed.
+BYTES_PER_NODE = 130
 
 
 @dataclass(frozen=True)
@@ -33,26 +50,96 @@ class DrapedPly:
 
 
 def build_surface(scene: Scene, registry: Any) -> Any:
-    """The scene's tool surface [m]."""
+    """The scene's tool surface [m]. The tool's preflight (file type and size of a mesh,
+    against ``limits.max_mesh_mb``) runs first, so nothing unsafe is read."""
     tool = scene.tool
-    return registry.surface_type(tool.surface).build(tool, scene.base_dir)
+    preflight = getattr(tool, "preflight", None)
+    if preflight is not None:
+        built, problems = preflight(scene.base_dir, scene.limits)
+        if problems:
+            raise CaseFailure("; ".join(f"tool: {message}" for _, message in problems))
+        if built is not None:
+            return built
+    build = registry.surface_type(tool.surface).build
+    try:
+        # Builders that take the scene's limits get them (the mesh reader caps its read).
+        inspect.signature(build).bind(tool, scene.base_dir, scene.limits)
+        args: tuple[Any, ...] = (tool, scene.base_dir, scene.limits)
+    except TypeError:
+        args = (tool, scene.base_dir)
+    try:
+        return build(*args)
+    except (ValueError, OSError) as error:
+        # Readers and builders say what is wrong with the tool in words (file:line for meshes).
+        raise CaseFailure(f"tool: {error}") from None
+
+
+def ply_outline(scene: Scene) -> PlyOutline:
+    """The scene's ply outline in the flat [m]."""
+    ply = scene.ply
+    if ply is None:
+        raise ValueError("a drape needs the scene section 'ply'")
+    if ply.outline_mm is not None:
+        return PlyOutline.polygon(np.asarray(ply.outline_mm, dtype=float) * MM)
+    size = ply.size_mm or (1000.0, 1000.0)
+    return PlyOutline.rectangle(
+        (size[0] * MM, size[1] * MM), offset_m=(-ply.offset_mm[0] * MM, -ply.offset_mm[1] * MM)
+    )
+
+
+def node_budget_problem(outline: PlyOutline, spacing_mm: float, max_nodes: int) -> str | None:
+    """Why a ply at ``spacing_mm`` needs too many nodes for ``limits.max_nodes``, or None."""
+    ni, nj = outline.grid_shape(spacing_mm * MM)
+    needed = ni * nj
+    if needed <= max_nodes:
+        return None
+    return (
+        f"the ply needs {ni:,} × {nj:,} = {needed:.3g} net nodes at node spacing "
+        f"{spacing_mm:g} mm, more than limits.max_nodes = {max_nodes:,} (about "
+        f"{_bytes(needed * BYTES_PER_NODE)} of memory); use a larger ply.node_spacing_mm or a "
+        "smaller ply, or raise limits.max_nodes in the scene if the machine has the memory"
+    )
+
+
+def ply_too_coarse_problem(outline: PlyOutline, spacing_mm: float) -> str | None:
+    """Why a ply at ``spacing_mm`` has no cell at all (fewer than 2 nodes along a fibre)."""
+    ni, nj = outline.grid_shape(spacing_mm * MM)
+    if ni >= 2 and nj >= 2:
+        return None
+    lo, hi = outline.vertices.min(axis=0) / MM, outline.vertices.max(axis=0) / MM
+    return (
+        f"the node spacing {spacing_mm:g} mm leaves the ply ({hi[0] - lo[0]:g} × "
+        f"{hi[1] - lo[1]:g} mm) with {ni} × {nj} node(s), so the net has no cell; use a node "
+        "spacing well below the ply's size"
+    )
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if n < 1000:
+            return f"{n:.3g} {unit}"
+        n /= 1000
+    return f"{n:.3g} EB"
 
 
 def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
     """Keyword arguments of :func:`preform.drape.net.drape` from a scene (SI units), with the
-    fidelity knobs resolved against the tool (``preform.pipeline.fidelity``)."""
+    fidelity knobs resolved against the tool (``preform.pipeline.fidelity``).
+
+    Raises ``CaseFailure`` when the ply would need more than ``limits.max_nodes`` nodes or has
+    no cell at the resolved spacing, before anything of its size is allocated."""
     ply, start = scene.ply, scene.start
     if ply is None or start is None:
         raise ValueError("a drape needs the scene sections 'ply' and 'start'")
     knobs = fidelity.resolve(scene, float(surface.size))
     assert knobs.node_spacing_mm is not None
-    if ply.outline_mm is not None:
-        outline = PlyOutline.polygon(np.asarray(ply.outline_mm, dtype=float) * MM)
-    else:
-        size = ply.size_mm or (1000.0, 1000.0)
-        outline = PlyOutline.rectangle(
-            (size[0] * MM, size[1] * MM), offset_m=(-ply.offset_mm[0] * MM, -ply.offset_mm[1] * MM)
-        )
+    outline = ply_outline(scene)
+    for problem in (
+        node_budget_problem(outline, knobs.node_spacing_mm, scene.limits.max_nodes),
+        ply_too_coarse_problem(outline, knobs.node_spacing_mm),
+    ):
+        if problem is not None:
+            raise CaseFailure(problem)
     settings: dict[str, Any] = {
         "node_spacing_m": knobs.node_spacing_mm * MM,
         "ply": outline,
@@ -73,6 +160,58 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
     return settings
 
 
+def start_problem(surface: Any, start_xy_m: tuple[float, float]) -> str | None:
+    """Why the start point cannot be put on the tool, or None."""
+    xy = np.asarray(start_xy_m, dtype=float).reshape(1, 2)
+    points, over = surface.point_at_plan(xy)
+    if bool(np.asarray(over)[0]) and np.all(np.isfinite(points[0])):
+        return None
+    (x0, y0, _), (x1, y1, _) = surface.bounds
+    return (
+        f"the start point (x, y) = ({xy[0, 0] / MM:.6g}, {xy[0, 1] / MM:.6g}) mm is not over "
+        f"the tool, whose plan extent is x {x0 / MM:.6g} … {x1 / MM:.6g} mm, "
+        f"y {y0 / MM:.6g} … {y1 / MM:.6g} mm; move start.point_mm onto it"
+    )
+
+
+def judge_drape(
+    ctx: CaseContext,
+    result: DrapeResult,
+    energy: EnergyField,
+    surface: Any,
+    start_xy_m: tuple[float, float],
+) -> None:
+    """Say what a finished drape is worth through the case context (module docstring):
+    ``CaseFailure`` for no cell or a non-finite energy, ``partial`` for missing coverage,
+    warnings for cells past the law's limits."""
+    if not result.valid.any():
+        d_mm = result.node_spacing / MM
+        raise CaseFailure(
+            f"the drape has no cell ({result.nodes_placed} node(s) placed): at node spacing "
+            f"{d_mm:g} mm the net does not fit on the tool (typical length "
+            f"{float(surface.size) / MM:.4g} mm); use a node spacing well below the tool's "
+            "size, or check that the ply and start point lie over the tool"
+        )
+    why = first_nonfinite_energy(result, energy)
+    if why is not None:
+        raise CaseFailure(why)
+    cover = coverage(result, surface, start_xy_m)
+    ctx.summary.update(cover.summary())
+    # "complete" in a case summary means what the status means: nothing asked is missing (a
+    # ply hanging over the tool's edge is complete; DrapeResult.complete would say it is not).
+    ctx.summary["complete"] = cover.complete
+    if not cover.complete:
+        ctx.partial(cover.reason(), cover.covered_fraction)
+    law = ctx.products["shear_law"]
+    block = getattr(ctx.fabric, "shear_law", None)
+    if block is None and hasattr(ctx.fabric, "default_shear_law"):
+        block = ctx.fabric.default_shear_law()
+    messages, counts = shear_limit_warnings(result, energy, law_range(law, block))
+    ctx.summary.update(counts)
+    for message in messages:
+        ctx.warn(message)
+
+
 def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:
     """Resolve the scene's fidelity knobs and record them as scalar results of the case."""
     knobs = fidelity.resolve(ctx.scene, float(surface.size))
@@ -86,8 +225,9 @@ def run_surface(ctx: CaseContext) -> dict[str, Any]:
 
 
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
-    settings = drape_settings(ctx.scene, ctx.products["surface"])
-    record_knobs(ctx, ctx.products["surface"])
+    surface = ctx.products["surface"]
+    settings = drape_settings(ctx.scene, surface)
+    record_knobs(ctx, surface)
     optimum = ctx.products.get("optimum")
     if optimum is not None:
         # the search may also have chosen the orientation, the start or curved generators
@@ -106,10 +246,15 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
         alpha_arg: float | None = None
     else:
         alpha_arg = alpha
-    result = drape(ctx.products["surface"], generator_angle_rad=alpha_arg, **settings)
-    energy = energy_field(result, ctx.products["shear_law"])
+    try:
+        result = drape(surface, generator_angle_rad=alpha_arg, **settings)
+    except DrapeError as error:
+        raise CaseFailure(f"the drape cannot start: {error}") from None
+    with np.errstate(all="ignore"):
+        energy = energy_field(result, ctx.products["shear_law"])
     ctx.summary.update(summary(result, energy))
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
+    judge_drape(ctx, result, energy, surface, settings["start_xy_m"])
     return {"drape": DrapedPly(result, energy)}
 
 

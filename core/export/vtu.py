@@ -128,12 +128,23 @@ def write_drape_vtu(
     else:
         cell_data["thinning"] = 1.0 / np.cos(shear)
 
+    # A file is a result users open and trust: never write a NaN or an infinity into one (the
+    # drape step fails such a case first; this guards direct callers).
+    points = np.asarray(result.nodes, dtype=float)[placed]
+    bad = [name for name, values in cell_data.items() if not np.all(np.isfinite(values))]
+    if not np.all(np.isfinite(points)):
+        bad.insert(0, "node positions")
+    if bad:
+        raise ValueError(
+            f"the draped net has non-finite values in {', '.join(bad)}; not writing {path}"
+        )
+
     # A net without a valid cell still shows its placed nodes, as vertex cells without cell
     # data: a file with an empty quad block, or with no cells, is one meshio cannot read back.
     has_cells = len(quads) > 0
     vertices = np.arange(len(node_i)).reshape(-1, 1)
     mesh = meshio.Mesh(
-        points=np.asarray(result.nodes, dtype=float)[placed],
+        points=points,
         cells=[("quad", quads)] if has_cells else [("vertex", vertices)],
         point_data={
             "i": node_i.astype(np.int32),

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from preform.library import build_shear_law
+from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext, Step
 
 
@@ -55,9 +56,20 @@ def run_shear_curve(ctx: CaseContext) -> dict[str, Any]:
 
     law_block = ctx.fabric.shear_law or ctx.fabric.default_shear_law()
     law_name = getattr(law_block, "law", None) or (law_block or {}).get("law", "")
-    curves = shear_curves(
-        ctx.products["shear_law"], _angles_deg(ctx), ctx.fabric.name, str(law_name)
-    )
+    with np.errstate(all="ignore"):
+        curves = shear_curves(
+            ctx.products["shear_law"], _angles_deg(ctx), ctx.fabric.name, str(law_name)
+        )
+    # A NaN would reach shear_curve.json as null and the figure as a gap: fail instead, with
+    # the first angle (nearest zero) where the law is not finite.
+    for sense in ("positive", "negative"):
+        for row in curves[sense]:
+            bad = [k for k, v in row.items() if k != "angle_deg" and not np.isfinite(v)]
+            if bad:
+                raise CaseFailure(
+                    f"the shear law returned a non-finite {bad[0].split('_')[0]} "
+                    f"({row[bad[0]]!r}) at γ = {row['angle_deg']:.4g}°"
+                )
     return {"shear_curve": curves}
 
 

@@ -1,0 +1,492 @@
+"""What a drape result is worth: its coverage, its finiteness, and where it leaves the law.
+
+The pipeline's status vocabulary (``preform.pipeline.status``) promises ``ok`` only for a
+result that is complete and finite. This module turns a :class:`DrapeResult` and its
+:class:`EnergyField` into the words that back that promise; the steps route them to
+``CaseContext.partial`` / ``warn`` or raise ``CaseFailure``. See ``docs/results.md``.
+
+What the scene asks of a drape [C]
+----------------------------------
+Until parts (trim regions) land, the scene asks for *the ply, draped wherever it lies over the
+tool*. A ply larger than the tool hangs over its edge, and a kinematic net cannot build a node
+whose construction passes through a node off the tool: those nodes are the ply's overhang, not
+missing coverage. Node (i, j) is built from the generators through its whole *dependency
+rectangle*, the nodes between it and the start node (i0, j0) in both indices, so a node missing
+for want of a parent inherits the cause of whichever node of that rectangle failed:
+
+- **past the edge** (fine): OFF_TOOL itself, or a non-placed node with an OFF_TOOL node in its
+  rectangle;
+- **missing** (coverage lost): NO_INTERSECTION or FOLDED itself, or NOT_REACHED behind such a
+  node (or behind a notch of the ply outline), with no OFF_TOOL node in its rectangle, and lying
+  over the tool.
+
+The generator marchers mark *any* stop as OFF_TOOL, also a geodesic that cannot cross a
+concave crease of a mesh (the hat mould's wall foot) while the tool goes on. So an OFF_TOOL
+node on a generator is taken as the tool's edge only when the generator's last chord, continued
+one step straight on, lands outside the tool's plan or farther than a node spacing from it; a
+generator that stops where the tool goes on is a failure ("stopped on the tool"). A tool that
+ends at the foot of a vertical wall (no plate beyond) cannot be told from a crease by this test
+and reads as "stopped on the tool".
+
+A missing node has no position, so "lying over the tool" is judged on its undeformed position:
+the flat ply laid on the plan at the start point, its +u fibres along the orientation and +v at
+the generator angle. Draping over relief pulls fabric towards the start, so this under-counts
+missing nodes near the tool's edge: ``covered_fraction`` is then an upper bound.
+
+``covered_fraction`` is a fraction of fabric area: each cell of the net is d² of undeformed
+fabric, so it is the number of valid cells over the number of cells asked for, a cell being
+asked for when it is valid, or when one of its corners is missing and none is past the edge.
+A drape is complete (fraction 1) exactly when no cell asked for is missing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.shear.law import ShearLaw
+
+BoolArray = NDArray[np.bool_]
+FloatArray = NDArray[np.float64]
+
+
+def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
+    """True at every node whose dependency rectangle (module docstring) holds a True node.
+
+    Per quadrant around the start node, a running OR along both indices away from the start:
+    node (a, b) of a quadrant depends on exactly the nodes (a', b') with a' ≤ a, b' ≤ b.
+    """
+    i0, j0 = start
+    out = np.zeros_like(mask, dtype=bool)
+    rows = (slice(i0, None), slice(i0, None, -1))
+    cols = (slice(j0, None), slice(j0, None, -1))
+    for r in rows:
+        for c in cols:
+            part = np.logical_or.accumulate(np.logical_or.accumulate(mask[r, c], axis=0), axis=1)
+            out[r, c] |= part
+    return out
+
+
+def _tool_goes_on(surface: Any, last: FloatArray, before: FloatArray, spacing: float) -> bool:
+    """Whether the tool goes on where a generator stopped: its chord continued one step
+    straight on from ``before`` through ``last`` [m] lands over the tool in plan and within one
+    node spacing of the surface. At a rim or a plate's edge it lands outside the tool's plan
+    (a chord through two points of a convex surface continues outside it); at a concave
+    crease (a wall's foot on a plate) it lands on the tool."""
+    ahead = 2.0 * last - before
+    if not np.all(np.isfinite(ahead)):
+        return False
+    _, over = surface.point_at_plan(ahead[None, :2])
+    if not bool(np.asarray(over)[0]):
+        return False
+    _, dist = surface.closest_point(ahead[None, :])
+    return bool(float(dist[0]) <= spacing)
+
+
+def generator_stops_on_tool(result: DrapeResult, surface: Any) -> BoolArray:
+    """OFF_TOOL nodes on the four half-generators where the tool in fact goes on (module
+    docstring): True there, False everywhere else (ni, nj)."""
+    status = result.status
+    nodes = np.asarray(result.nodes, dtype=float)
+    ni, nj = result.shape
+    i0, j0 = result.start_index
+    out = np.zeros(status.shape, dtype=bool)
+    for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        count = (ni - 1 - i0 if di > 0 else i0) if di else (nj - 1 - j0 if dj > 0 else j0)
+        k = np.arange(1, count + 1)
+        line = status[i0 + di * k, j0 + dj * k]
+        stops = np.flatnonzero(line == NodeStatus.OFF_TOOL)
+        if stops.size == 0:
+            continue
+        step = int(k[stops[0]])
+        last = nodes[i0 + di * (step - 1), j0 + dj * (step - 1)]
+        if step >= 2:
+            before = nodes[i0 + di * (step - 2), j0 + dj * (step - 2)]
+        else:
+            # Only the start is placed: walk on from the opposite half-generator's first node.
+            oi, oj = i0 - di, j0 - dj
+            if not (0 <= oi < ni and 0 <= oj < nj) or status[oi, oj] != NodeStatus.PLACED:
+                continue
+            before = nodes[oi, oj]
+        if _tool_goes_on(surface, last, before, result.node_spacing):
+            out[i0 + di * step, j0 + dj * step] = True
+    return out
+
+
+def flat_plan_positions(result: DrapeResult, start_xy_m: tuple[float, float]) -> FloatArray:
+    """Undeformed plan position (ni, nj, 2) [m] of every node: the flat ply laid on the plan
+    at the start point, +u along the orientation, +v at the generator angle from it."""
+    ni, nj = result.shape
+    i0, j0 = result.start_index
+    d = result.node_spacing
+    theta, alpha = result.orientation, result.generator_angle
+    e_u = np.array([math.cos(theta), math.sin(theta)])
+    e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
+    xi = (np.arange(ni) - i0) * d
+    eta = (np.arange(nj) - j0) * d
+    return (
+        np.asarray(start_xy_m, dtype=float)
+        + xi[:, None, None] * e_u[None, None, :]
+        + eta[None, :, None] * e_v[None, None, :]
+    )
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """How much of what the scene asked (module docstring) a drape covers, and why not more."""
+
+    #: Cells asked for, and the valid ones among them (each d² of undeformed fabric).
+    cells_asked: int
+    cells_covered: int
+    #: Failed nodes (generator_stopped, no_intersection, folded), and nodes over the tool not
+    #: reached behind them or behind a notch of the ply outline (not_reached_behind_failure,
+    #: not_reached_behind_outline).
+    missing_nodes: dict[str, int]
+    #: Nodes of the ply not placed and not asked for: past the tool's edge, or (undeformed)
+    #: not over the tool at all; the overhang.
+    nodes_overhang: int
+    #: Where the first missing node nearest the start lies, undeformed, in plan [m], if any.
+    first_missing_xy_m: tuple[float, float] | None = None
+    node_spacing_m: float = 0.0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def covered_fraction(self) -> float:
+        """Valid cells / cells asked for: a fraction of fabric area (1.0 when nothing asked)."""
+        return 1.0 if self.cells_asked == 0 else self.cells_covered / self.cells_asked
+
+    @property
+    def complete(self) -> bool:
+        """No node over the tool is missing (then ``covered_fraction`` is 1)."""
+        return self.cells_asked == self.cells_covered
+
+    def reason(self) -> str:
+        """Why the drape is partial, in words (empty when complete)."""
+        if self.complete:
+            return ""
+        d_mm = self.node_spacing_m * 1e3
+        causes = []
+        m = self.missing_nodes
+        if m.get("generator_stopped"):
+            causes.append(
+                f"{m['generator_stopped']} generator(s) stopped on the tool (the generator "
+                "fibre could not be continued across a crease or corner, although the tool goes "
+                "on there)"
+            )
+        if m.get("folded"):
+            causes.append(
+                f"{m['folded']} node(s) folded (the net would turn over there: an edge or "
+                "corner of the tool sharper than a net of this spacing can follow)"
+            )
+        if m.get("no_intersection"):
+            causes.append(
+                f"{m['no_intersection']} node(s) had no intersection (no point of the tool at "
+                f"distance d = {d_mm:.3g} mm from both parent nodes: the curvature is too "
+                "high for the node spacing)"
+            )
+        if m.get("not_reached_behind_failure"):
+            causes.append(
+                f"{m['not_reached_behind_failure']} node(s) over the tool were not reached "
+                "because a node between them and the start failed"
+            )
+        if m.get("not_reached_behind_outline"):
+            causes.append(
+                f"{m['not_reached_behind_outline']} node(s) over the tool were not reached "
+                "because the ply outline cuts a generator before them"
+            )
+        where = ""
+        if self.first_missing_xy_m is not None:
+            x, y = (1e3 * v for v in self.first_missing_xy_m)
+            where = f"; the first missing node nearest the start lies near (x, y) = ({x:.0f}, {y:.0f}) mm"
+        return (
+            f"the net covers {100 * self.covered_fraction:.1f} % of the ply's fabric area that "
+            f"lies over the tool ({self.cells_covered} of {self.cells_asked} cells): "
+            + "; ".join(causes)
+            + where
+        )
+
+    def summary(self) -> dict[str, Any]:
+        """Scalar results for the case summary."""
+        out: dict[str, Any] = {
+            "covered_fraction": self.covered_fraction,
+            "coverage_cells_asked": self.cells_asked,
+            "coverage_cells_covered": self.cells_covered,
+            "nodes_overhang": self.nodes_overhang,
+            "nodes_missing": int(sum(self.missing_nodes.values())),
+        }
+        for key, value in self.missing_nodes.items():
+            out[f"nodes_missing_{key}"] = value
+        return out
+
+
+def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float]) -> Coverage:
+    """The coverage of ``result`` on ``surface`` (module docstring); ``start_xy_m`` [m] is the
+    plan position of the start point (the flat ply is laid from there)."""
+    status = result.status
+    placed = status == NodeStatus.PLACED
+    in_ply = status != NodeStatus.OUTSIDE_PLY
+    start = result.start_index
+    stopped = generator_stops_on_tool(result, surface)
+    edge = (status == NodeStatus.OFF_TOOL) & ~stopped
+    past_edge = ~placed & in_ply & dependency_shadow(edge, start)
+    failed = (status == NodeStatus.NO_INTERSECTION) | (status == NodeStatus.FOLDED) | stopped
+    behind_failure = dependency_shadow(failed, start)
+    behind_outline = dependency_shadow(~in_ply, start)
+    lost = ~placed & in_ply & ~past_edge
+
+    plan = flat_plan_positions(result, start_xy_m)
+    over = np.zeros(status.shape, dtype=bool)
+    if lost.any():
+        _, mask = surface.point_at_plan(plan[lost])
+        over[lost] = np.asarray(mask, dtype=bool)
+    missing = lost & over
+    not_reached = missing & (status == NodeStatus.NOT_REACHED)
+    # The failed nodes themselves are counted wherever they lie (they say why the net stopped);
+    # the nodes behind them only where they lie over the tool (they are the coverage lost).
+    counts = {
+        "generator_stopped": int(np.count_nonzero(lost & stopped)),
+        "no_intersection": int(np.count_nonzero(lost & (status == NodeStatus.NO_INTERSECTION))),
+        "folded": int(np.count_nonzero(lost & (status == NodeStatus.FOLDED))),
+        "not_reached_behind_failure": int(np.count_nonzero(not_reached & behind_failure)),
+        "not_reached_behind_outline": int(
+            np.count_nonzero(not_reached & ~behind_failure & behind_outline)
+        ),
+    }
+    # A node that is missing for none of these reasons would be an engine bug; say so rather
+    # than let it pass as coverage.
+    other = int(np.count_nonzero(not_reached & ~behind_failure & ~behind_outline))
+    if other:
+        counts["not_reached_unexplained"] = other
+
+    # Cells: valid ones are covered; a non-valid cell inside the ply is asked for when none of
+    # its corners is past the edge and its undeformed centre lies over the tool.
+    valid = result.cell_status == CellStatus.VALID
+    cell_in_ply = result.cell_status != CellStatus.OUTSIDE_PLY
+    edge_corner = past_edge[:-1, :-1] | past_edge[1:, :-1] | past_edge[:-1, 1:] | past_edge[1:, 1:]
+    missing_corner = missing[:-1, :-1] | missing[1:, :-1] | missing[:-1, 1:] | missing[1:, 1:]
+    asked = valid | (cell_in_ply & ~edge_corner & missing_corner)
+
+    first: tuple[float, float] | None = None
+    if missing.any():
+        i0, j0 = start
+        ii, jj = np.nonzero(missing)
+        k = int(np.argmin(np.abs(ii - i0) + np.abs(jj - j0)))
+        first = (float(plan[ii[k], jj[k], 0]), float(plan[ii[k], jj[k], 1]))
+    return Coverage(
+        cells_asked=int(np.count_nonzero(asked)),
+        cells_covered=int(np.count_nonzero(valid)),
+        missing_nodes=counts,
+        nodes_overhang=int(np.count_nonzero(past_edge | (lost & ~over))),
+        first_missing_xy_m=first,
+        node_spacing_m=result.node_spacing,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Finiteness
+
+
+def first_nonfinite_energy(result: DrapeResult, energy: EnergyField) -> str | None:
+    """Why the energy of a drape is not finite, in words, or None when it is finite."""
+    density = np.asarray(energy.energy_density, dtype=float)
+    shear = np.asarray(result.shear, dtype=float)
+    bad_shear = result.valid & ~np.isfinite(shear)
+    if bad_shear.any():
+        i, j = (int(v) for v in np.argwhere(bad_shear)[0])
+        return (
+            f"the drape gave a non-finite shear angle in {int(bad_shear.sum())} cell(s), first "
+            f"cell ({i}, {j}): the net's geometry is broken there"
+        )
+    bad = ~np.isfinite(density)
+    if bad.any():
+        i, j = (int(v) for v in np.argwhere(bad)[0])
+        value = density[i, j]
+        word = "NaN" if math.isnan(value) else ("+inf" if value > 0 else "-inf")
+        return (
+            f"the shear law returned {word} at γ = {math.degrees(float(shear[i, j])):.4g}° "
+            f"(cell ({i}, {j}); {int(bad.sum())} cell(s) in all): total energy is not finite"
+        )
+    if not math.isfinite(energy.total_energy):
+        return (
+            f"total energy is not finite ({energy.total_energy!r} J) although every cell's "
+            "energy density is: the sum overflows"
+        )
+    return None
+
+
+def law_nonfinite_angle(law: ShearLaw, max_deg: float = 89.0, step_deg: float = 0.5) -> str | None:
+    """Where a law's energy is not finite on a grid of ±``max_deg`` [deg], in words, or None."""
+    angles = np.radians(np.arange(-max_deg, max_deg + 0.5 * step_deg, step_deg))
+    with np.errstate(all="ignore"):
+        values = np.asarray(law.energy(angles), dtype=float)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size == 0:
+        return None
+    # The failing angle nearest zero is the one a drape meets first.
+    k = int(bad[np.argmin(np.abs(angles[bad]))])
+    value = values[k]
+    word = "NaN" if math.isnan(value) else ("+inf" if value > 0 else "-inf")
+    return f"the shear law returned {word} at γ = {math.degrees(float(angles[k])):.4g}°"
+
+
+# --------------------------------------------------------------------------------------------
+# Where the drape leaves the law's trustworthy range
+
+
+@dataclass(frozen=True)
+class LawRange:
+    """The angles [rad, > 0] past which a law's numbers stop being measured or physical."""
+
+    locking: float | None = None
+    failure: float | None = None
+    #: Physical limit of the model (tows packed solid), past which it continues artificially.
+    packing: float | None = None
+    #: End of the measured/fitted data in the positive and negative senses, and what the law
+    #: does past it ("hold", "linear", "extrapolate").
+    data_positive: float | None = None
+    data_negative: float | None = None
+    beyond: str | None = None
+
+
+def _deg_or_none(value: Any) -> float | None:
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        return None
+    return math.radians(out) if math.isfinite(out) else None
+
+
+def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
+    """The limits of ``law``. Read from the law when it offers them (``packing_angle`` [rad],
+    ``data_range`` = (negative end, positive end) [rad]); else the data range is read from the
+    fabric's shear-law block (``law_block``): the generic fields ``max_angle_deg`` (positive
+    sense), ``max_angle_negative_deg`` / ``max_angle_perpendicular_deg`` (negative sense) of
+    fitted laws, the last ``angle_deg`` / ``angle_negative_deg`` of tabulated ones, and
+    ``beyond_range``."""
+    packing = getattr(law, "packing_angle", None)
+    data = getattr(law, "data_range", None)
+    positive = negative = None
+    beyond = None
+    if data is not None:
+        negative, positive = (None if v is None else float(v) for v in data)
+    elif law_block is not None:
+        block: Mapping[str, Any]
+        if isinstance(law_block, Mapping):
+            block = law_block
+        elif hasattr(law_block, "model_dump"):
+            block = law_block.model_dump()
+        else:
+            block = {}
+        positive = _deg_or_none(block.get("max_angle_deg"))
+        table = block.get("angle_deg")
+        if positive is None and isinstance(table, list | tuple) and table:
+            positive = _deg_or_none(table[-1])
+        negative = _deg_or_none(
+            block.get("max_angle_negative_deg") or block.get("max_angle_perpendicular_deg")
+        )
+        neg_table = block.get("angle_negative_deg")
+        if negative is None and isinstance(neg_table, list | tuple) and neg_table:
+            negative = _deg_or_none(neg_table[-1])
+        if negative is None:
+            negative = positive
+        beyond = block.get("beyond_range")
+        beyond = str(beyond) if beyond is not None else None
+    # A data range reaching 90° is no range at all.
+    if positive is not None and positive >= 0.5 * math.pi - 1e-9:
+        positive = None
+    if negative is not None and negative >= 0.5 * math.pi - 1e-9:
+        negative = None
+    return LawRange(
+        locking=law.locking_angle,
+        failure=law.failure_angle,
+        packing=None if packing is None else float(packing),
+        data_positive=positive,
+        data_negative=negative,
+        beyond=beyond,
+    )
+
+
+def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
+    total = float(area[counted].sum())
+    part = float(area[mask].sum())
+    percent = 100.0 * part / total if total > 0 else 0.0
+    return f"{int(np.count_nonzero(mask))} cells ({percent:.1f} % of the draped area)"
+
+
+def shear_limit_warnings(
+    result: DrapeResult, energy: EnergyField, limits: LawRange
+) -> tuple[list[str], dict[str, Any]]:
+    """Sentences about the counted cells past the law's limits, and their counts for the
+    summary. Counted cells are those the energy sums (``energy_field``)."""
+    counted = result.valid & result.in_part
+    gamma = np.where(counted, np.asarray(result.shear, dtype=float), 0.0)
+    area = np.asarray(result.area, dtype=float)
+    density = np.asarray(energy.energy_density, dtype=float)
+    cell_energy = density * result.node_spacing**2
+    total = float(cell_energy[counted].sum())
+    messages: list[str] = []
+    counts: dict[str, Any] = {}
+    if limits.locking is not None:
+        past = np.asarray(energy.past_locking, dtype=bool) & counted
+        counts["cells_past_locking"] = int(np.count_nonzero(past))
+        if past.any():
+            messages.append(
+                f"{_share(past, area, counted)} are sheared past the locking angle "
+                f"{math.degrees(limits.locking):.1f}°: the fabric would wrinkle there"
+            )
+    if limits.failure is not None:
+        past = np.asarray(energy.past_failure, dtype=bool) & counted
+        counts["cells_past_failure"] = int(np.count_nonzero(past))
+        if past.any():
+            messages.append(
+                f"{_share(past, area, counted)} are sheared past the stitch-failure angle "
+                f"{math.degrees(limits.failure):.1f}° (parallel to the stitch): the stitching "
+                "would break there"
+            )
+    if limits.packing is not None:
+        past = counted & (np.abs(gamma) > limits.packing)
+        counts["cells_past_packing"] = int(np.count_nonzero(past))
+        if past.any():
+            share = float(cell_energy[past].sum()) / total if total > 0 else 0.0
+            messages.append(
+                f"{_share(past, area, counted)} are sheared past "
+                f"{math.degrees(limits.packing):.1f}°, where the law's tows are packed solid "
+                "(fibre volume fraction at its maximum): the law only continues its stress "
+                f"along a tangent there, so their energy, {100 * share:.3g} % of the total "
+                f"{total:.3g} J, is not a physical energy"
+            )
+    beyond_pos = (
+        counted & (gamma > limits.data_positive)
+        if limits.data_positive is not None
+        else np.zeros_like(counted)
+    )
+    beyond_neg = (
+        counted & (gamma < -limits.data_negative)
+        if limits.data_negative is not None
+        else np.zeros_like(counted)
+    )
+    if limits.data_positive is not None or limits.data_negative is not None:
+        outside = beyond_pos | beyond_neg
+        counts["cells_outside_law_data"] = int(np.count_nonzero(outside))
+        if outside.any():
+            ends = []
+            if limits.data_positive is not None:
+                ends.append(f"+{math.degrees(limits.data_positive):.1f}°")
+            if limits.data_negative is not None:
+                ends.append(f"−{math.degrees(limits.data_negative):.1f}°")
+            how = {
+                "hold": "holds the last measured value",
+                "linear": "continues the last tangent",
+                "extrapolate": "extrapolates the fitted curve",
+            }.get(limits.beyond or "", "is extrapolated")
+            messages.append(
+                f"{_share(outside, area, counted)} are sheared beyond the shear law's data "
+                f"range ({' / '.join(ends)}), where the law {how}: their energy is not measured"
+            )
+    return messages, counts
