@@ -484,11 +484,13 @@ def _finished(out: Path) -> dict[str, bytes]:
     return found
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig):
-    lib = runenv.library(*(fabric(f"f{i}", work_s=0.8) for i in range(8)))
+@pytest.mark.parametrize(
+    ("sig", "engine"), [(signal.SIGINT, "process"), (signal.SIGTERM, "serial")]
+)
+def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig, engine):
+    lib = runenv.library(*(fabric(f"f{i}", work_s=0.5) for i in range(6)))
     scene = runenv.scene()
-    proc = runenv.start(lib, scene, "--workers", "2")
+    proc = runenv.start(lib, scene, "--workers", "2", "--engine", engine)
     assert _wait_for(lambda: len(_finished(runenv.out)) >= 2)
     proc.send_signal(sig)
     t0 = time.monotonic()
@@ -502,7 +504,7 @@ def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig):
     assert set(st.values()) <= {"ok", "interrupted"} and "interrupted" in st.values()
     assert {k for k, v in st.items() if v == "ok"} == set(kept)
     assert_consistent(runenv.out)
-    rerun = runenv.run(lib, scene, "--workers", "2")
+    rerun = runenv.run(lib, scene, "--workers", "2", "--engine", engine)
     assert rerun.returncode == 0, rerun.stderr
     assert f"{len(kept)} skipped" in rerun.stdout
     for case_id, content in kept.items():  # untouched
