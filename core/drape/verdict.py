@@ -24,7 +24,9 @@ The generator marchers mark *any* stop as OFF_TOOL, also a geodesic that cannot 
 concave crease of a mesh (the hat mould's wall foot) while the tool goes on. So an OFF_TOOL
 node on a generator is taken as the tool's edge only when the generator's last chord, continued
 one step straight on, lands outside the tool's plan or farther than a node spacing from it; a
-generator that stops where the tool goes on is a failure ("stopped on the tool"). A tool that
+generator that stops where the tool goes on is a failure ("stopped on the tool"). The same
+test judges the interior OFF_TOOL nodes of the general Newton placement (continuing the cell's
+parallelogram), which calls a node at a concave crease of a mesh OFF_TOOL too. A tool that
 ends at the foot of a vertical wall (no plate beyond) cannot be told from a crease by this test
 and reads as "stopped on the tool".
 
@@ -73,35 +75,42 @@ def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
     return out
 
 
-def _tool_goes_on(surface: Any, last: FloatArray, before: FloatArray, spacing: float) -> bool:
-    """Whether the tool goes on where a generator stopped: its chord continued one step
-    straight on from ``before`` through ``last`` [m] lands over the tool in plan and within one
-    node spacing of the surface. At a rim or a plate's edge it lands outside the tool's plan
-    (a chord through two points of a convex surface continues outside it); at a concave
-    crease (a wall's foot on a plate) it lands on the tool."""
-    ahead = 2.0 * last - before
-    if not np.all(np.isfinite(ahead)):
-        return False
-    _, over = surface.point_at_plan(ahead[None, :2])
-    if not bool(np.asarray(over)[0]):
-        return False
-    _, dist = surface.closest_point(ahead[None, :])
-    return bool(float(dist[0]) <= spacing)
+def _tool_goes_on(surface: Any, last: FloatArray, before: FloatArray, spacing: float) -> BoolArray:
+    """Whether the tool goes on where the net stopped (m,): the chord from ``before`` through
+    ``last`` (m, 3) [m], continued one step straight on, lands over the tool in plan and within
+    one node spacing of the surface. At a rim or a plate's edge it lands outside the tool's plan
+    (a chord through two points of a convex surface continues outside it); at a concave crease
+    (a wall's foot on a plate) it lands on the tool."""
+    ahead = 2.0 * np.asarray(last, dtype=float) - np.asarray(before, dtype=float)
+    finite = np.all(np.isfinite(ahead), axis=1)
+    out = np.zeros(len(ahead), dtype=bool)
+    if not finite.any():
+        return out
+    _, over = surface.point_at_plan(ahead[finite, :2])
+    _, dist = surface.closest_point(ahead[finite])
+    out[finite] = np.asarray(over, dtype=bool) & (np.asarray(dist) <= spacing)
+    return out
 
 
 def generator_stops_on_tool(result: DrapeResult, surface: Any) -> BoolArray:
-    """OFF_TOOL nodes on the four half-generators where the tool in fact goes on (module
-    docstring): True there, False everywhere else (ni, nj)."""
+    """OFF_TOOL nodes where the tool in fact goes on (module docstring): True there (ni, nj).
+
+    Checked: the first OFF_TOOL node of each half-generator (the marchers call any stop
+    OFF_TOOL) and, on tools placed by the general Newton solve, the interior OFF_TOOL nodes
+    (that solve calls a node OFF_TOOL when its closest point lies on an edge of the tool, which
+    a concave crease between two faces of a mesh also is). Closed-form placements decide
+    OFF_TOOL from the tool's own shape and are trusted."""
     status = result.status
     nodes = np.asarray(result.nodes, dtype=float)
     ni, nj = result.shape
     i0, j0 = result.start_index
-    out = np.zeros(status.shape, dtype=bool)
+    targets: list[tuple[int, int]] = []
+    lasts: list[FloatArray] = []
+    befores: list[FloatArray] = []
     for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
         count = (ni - 1 - i0 if di > 0 else i0) if di else (nj - 1 - j0 if dj > 0 else j0)
         k = np.arange(1, count + 1)
-        line = status[i0 + di * k, j0 + dj * k]
-        stops = np.flatnonzero(line == NodeStatus.OFF_TOOL)
+        stops = np.flatnonzero(status[i0 + di * k, j0 + dj * k] == NodeStatus.OFF_TOOL)
         if stops.size == 0:
             continue
         step = int(k[stops[0]])
@@ -109,13 +118,30 @@ def generator_stops_on_tool(result: DrapeResult, surface: Any) -> BoolArray:
         if step >= 2:
             before = nodes[i0 + di * (step - 2), j0 + dj * (step - 2)]
         else:
-            # Only the start is placed: walk on from the opposite half-generator's first node.
+            # Only the start is placed: continue from the opposite half-generator's first node.
             oi, oj = i0 - di, j0 - dj
             if not (0 <= oi < ni and 0 <= oj < nj) or status[oi, oj] != NodeStatus.PLACED:
                 continue
             before = nodes[oi, oj]
-        if _tool_goes_on(surface, last, before, result.node_spacing):
-            out[i0 + di * step, j0 + dj * step] = True
+        targets.append((i0 + di * step, j0 + dj * step))
+        lasts.append(last)
+        befores.append(before)
+    if not hasattr(surface, "place_nodes"):
+        ii, jj = np.indices(status.shape)
+        inner = np.argwhere((status == NodeStatus.OFF_TOOL) & (ii != i0) & (jj != j0))
+        if inner.size:
+            i, j = inner[:, 0], inner[:, 1]
+            si, sj = np.sign(i - i0), np.sign(j - j0)
+            a, b, c = nodes[i - si, j], nodes[i, j - sj], nodes[i - si, j - sj]
+            # The cell's parallelogram a + b − c: the chord from c through (a + b)/2, continued.
+            targets += [(int(p), int(q)) for p, q in inner]
+            lasts += list(0.5 * (a + b))
+            befores += list(c)
+    out = np.zeros(status.shape, dtype=bool)
+    if targets:
+        goes_on = _tool_goes_on(surface, np.array(lasts), np.array(befores), result.node_spacing)
+        for (ti, tj), flag in zip(targets, goes_on, strict=True):
+            out[ti, tj] = bool(flag)
     return out
 
 
@@ -144,7 +170,7 @@ class Coverage:
     #: Cells asked for, and the valid ones among them (each d² of undeformed fabric).
     cells_asked: int
     cells_covered: int
-    #: Failed nodes (generator_stopped, no_intersection, folded), and nodes over the tool not
+    #: Failed nodes (stopped_on_tool, no_intersection, folded), and nodes over the tool not
     #: reached behind them or behind a notch of the ply outline (not_reached_behind_failure,
     #: not_reached_behind_outline).
     missing_nodes: dict[str, int]
@@ -173,11 +199,10 @@ class Coverage:
         d_mm = self.node_spacing_m * 1e3
         causes = []
         m = self.missing_nodes
-        if m.get("generator_stopped"):
+        if m.get("stopped_on_tool"):
             causes.append(
-                f"{m['generator_stopped']} generator(s) stopped on the tool (the generator "
-                "fibre could not be continued across a crease or corner, although the tool goes "
-                "on there)"
+                f"{m['stopped_on_tool']} node(s) stopped on the tool (the net could not be "
+                "continued across a crease or corner there, although the tool goes on)"
             )
         if m.get("folded"):
             causes.append(
@@ -250,7 +275,7 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     # The failed nodes themselves are counted wherever they lie (they say why the net stopped);
     # the nodes behind them only where they lie over the tool (they are the coverage lost).
     counts = {
-        "generator_stopped": int(np.count_nonzero(lost & stopped)),
+        "stopped_on_tool": int(np.count_nonzero(lost & stopped)),
         "no_intersection": int(np.count_nonzero(lost & (status == NodeStatus.NO_INTERSECTION))),
         "folded": int(np.count_nonzero(lost & (status == NodeStatus.FOLDED))),
         "not_reached_behind_failure": int(np.count_nonzero(not_reached & behind_failure)),
