@@ -21,7 +21,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from preform.material import FabricBase, Location
+from preform.material import FabricBase, Location, plausibility_checks
 from preform.registry import Registry
 from preform.validation import format_path, located_errors
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
@@ -190,6 +190,11 @@ def validate_entry(
         return None, errors, []
     if law_params is not None:
         fabric = fabric.model_copy(update={"shear_law": law_params})
+    # Plausible ranges before the architecture's own checks: a value in the wrong unit (a tow
+    # width in µm) would otherwise reach the unit-cell builder, which may take long on it.
+    range_errors, range_warnings = _range_problems(fabric, err)
+    if range_errors:
+        return None, range_errors, []
     try:
         consistency = fabric.errors()
         warns = list(fabric.check())
@@ -202,8 +207,59 @@ def validate_entry(
     errors += [err(tuple(path), msg) for path, msg in consistency]
     if errors:
         return None, errors, []
-    warnings = [err(tuple(path), msg) for path, msg in warns]
+    warnings = range_warnings + [err(tuple(path), msg) for path, msg in warns]
     return fabric, [], warnings
+
+
+def _range_problems(fabric: FabricBase, err: Any) -> tuple[list[SourceError], list[SourceError]]:
+    """Values outside their plausible range (errors), and the ones the entry accepts on purpose
+    through ``accept_out_of_range`` (warnings); an override naming no range-checked field is an
+    error, one naming a value inside its range a warning (it is not needed).
+
+    An override names a field as the errors do (``tow_types.glass.width_mm``,
+    ``shear_law.force_N_per_mm[2]``); naming a list (``shear_law.force_N_per_mm``) accepts
+    every item of it."""
+    checks = plausibility_checks(fabric)
+    overrides = fabric.accept_out_of_range or ()
+    paths = [format_path(c.path) for c in checks]
+
+    def covered(path: str, override: str) -> bool:
+        return path == override or path.startswith(override + "[")
+
+    errors: list[SourceError] = []
+    warnings: list[SourceError] = []
+    for i, override in enumerate(overrides):
+        where = ("accept_out_of_range", i)
+        matching = [c for c, p in zip(checks, paths, strict=True) if covered(p, override)]
+        if not matching:
+            close = difflib.get_close_matches(override, paths, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            errors.append(
+                err(where, f"{override!r} names no range-checked value of this entry{hint}")
+            )
+        elif all(c.inside for c in matching):
+            warnings.append(
+                err(
+                    where,
+                    f"{override!r} is inside its plausible range "
+                    f"({matching[0].rule.describe()}); the override is not needed",
+                )
+            )
+    for check, path in zip(checks, paths, strict=True):
+        if check.inside:
+            continue
+        if any(covered(path, o) for o in overrides):
+            warnings.append(
+                err(
+                    check.path,
+                    f"{check.field} = {check.value:g} is outside the plausible range "
+                    f"{check.rule.describe()} for {check.rule.what}; accepted by override "
+                    "(accept_out_of_range)",
+                )
+            )
+        else:
+            errors.append(err(check.path, check.message(path)))
+    return errors, warnings
 
 
 def _validate_law(

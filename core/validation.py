@@ -75,6 +75,14 @@ def _message(err: Any, model: type[BaseModel] | None) -> str:
         return msg
     if kind == "missing":
         return "required field is missing"
+    if kind == "finite_number":
+        # Text such as inf, Infinity, nan or 1e999 reaches the model as a string (YAML's own
+        # .inf/.nan are refused by the reader); name what was written.
+        shown = err.get("input")
+        return (
+            f"non-finite number {shown!r} is not allowed; write a finite value (infinities, NaN "
+            "and numbers that overflow, such as 1e999, are refused, also when written as text)"
+        )
     msg = str(err.get("msg", "invalid value"))
     return msg.removeprefix("Value error, ")
 
