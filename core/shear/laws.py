@@ -18,14 +18,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, Literal, Self
+from typing import Annotated, Any, Literal, Self
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
 from numpy.typing import ArrayLike, NDArray
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, Field, model_validator
+from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
 from scipy.interpolate import PchipInterpolator
 
+from preform.material import ParamsModel, Plausible, size_limit
 from preform.shear.energy import DOMAIN_END, Branch, PiecewiseBranch
 from preform.shear.law import ShearLaw
 
@@ -35,6 +37,164 @@ FloatArray = NDArray[np.float64]
 N_PER_MM_TO_N_PER_M = 1000.0
 
 BeyondRange = Literal["hold", "linear", "extrapolate"]
+
+#: Largest plausible normalised picture-frame force F_s/L [N/mm] and the matching torque per
+#: area C = 1000·F_s/L·cos γ [N·m/m²]. Measured curves stay below ≈ 10 N/mm up to 70°; 100 N/mm
+#: on a 150 mm frame is 15 kN of shear force, past what picture-frame rigs apply.
+MAX_FORCE_N_PER_MM = 100.0
+MAX_TORQUE_N_PER_M = MAX_FORCE_N_PER_MM * N_PER_MM_TO_N_PER_M
+
+_FORCE_REASON = "measured picture-frame curves stay below ≈ 10 N/mm up to 70°"
+
+
+def _angle_rule(what: str, low: float, high: float, reason: str) -> Plausible:
+    return Plausible(
+        low, high, "deg", what, f"below {low:g}° a value is most likely radians; {reason}"
+    )
+
+
+#: Ranges of the angles a shear law is given; reasons in docs/ranges.md.
+FIT_END = _angle_rule("the end of a fitted range", 2.0, 90.0, "picture-frame tests run to 40–70°")
+LOCKING_ANGLE = _angle_rule(
+    "a locking angle", 2.0, 90.0, "woven fabrics lock at ≈ 25–60°, acos(Tw0/Ts)"
+)
+FAILURE_ANGLE = _angle_rule(
+    "a stitch-failure angle", 2.0, 90.0, "chain stitches fail near 35° (paper)"
+)
+FORCE_POINT = Plausible(
+    0.0, MAX_FORCE_N_PER_MM, "N/mm", "a picture-frame shear force F_s/L", _FORCE_REASON
+)
+TORQUE_POINT = Plausible(
+    0.0,
+    MAX_TORQUE_N_PER_M,
+    "N·m/m²",
+    "a shear torque per area C",
+    f"C = 1000·F_s/L·cos γ with F_s/L ≤ {MAX_FORCE_N_PER_MM:g} N/mm",
+)
+
+
+def polynomial_extremes(
+    coefficients_per_deg: ArrayLike, start_deg: float, end_deg: float
+) -> tuple[float, float, float]:
+    """(smallest value, the angle [deg] where it is, largest value) of Σ a_k·(γ/deg)^k over
+    [start_deg, end_deg]: from the interval ends, the real roots of the derivative inside it,
+    and a dense grid as a guard against roots the companion matrix misplaces."""
+    c = np.trim_zeros(np.atleast_1d(np.asarray(coefficients_per_deg, dtype=float)), "b")
+    if c.size == 0:
+        return 0.0, start_deg, 0.0
+    candidates = [start_deg, end_deg, *np.linspace(start_deg, end_deg, 513)]
+    # Leading terms too small to change the value on the interval would only send roots of
+    # the derivative to infinity (or overflow the companion matrix): drop them for the roots.
+    size = np.abs(c) * max(abs(start_deg), abs(end_deg), 1.0) ** np.arange(c.size)
+    significant = np.nonzero(size > 1e-14 * size.max())[0] if size.max() > 0 else [0]
+    trimmed = c[: int(significant[-1]) + 1]
+    if trimmed.size > 2:
+        with np.errstate(all="ignore"):
+            try:
+                roots = npoly.polyroots(npoly.polyder(trimmed))
+            except np.linalg.LinAlgError:  # the grid still bounds the extremes
+                roots = np.array([])
+            for root in roots:
+                if abs(root.imag) <= 1e-9 * max(1.0, abs(root.real)):
+                    if start_deg < root.real < end_deg:
+                        candidates.append(float(root.real))
+    angles = np.asarray(candidates)
+    with np.errstate(all="ignore"):
+        values = npoly.polyval(angles, c)
+    k = int(np.argmin(values))
+    return float(values[k]), float(angles[k]), float(np.max(values))
+
+
+def negative_stretch(
+    coefficients_per_deg: ArrayLike, start_deg: float, end_deg: float
+) -> tuple[float, float] | None:
+    """(value, angle [deg]) where a polynomial is most negative on [start, end], or None when
+    it is non-negative there (to 1e-9 of its largest value: rounding is not a negative force)."""
+    low, at, high = polynomial_extremes(coefficients_per_deg, start_deg, end_deg)
+    return (low, at) if low < -1e-9 * max(abs(high), abs(low)) else None
+
+
+def negative_law_error(
+    field: str,
+    coefficients: list[float],
+    quantity: Literal["force", "torque"],
+    stretch: tuple[float, float],
+    start_deg: float,
+    end_deg: float,
+) -> InitErrorDetails:
+    """The located error for a polynomial that comes out negative inside its fitted range."""
+    value, angle = stretch
+    unit = "N/mm" if quantity == "force" else "N·m/m²"
+    return InitErrorDetails(
+        type=PydanticCustomError(
+            "negative_shear_law",
+            "the {quantity} comes out negative ({value} {unit} at {angle}°) inside the "
+            "fitted range {start}–{end}°; a fabric does not drive its own shear. Refit (a lower "
+            "degree, or a tabulated law) or shorten the fitted range",
+            {
+                "field": field,
+                "quantity": "force F_s/L" if quantity == "force" else "torque C",
+                "value": f"{value:.3g}",
+                "unit": unit,
+                "angle": f"{angle:.3g}",
+                "start": f"{start_deg:g}",
+                "end": f"{end_deg:g}",
+            },
+        ),
+        loc=(field,),
+        input=coefficients,
+    )
+
+
+def raise_located(model: str, errors: list[InitErrorDetails]) -> None:
+    """Raise pydantic errors located at the fields they name (from a model validator)."""
+    if errors:
+        raise ValidationError.from_exception_data(model, errors)
+
+
+def peak_over_range(range_field: str, fallback_field: str | None = None) -> Any:
+    """A ``Plausible.measure``: the largest value of a coefficient list's polynomial over
+    [0, the model's ``range_field``] (or ``fallback_field`` when that is None) [deg]."""
+
+    def measure(coefficients: list[float], model: Any) -> float | None:
+        end = getattr(model, range_field, None)
+        if end is None and fallback_field is not None:
+            end = getattr(model, fallback_field, None)
+        if end is None or not coefficients:
+            return None
+        return polynomial_extremes(coefficients, 0.0, float(end))[2]
+
+    return measure
+
+
+def force_peak(range_field: str, fallback_field: str | None = None) -> Plausible:
+    """Plausible range of the peak F_s/L of a force polynomial over its fitted range."""
+    return Plausible(
+        0.0,
+        MAX_FORCE_N_PER_MM,
+        "N/mm",
+        "the peak picture-frame shear force F_s/L over the fitted range",
+        _FORCE_REASON,
+        measure=peak_over_range(range_field, fallback_field),
+    )
+
+
+def torque_peak(range_field: str, fallback_field: str | None = None) -> Plausible:
+    """Plausible range of the peak C of a torque polynomial over its fitted range."""
+    return Plausible(
+        0.0,
+        MAX_TORQUE_N_PER_M,
+        "N·m/m²",
+        "the peak shear torque per area C over the fitted range",
+        f"C = 1000·F_s/L·cos γ with F_s/L ≤ {MAX_FORCE_N_PER_MM:g} N/mm",
+        measure=peak_over_range(range_field, fallback_field),
+    )
+
+
+#: Coefficients of one polynomial (size-limited: a long list only fits noise).
+Coefficients = Annotated[list[float], size_limit("polynomial_terms")]
+#: One column of a tabulated curve.
+TableColumn = Annotated[list[float], size_limit("table_points")]
 
 
 class SignedShearLaw:
@@ -124,47 +284,53 @@ def _check_coefficients(values: list[float] | None, name: str) -> None:
         raise ValueError(f"{name}: give at least one finite coefficient")
 
 
-class PolynomialParams(BaseModel):
+class PolynomialParams(ParamsModel):
     """Parameters of the ``polynomial`` shear law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
     law: Literal["polynomial"] = Field(description="Selects the polynomial shear law.")
-    force_coefficients_N_per_mm: list[float] | None = Field(
-        default=None,
-        description=(
-            "F_s/L [N/mm] = Σ a_k·(γ/deg)^k, ascending powers from k = 0, for γ ≥ 0 (and for "
-            "γ < 0 at |γ| unless a negative-sense polynomial is given). a_k in N/mm/deg^k."
-        ),
+    force_coefficients_N_per_mm: Annotated[Coefficients | None, force_peak("max_angle_deg")] = (
+        Field(
+            default=None,
+            description=(
+                "F_s/L [N/mm] = Σ a_k·(γ/deg)^k, ascending powers from k = 0, for γ ≥ 0 (and for "
+                "γ < 0 at |γ| unless a negative-sense polynomial is given). a_k in N/mm/deg^k."
+            ),
+        )
     )
-    torque_coefficients_N_per_m: list[float] | None = Field(
-        default=None,
-        description=(
-            "Alternative to the force polynomial: torque per area C [N·m/m²] = Σ a_k·(γ/deg)^k."
-        ),
+    torque_coefficients_N_per_m: Annotated[Coefficients | None, torque_peak("max_angle_deg")] = (
+        Field(
+            default=None,
+            description=(
+                "Alternative to the force polynomial: torque per area C [N·m/m²] = Σ a_k·(γ/deg)^k."
+            ),
+        )
     )
-    force_coefficients_negative_N_per_mm: list[float] | None = Field(
+    force_coefficients_negative_N_per_mm: Annotated[
+        Coefficients | None, force_peak("max_angle_negative_deg", "max_angle_deg")
+    ] = Field(
         default=None,
         description="F_s/L [N/mm] for γ < 0 as a polynomial in |γ| [deg]; makes the law asymmetric.",
     )
-    torque_coefficients_negative_N_per_m: list[float] | None = Field(
+    torque_coefficients_negative_N_per_m: Annotated[
+        Coefficients | None, torque_peak("max_angle_negative_deg", "max_angle_deg")
+    ] = Field(
         default=None,
         description="C [N·m/m²] for γ < 0 as a polynomial in |γ| [deg]; makes the law asymmetric.",
     )
-    max_angle_deg: float = Field(
+    max_angle_deg: Annotated[float, FIT_END] = Field(
         gt=0.0, le=90.0, description="End of the fitted range for γ ≥ 0 [deg]."
     )
-    max_angle_negative_deg: float | None = Field(
+    max_angle_negative_deg: Annotated[float | None, FIT_END] = Field(
         default=None, gt=0.0, le=90.0, description="End of the fitted range for γ < 0 [deg]."
     )
     beyond_range: BeyondRange = Field(
         default="hold",
         description="Past the fitted range: hold the value, continue the tangent, or extrapolate.",
     )
-    locking_angle_deg: float | None = Field(
+    locking_angle_deg: Annotated[float | None, LOCKING_ANGLE] = Field(
         default=None, gt=0.0, lt=90.0, description="Locking (wrinkling) angle [deg], if known."
     )
-    failure_angle_deg: float | None = Field(
+    failure_angle_deg: Annotated[float | None, FAILURE_ANGLE] = Field(
         default=None, gt=0.0, lt=90.0, description="Stitch-failure angle, γ > 0 [deg], if any."
     )
 
@@ -183,7 +349,37 @@ class PolynomialParams(BaseModel):
         for name in type(self).model_fields:
             if "coefficients" in name:
                 _check_coefficients(getattr(self, name), name)
+        quantity: Literal["force", "torque"] = "force" if force[0] is not None else "torque"
+        end_negative = self.max_angle_negative_deg or self.max_angle_deg
+        errors = []
+        for name, coefficients, end in (
+            (
+                f"{quantity}_coefficients_{self._unit(quantity)}",
+                self._senses()[0],
+                self.max_angle_deg,
+            ),
+            (
+                f"{quantity}_coefficients_negative_{self._unit(quantity)}",
+                self._senses()[1],
+                end_negative,
+            ),
+        ):
+            if coefficients is None:
+                continue
+            stretch = negative_stretch(coefficients, 0.0, end)
+            if stretch is not None:
+                errors.append(negative_law_error(name, coefficients, quantity, stretch, 0.0, end))
+        raise_located(type(self).__name__, errors)
         return self
+
+    @staticmethod
+    def _unit(quantity: str) -> str:
+        return "N_per_mm" if quantity == "force" else "N_per_m"
+
+    def _senses(self) -> tuple[list[float] | None, list[float] | None]:
+        if self.force_coefficients_N_per_mm is not None:
+            return self.force_coefficients_N_per_mm, self.force_coefficients_negative_N_per_mm
+        return self.torque_coefficients_N_per_m, self.torque_coefficients_negative_N_per_m
 
 
 def _radians_or_none(deg: float | None) -> float | None:
@@ -248,38 +444,36 @@ def tabulated_branch(
     return PiecewiseBranch(breaks, pieces, weight="cos" if quantity == "force" else "one")
 
 
-class TabulatedParams(BaseModel):
+class TabulatedParams(ParamsModel):
     """Parameters of the ``tabulated`` shear law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
     law: Literal["tabulated"] = Field(description="Selects the tabulated shear law.")
-    angle_deg: list[float] = Field(
+    angle_deg: TableColumn = Field(
         min_length=2, description="Shear angles [deg], strictly ascending, 0 ≤ γ ≤ 90, γ ≥ 0."
     )
-    force_N_per_mm: list[float] | None = Field(
+    force_N_per_mm: Annotated[TableColumn | None, FORCE_POINT] = Field(
         default=None, description="Normalised picture-frame force F_s/L [N/mm] at angle_deg."
     )
-    torque_N_per_m: list[float] | None = Field(
+    torque_N_per_m: Annotated[TableColumn | None, TORQUE_POINT] = Field(
         default=None, description="Alternatively, torque per area C [N·m/m²] at angle_deg."
     )
-    angle_negative_deg: list[float] | None = Field(
+    angle_negative_deg: TableColumn | None = Field(
         default=None,
         description="Shear-angle magnitudes [deg] of a separate table for γ < 0 (asymmetric law).",
     )
-    force_negative_N_per_mm: list[float] | None = Field(
+    force_negative_N_per_mm: Annotated[TableColumn | None, FORCE_POINT] = Field(
         default=None, description="F_s/L [N/mm] for γ < 0 at angle_negative_deg."
     )
-    torque_negative_N_per_m: list[float] | None = Field(
+    torque_negative_N_per_m: Annotated[TableColumn | None, TORQUE_POINT] = Field(
         default=None, description="C [N·m/m²] for γ < 0 at angle_negative_deg."
     )
     beyond_range: Literal["hold", "linear"] = Field(
         default="hold", description="Past the last point: hold its value or continue its tangent."
     )
-    locking_angle_deg: float | None = Field(
+    locking_angle_deg: Annotated[float | None, LOCKING_ANGLE] = Field(
         default=None, gt=0.0, lt=90.0, description="Locking (wrinkling) angle [deg], if known."
     )
-    failure_angle_deg: float | None = Field(
+    failure_angle_deg: Annotated[float | None, FAILURE_ANGLE] = Field(
         default=None, gt=0.0, lt=90.0, description="Stitch-failure angle, γ > 0 [deg], if any."
     )
 
@@ -287,7 +481,8 @@ class TabulatedParams(BaseModel):
     def _consistent(self) -> Self:
         if (self.force_N_per_mm is None) == (self.torque_N_per_m is None):
             raise ValueError("give exactly one of force_N_per_mm, torque_N_per_m")
-        _check_table(self.angle_deg, self.force_N_per_mm or self.torque_N_per_m, "angle_deg")
+        values_field = "force_N_per_mm" if self.force_N_per_mm is not None else "torque_N_per_m"
+        _check_table(self, "angle_deg", values_field)
         neg_values = (
             self.force_negative_N_per_mm
             if self.force_N_per_mm is not None
@@ -303,20 +498,41 @@ class TabulatedParams(BaseModel):
         if (self.angle_negative_deg is None) != (neg_values is None):
             raise ValueError("give angle_negative_deg together with its values")
         if self.angle_negative_deg is not None and neg_values is not None:
-            _check_table(self.angle_negative_deg, neg_values, "angle_negative_deg")
+            negative_field = values_field.replace("_N_per", "_negative_N_per")
+            _check_table(self, "angle_negative_deg", negative_field)
         return self
 
 
-def _check_table(angles: list[float], values: list[float] | None, name: str) -> None:
-    if values is None or len(values) != len(angles):
-        raise ValueError(f"{name}: one value per angle")
-    a = np.asarray(angles)
-    if not np.all(np.isfinite(a)) or not np.all(np.isfinite(values)):
-        raise ValueError(f"{name}: values must be finite")
+def _check_table(params: BaseModel, angles_field: str, values_field: str) -> None:
+    """One value per angle, angles strictly ascending in [0, 90]°, values ≥ 0; each error
+    located at the list (or the item) at fault."""
+    angles: list[float] = getattr(params, angles_field)
+    values: list[float] = getattr(params, values_field)
+    model = type(params).__name__
+
+    def fail(loc: tuple[str | int, ...], message: str, value: Any) -> None:
+        raise_located(
+            model,
+            [InitErrorDetails(type=PydanticCustomError("table", message), loc=loc, input=value)],
+        )
+
+    if len(values) != len(angles):
+        fail(
+            (values_field,),
+            f"{len(values)} value(s) for {len(angles)} angle(s) in {angles_field}: "
+            "give one value per angle",
+            values,
+        )
+    a = np.asarray(angles, dtype=float)
     if a[0] < 0.0 or a[-1] > 90.0 or np.any(np.diff(a) <= 0.0):
-        raise ValueError(f"{name}: angles must be strictly ascending within [0, 90] deg")
-    if min(values) < 0.0:
-        raise ValueError(f"{name}: forces/torques are magnitudes in their sense, ≥ 0")
+        fail((angles_field,), "angles must be strictly ascending within [0, 90] deg", angles)
+    for i, value in enumerate(values):
+        if value < 0.0:
+            fail(
+                (values_field, i),
+                f"{value:g} < 0: forces and torques are magnitudes in their sense, ≥ 0",
+                value,
+            )
 
 
 def build_tabulated(params: TabulatedParams, fabric: Any = None) -> ShearLaw:

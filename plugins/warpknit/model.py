@@ -14,11 +14,22 @@ from functools import cached_property
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
 
 from preform.geometry.fibres import FIBRES, fibre
 from preform.geometry.unit_cell import UnitCell
-from preform.material import FabricBase, Location
+from preform.material import (
+    TOW_HEIGHT,
+    TOW_LINEAR_DENSITY,
+    TOW_SPACING,
+    TOW_WIDTH,
+    FabricBase,
+    Location,
+    ParamsModel,
+    Plausible,
+    check_size,
+    size_limit,
+)
 
 from .geometry import ThreadLevel, TowLayer, TowType, WarpKnitGeometry
 from .lapping import LappingSyntaxError, parse_lapping
@@ -34,8 +45,60 @@ def _known_fibre(name: str) -> str:
     return name
 
 
-class _Part(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+# Ranges of the stitching; reasons in docs/ranges.md.
+TOW_OFFSET = Plausible(
+    -200.0,
+    200.0,
+    "mm",
+    "a tow offset",
+    "an offset past one tow spacing (≤ 200 mm) only repeats the same pattern",
+)
+OVERLAP_LENGTH = Plausible(
+    0.1,
+    100.0,
+    "mm",
+    "a loop (overlap) length",
+    "about 2 × stitch length + 2 × fabric thickness: a few mm, ≈ 30 mm for thick multiaxials",
+)
+STITCH_LENGTH = Plausible(
+    0.1,
+    50.0,
+    "mm",
+    "a stitch length",
+    "stitch-bonding machines knit courses 1–6 mm apart",
+)
+GAUGE = Plausible(
+    0.5,
+    60.0,
+    "needles per inch",
+    "a machine gauge",
+    "warp-knitting machines run from E1.5 to E44 (needles per inch)",
+)
+NEEDLE_DISTANCE = Plausible(
+    0.3,
+    60.0,
+    "mm",
+    "a needle distance",
+    "25.4 mm / gauge for gauges E0.5–E60 (0.4–51 mm)",
+)
+STITCH_LINEAR_DENSITY = Plausible(
+    0.5,
+    1000.0,
+    "tex",
+    "a stitching-yarn linear density",
+    "stitch yarns are 2–30 tex (76 dtex polyester = 7.6 tex), glass stitching up to ≈ 70 tex",
+)
+AREAL_DENSITY = Plausible(
+    5.0,
+    20000.0,
+    "g/m²",
+    "a fabric areal density",
+    "the lightest spread-tow NCF ≈ 50 g/m², the heaviest multiaxials ≈ 5000 g/m²",
+)
+
+
+class _Part(ParamsModel):
+    pass
 
 
 class TowLayerEntry(_Part):
@@ -47,15 +110,21 @@ class TowLayerEntry(_Part):
         description="Tow direction [deg] from the stitch (machine) direction towards the "
         "cross direction, e.g. 0, 90, +45, -45.",
     )
-    spacing_mm: float = Field(
+    spacing_mm: Annotated[float, TOW_SPACING] = Field(
         gt=0.0,
         description="Centre-to-centre distance between neighbouring tows, normal to them [mm].",
     )
     fibre: str = Field(description="Fibre of the tows: one of preform's known fibres (glass, ...).")
-    linear_density_tex: float = Field(gt=0.0, description="Linear density of one tow [tex = g/km].")
-    tow_width_mm: float = Field(gt=0.0, description="Tow width in the fabric plane [mm].")
-    tow_height_mm: float = Field(gt=0.0, description="Tow height (thickness) [mm].")
-    offset_mm: float | None = Field(
+    linear_density_tex: Annotated[float, TOW_LINEAR_DENSITY] = Field(
+        gt=0.0, description="Linear density of one tow [tex = g/km]."
+    )
+    tow_width_mm: Annotated[float, TOW_WIDTH] = Field(
+        gt=0.0, description="Tow width in the fabric plane [mm]."
+    )
+    tow_height_mm: Annotated[float, TOW_HEIGHT] = Field(
+        gt=0.0, description="Tow height (thickness) [mm]."
+    )
+    offset_mm: Annotated[float | None, TOW_OFFSET] = Field(
         default=None,
         description="Normal distance of the first tow's centreline from the cell origin [mm] "
         "(default 0); moves the tows against the needles.",
@@ -71,29 +140,29 @@ class ThreadLevelEntry(_Part):
         description="Lapping notation of the guide bar, course by course: '1-0/0-1' pillar "
         "(chain), '1-0/1-2' tricot, '1-0/2-3' cord, '1-0/3-4' satin; may end in '/' or '//'.",
     )
-    overlap_length_mm: float = Field(
+    overlap_length_mm: Annotated[float, OVERLAP_LENGTH] = Field(
         gt=0.0,
         description="Thread length of one loop (overlap), from leaving the underlap plane "
         "through the stack, round the needle and back [mm].",
     )
-    stitch_length_mm: float = Field(
+    stitch_length_mm: Annotated[float, STITCH_LENGTH] = Field(
         gt=0.0, description="Course spacing (stitch length) along the machine direction [mm]."
     )
-    gauge_needles_per_inch: float | None = Field(
+    gauge_needles_per_inch: Annotated[float | None, GAUGE] = Field(
         default=None,
         gt=0.0,
         description="Machine gauge E [needles per inch]; the needle distance is 25.4 mm / E. "
         "Give this, needle_distance_mm, or both (they must agree).",
     )
-    needle_distance_mm: float | None = Field(
+    needle_distance_mm: Annotated[float | None, NEEDLE_DISTANCE] = Field(
         default=None, gt=0.0, description="Distance between adjacent needles D [mm]."
     )
-    empty_guides: int | None = Field(
+    empty_guides: Annotated[int | None, size_limit("empty_guides")] = Field(
         default=None,
         ge=0,
         description="Empty guides between two loaded guides (default 0: fully threaded).",
     )
-    linear_density_tex: float = Field(
+    linear_density_tex: Annotated[float, STITCH_LINEAR_DENSITY] = Field(
         gt=0.0, description="Linear density of the stitching yarn [tex = g/km] (76 dtex = 7.6 tex)."
     )
     fibre: str | None = Field(
@@ -103,12 +172,16 @@ class ThreadLevelEntry(_Part):
     @field_validator("knitting_sequence")
     @classmethod
     def _sequence_parses(cls, text: str) -> str:
+        # Courses are counted before parsing so that a huge sequence is refused unread.
+        check_size("lapping_courses", text.rstrip("/ \t").count("/") + 1)
         try:
-            parse_lapping(text)
+            sequence = parse_lapping(text)
         except LappingSyntaxError as err:
             raise ValueError(
                 f"{err.message} at character {err.position + 1}\n{err.caret_diagram()}"
             ) from None
+        low, high = sequence.gap_span
+        check_size("needle_gap", max(abs(low), abs(high)))
         return text
 
     @field_validator("fibre")
@@ -118,6 +191,7 @@ class ThreadLevelEntry(_Part):
 
 
 PlacementEntry = Annotated[int, Field(ge=0)]
+PlacementRow = Annotated[tuple[PlacementEntry, ...], size_limit("placement_row")]
 
 
 class WarpKnitFabric(FabricBase):
@@ -127,21 +201,21 @@ class WarpKnitFabric(FabricBase):
     architecture: Literal["warp_knit"] = Field(
         description="Warp-knitted / stitch-bonded (NCF) fabric."
     )
-    tow_layers: tuple[TowLayerEntry, ...] = Field(
+    tow_layers: Annotated[tuple[TowLayerEntry, ...], size_limit("tow_layers")] = Field(
         description="Tow layers from the technical face (loop side) to the back."
     )
-    threads: tuple[ThreadLevelEntry, ...] = Field(
+    threads: Annotated[tuple[ThreadLevelEntry, ...], size_limit("thread_levels")] = Field(
         description="Thread levels, one per guide bar, numbered from 1; their underlaps stack "
         "in this order from the face towards the back.",
     )
-    placement: tuple[tuple[PlacementEntry, ...], ...] | None = Field(
+    placement: Annotated[tuple[PlacementRow, ...] | None, size_limit("tow_layers")] = Field(
         default=None,
         description="Placement matrix: one row per tow layer giving, for its tows in order "
         "across the cell, the thread level (from 1) of the first underlap above the tow; a row "
         "shorter than the layer repeats. 0 means no underlap above. Default: every tow under "
         "thread level 1.",
     )
-    nominal_areal_density_g_m2: float | None = Field(
+    nominal_areal_density_g_m2: Annotated[float | None, AREAL_DENSITY] = Field(
         default=None,
         gt=0.0,
         description="Datasheet areal density including the stitch yarn [g/m²], checked against "

@@ -22,35 +22,56 @@ import math
 from functools import cached_property
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 
 from preform.geometry.fibres import FIBRES, Fibre
 from preform.geometry.unit_cell import UnitCell
-from preform.material import FabricBase, Location
+from preform.material import (
+    FIBRE_DENSITY,
+    FIBRE_MODULUS,
+    TOW_HEIGHT,
+    TOW_LINEAR_DENSITY,
+    TOW_SPACING,
+    TOW_WIDTH,
+    FabricBase,
+    Location,
+    ParamsModel,
+    check_size,
+    size_limit,
+)
 from preform.plugins.woven import weaves
 from preform.plugins.woven.crossover import CrossoverGeometry
 from preform.plugins.woven.geometry import TowType, WeaveDescription, WovenUnitCell
 
-_STRICT = ConfigDict(extra="forbid", frozen=True)
-
 TowTypeAssignment = str | tuple[str | tuple[str, ...], ...]
 
 
-class TowTypeEntry(BaseModel):
+#: Tows in one repeat of a generated weave (harness, over/under, group): a repeat of n tows
+#: builds an n × n weaving matrix, so the size is limited before anything is built.
+RepeatCount = Annotated[int, Field(ge=1), size_limit("weave_repeat")]
+#: Layers or levels of a weave.
+LayerCount = Annotated[int, size_limit("weave_levels")]
+
+
+class TowTypeEntry(ParamsModel):
     """One named kind of tow (datasheet units)."""
 
-    model_config = _STRICT
-
     fibre: str = Field(description=f"Fibre material, one of: {', '.join(sorted(FIBRES))}.")
-    linear_density_tex: float = Field(gt=0, description="Linear density of the tow [tex = g/km].")
-    width_mm: float = Field(gt=0, description="Tow width in the fabric plane [mm] (Tw0).")
-    height_mm: float = Field(gt=0, description="Tow height (thickness of one tow) [mm].")
-    fibre_density_g_cm3: float | None = Field(
+    linear_density_tex: Annotated[float, TOW_LINEAR_DENSITY] = Field(
+        gt=0, description="Linear density of the tow [tex = g/km]."
+    )
+    width_mm: Annotated[float, TOW_WIDTH] = Field(
+        gt=0, description="Tow width in the fabric plane [mm] (Tw0)."
+    )
+    height_mm: Annotated[float, TOW_HEIGHT] = Field(
+        gt=0, description="Tow height (thickness of one tow) [mm]."
+    )
+    fibre_density_g_cm3: Annotated[float | None, FIBRE_DENSITY] = Field(
         default=None,
         gt=0,
         description="Fibre density [g/cm³]; default: the fibre's handbook value.",
     )
-    fibre_modulus_GPa: float | None = Field(
+    fibre_modulus_GPa: Annotated[float | None, FIBRE_MODULUS] = Field(
         default=None, gt=0, description="Fibre axial modulus [GPa]; default: the fibre's value."
     )
 
@@ -91,12 +112,10 @@ def _check_assignment(value: TowTypeAssignment) -> TowTypeAssignment:
     return value
 
 
-class TowSet(BaseModel):
+class TowSet(ParamsModel):
     """The weft-wise tows: spacing and tow types."""
 
-    model_config = _STRICT
-
-    tow_spacing_mm: float = Field(
+    tow_spacing_mm: Annotated[float, TOW_SPACING] = Field(
         gt=0, description="Centre-to-centre distance between neighbouring tows [mm] (Ts)."
     )
     tow_type: TowTypeAssignment = Field(
@@ -123,34 +142,41 @@ class WarpTowSet(TowSet):
 
 
 # -- weaves --------------------------------------------------------------------------------
-class PlainWeave(BaseModel):
+class PlainWeave(ParamsModel):
     """Plain weave (2 × 2 repeat)."""
 
-    model_config = _STRICT
     pattern: Literal["plain"] = Field(description="Plain weave.")
 
     def description(self) -> WeaveDescription:
         return weaves.plain()
 
 
-class TwillWeave(BaseModel):
+class TwillWeave(ParamsModel):
     """over/under twill: warp over ``over`` weft tows, then under ``under``, shifted by one."""
 
-    model_config = _STRICT
     pattern: Literal["twill"] = Field(description="Twill weave.")
-    over: int = Field(ge=1, description="Weft tows each warp tow passes over per repeat.")
-    under: int = Field(ge=1, description="Weft tows each warp tow passes under per repeat.")
+    over: RepeatCount = Field(description="Weft tows each warp tow passes over per repeat.")
+    under: RepeatCount = Field(description="Weft tows each warp tow passes under per repeat.")
+
+    @field_validator("under")
+    @classmethod
+    def _repeat_in_limit(cls, value: int, info: ValidationInfo) -> int:
+        over = info.data.get("over")
+        if over is not None:
+            check_size("weave_repeat", over + value)  # the repeat is over + under tows
+        return value
 
     def description(self) -> WeaveDescription:
         return weaves.twill(self.over, self.under)
 
 
-class SatinWeave(BaseModel):
+class SatinWeave(ParamsModel):
     """Regular warp-faced satin: warp i under only at weft (move·i) mod harness."""
 
-    model_config = _STRICT
     pattern: Literal["satin"] = Field(description="Regular n-harness satin.")
-    harness: int = Field(description="Harness number n (repeat n × n), at least 5.")
+    harness: Annotated[int, size_limit("weave_repeat")] = Field(
+        description="Harness number n (repeat n × n), at least 5."
+    )
     move: int = Field(description="Move number m: 1 < m < n − 1 and gcd(m, n) = 1.")
 
     @field_validator("harness")
@@ -175,23 +201,26 @@ class SatinWeave(BaseModel):
         return weaves.satin(self.harness, self.move)
 
 
-class CrowfootWeave(BaseModel):
+class CrowfootWeave(ParamsModel):
     """Four-harness satin (crowfoot), irregular: unders in the order 0, 1, 3, 2."""
 
-    model_config = _STRICT
     pattern: Literal["crowfoot"] = Field(description="Four-harness (crowfoot) satin.")
 
     def description(self) -> WeaveDescription:
         return weaves.crowfoot()
 
 
-class BasketWeave(BaseModel):
+class BasketWeave(ParamsModel):
     """Basket weave: a plain weave of groups of tows."""
 
-    model_config = _STRICT
     pattern: Literal["basket"] = Field(description="Basket weave.")
-    warp_group: int = Field(ge=1, description="Warp tows woven together as one.")
-    weft_group: int = Field(ge=1, description="Weft tows woven together as one.")
+    warp_group: RepeatCount = Field(description="Warp tows woven together as one.")
+    weft_group: RepeatCount = Field(description="Weft tows woven together as one.")
+
+    @field_validator("warp_group", "weft_group")
+    @classmethod
+    def _repeat_in_limit(cls, value: int) -> int:
+        return check_size("weave_repeat", 2 * value) // 2  # the repeat is two groups
 
     def description(self) -> WeaveDescription:
         return weaves.basket(self.warp_group, self.weft_group)
@@ -204,13 +233,12 @@ def _min_levels(value: int, info: ValidationInfo) -> int:
     return value
 
 
-class OrthogonalWeave(BaseModel):
+class OrthogonalWeave(ParamsModel):
     """3D orthogonal weave: binders pass straight through the thickness."""
 
-    model_config = _STRICT
     pattern: Literal["orthogonal"] = Field(description="3D orthogonal weave.")
-    stuffer_layers: int = Field(ge=0, description="Layers of straight warp stuffer tows.")
-    weft_layers: int = Field(ge=1, description="Layers of weft tows.")
+    stuffer_layers: LayerCount = Field(ge=0, description="Layers of straight warp stuffer tows.")
+    weft_layers: LayerCount = Field(ge=1, description="Layers of weft tows.")
 
     _weft_layers = field_validator("weft_layers")(_min_levels)
 
@@ -218,14 +246,13 @@ class OrthogonalWeave(BaseModel):
         return weaves.orthogonal_3d(self.stuffer_layers, self.weft_layers)
 
 
-class AngleInterlockWeave(BaseModel):
+class AngleInterlockWeave(ParamsModel):
     """3D angle-interlock weave: binders step diagonally through ``binder_depth`` weft layers."""
 
-    model_config = _STRICT
     pattern: Literal["angle_interlock"] = Field(description="3D angle-interlock weave.")
-    stuffer_layers: int = Field(ge=0, description="Layers of straight warp stuffer tows.")
-    weft_layers: int = Field(ge=2, description="Layers of weft tows.")
-    binder_depth: int | None = Field(
+    stuffer_layers: LayerCount = Field(ge=0, description="Layers of straight warp stuffer tows.")
+    weft_layers: LayerCount = Field(ge=2, description="Layers of weft tows.")
+    binder_depth: LayerCount | None = Field(
         default=None,
         description=(
             "Weft layers each binder passes through, 2..weft_layers; default weft_layers "
@@ -245,33 +272,38 @@ class AngleInterlockWeave(BaseModel):
         return weaves.angle_interlock_3d(self.stuffer_layers, self.weft_layers, self.binder_depth)
 
 
-class LayerToLayerWeave(BaseModel):
+class LayerToLayerWeave(ParamsModel):
     """3D layer-to-layer angle interlock: each binder ties two neighbouring weft layers."""
 
-    model_config = _STRICT
     pattern: Literal["layer_to_layer"] = Field(description="3D layer-to-layer weave.")
-    stuffer_layers: int = Field(ge=0, description="Layers of straight warp stuffer tows.")
-    weft_layers: int = Field(ge=2, description="Layers of weft tows.")
+    stuffer_layers: LayerCount = Field(ge=0, description="Layers of straight warp stuffer tows.")
+    weft_layers: LayerCount = Field(ge=2, description="Layers of weft tows.")
 
     def description(self) -> WeaveDescription:
         return weaves.layer_to_layer_3d(self.stuffer_layers, self.weft_layers)
 
 
-class GeneralWeave(BaseModel):
+#: One crossover of a weaving matrix (level ids bottom to top) and one row of crossovers.
+_MatrixEntry = Annotated[tuple[int, ...], size_limit("weave_levels")]
+_MatrixRow = Annotated[tuple[_MatrixEntry, ...], size_limit("weave_repeat")]
+
+
+class GeneralWeave(ParamsModel):
     """Explicit description (paper Fig. 1, 2): levels, repeat and weaving matrix."""
 
-    model_config = _STRICT
     pattern: Literal["general"] = Field(description="Explicit levels and weaving matrix.")
-    warp_levels: int = Field(ge=1, description="Number of warp-wise levels L_wp (ids 1..L_wp).")
-    weft_levels: int = Field(
+    warp_levels: LayerCount = Field(
+        ge=1, description="Number of warp-wise levels L_wp (ids 1..L_wp)."
+    )
+    weft_levels: LayerCount = Field(
         ge=1, description="Number of weft-wise levels L_wt (ids L_wp+1..L_wp+L_wt)."
     )
-    repeat_warp: int = Field(ge=1, description="Warp-wise tows in the repeat (RC_wp).")
-    repeat_weft: int = Field(ge=1, description="Weft-wise tows in the repeat (RC_wt).")
+    repeat_warp: RepeatCount = Field(description="Warp-wise tows in the repeat (RC_wp).")
+    repeat_weft: RepeatCount = Field(description="Weft-wise tows in the repeat (RC_wt).")
     binder_levels: tuple[int, ...] | None = Field(
         default=None, description="Warp-wise level ids whose tows are binders (3D weaves)."
     )
-    matrix: tuple[tuple[tuple[int, ...], ...], ...] = Field(
+    matrix: Annotated[tuple[_MatrixRow, ...], size_limit("weave_repeat")] = Field(
         min_length=1,
         description=(
             "Weaving matrix, RC_wp rows of RC_wt entries; each entry lists every level id once, "

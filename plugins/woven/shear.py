@@ -39,12 +39,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
+from preform.material import ParamsModel, Plausible
 from preform.plugins.woven.compaction import SQUARE_PACKING, BundleCompaction
 from preform.plugins.woven.crossover import CrossoverGeometry
 from preform.shear.energy import QuadratureBranch
@@ -112,16 +113,70 @@ def crimp_angle(crossing_height: float, crossing_spacing: float) -> float:
     return 2.0 * math.atan(crossing_height / crossing_spacing)
 
 
-class FrictionCompactionParams(BaseModel):
+#: Hexagonal packing of round fibres, π/(2√3): no fibre fraction can exceed it.
+HEXAGONAL_PACKING = math.pi / (2.0 * math.sqrt(3.0))
+
+# Plausible ranges of the law's parameters; reasons in docs/ranges.md.
+FRICTION = Plausible(
+    0.0,
+    2.0,
+    "",
+    "a tow-on-tow friction coefficient",
+    "fibre–fibre friction is 0.1–0.6 (paper: 0.3)",
+)
+PRETENSION = Plausible(
+    0.0,
+    1e4,
+    "N",
+    "a frame pre-tension",
+    "the paper uses 50–100 N; a fabric in a picture frame tears long before 10 kN",
+)
+FABRIC_THICKNESS = Plausible(
+    0.01,
+    100.0,
+    "mm",
+    "a fabric thickness",
+    "spread-tow fabrics ≈ 0.03 mm thick, thick 3D weaves ≈ 50 mm",
+)
+FRAME_WIDTH = Plausible(1.0, 5000.0, "mm", "a frame width", "picture frames are 100–300 mm a side")
+TOW_FRACTION = Plausible(
+    0.05,
+    HEXAGONAL_PACKING,
+    "",
+    "a tow fibre volume fraction",
+    "as-woven tows hold 0.4–0.8 fibre; hexagonal packing π/(2√3) ≈ 0.907 is the ceiling",
+)
+MAX_FRACTION = Plausible(
+    0.3,
+    HEXAGONAL_PACKING,
+    "",
+    "a maximum attainable fibre fraction",
+    "square packing π/4 ≈ 0.785 to hexagonal π/(2√3) ≈ 0.907 (Gutowski's V_a ≈ 0.75–0.85)",
+)
+WAVE_RATIO = Plausible(
+    1.0,
+    1e4,
+    "",
+    "Gutowski's fibre-wave ratio β",
+    "350 quoted for AS4 carbon, 30 the default here; A_s goes as β⁻⁴",
+)
+COUPLING = Plausible(
+    0.0,
+    100.0,
+    "1/GPa",
+    "the Cai–Gutowski coupling compliance",
+    "a fibre bed's compliances are ≈ 1/E_f ≈ 0.004–0.1 /GPa",
+)
+
+
+class FrictionCompactionParams(ParamsModel):
     """Parameters of the woven ``friction_compaction`` law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
     law: Literal["friction_compaction"] = Field(description="Selects this law.")
-    friction_coefficient: float = Field(
+    friction_coefficient: Annotated[float, FRICTION] = Field(
         default=0.3, ge=0.0, description="Tow-on-tow friction coefficient μ at crossovers [-]."
     )
-    pretension_N: float = Field(
+    pretension_N: Annotated[float, PRETENSION] = Field(
         ge=0.0,
         description=(
             "Clamping-frame pre-tension of the fabric [N] across pretension_width_mm, per "
@@ -129,16 +184,16 @@ class FrictionCompactionParams(BaseModel):
             "its crimp [C]."
         ),
     )
-    fabric_thickness_mm: float = Field(
+    fabric_thickness_mm: Annotated[float, FABRIC_THICKNESS] = Field(
         gt=0.0,
         description="Fabric thickness [mm]; tow height = thickness / levels [C] (paper: fitted).",
     )
-    pretension_width_mm: float = Field(
+    pretension_width_mm: Annotated[float, FRAME_WIDTH] = Field(
         default=150.0,
         gt=0.0,
         description="Fabric width [mm] sharing pretension_N (the frame side) [C].",
     )
-    tow_volume_fraction: float | None = Field(
+    tow_volume_fraction: Annotated[float | None, TOW_FRACTION] = Field(
         default=None,
         gt=0.0,
         lt=1.0,
@@ -147,19 +202,19 @@ class FrictionCompactionParams(BaseModel):
             "lenticular section of height h [C]."
         ),
     )
-    onset_volume_fraction: float | None = Field(
+    onset_volume_fraction: Annotated[float | None, TOW_FRACTION] = Field(
         default=None,
         gt=0.0,
         lt=1.0,
         description="Gutowski V_o [-], the fraction where the fibres start to carry load; default V_f0 [C].",
     )
-    max_volume_fraction: float = Field(
+    max_volume_fraction: Annotated[float, MAX_FRACTION] = Field(
         default=SQUARE_PACKING,
         gt=0.0,
         lt=1.0,
         description="Gutowski V_a [-], maximum attainable fraction; default π/4 (square packing).",
     )
-    fibre_wave_ratio: float = Field(
+    fibre_wave_ratio: Annotated[float, WAVE_RATIO] = Field(
         default=30.0,
         gt=0.0,
         description=(
@@ -168,7 +223,7 @@ class FrictionCompactionParams(BaseModel):
             "paper's curves do; the carbon value 350 leaves it negligible at V_f0 ≈ 0.23."
         ),
     )
-    coupling_compliance_per_GPa: float = Field(
+    coupling_compliance_per_GPa: Annotated[float, COUPLING] = Field(
         default=0.0,
         ge=0.0,
         description="Cai–Gutowski F_bl [1/GPa]; 0 reduces the bundle stress to Gutowski's [C].",
