@@ -17,63 +17,118 @@ Shape and policy [C]:
   post-failure polynomial carries the later rise from inter-tow compaction.
 * Beyond the fitted range the last polynomial follows ``beyond_range`` (hold, tangent or the
   polynomial itself) and a force that would come out negative is set to zero.
+* A polynomial that comes out negative *inside* its fitted range is refused when the
+  parameters are validated (parallel on [0, failure or end], post-failure on [failure, end],
+  perpendicular on [0, its end], the failure drop itself): that is a bad fit, not a fabric.
+* The drop is handed to the energy integration as sub-pieces, each expanded about its own start
+  (``DROP_PIECES``): expanded over the whole drop, P₁ extrapolated past the failure angle and the
+  blend towards P₂ cancel in the monomial coefficients (terms up to 1e5× the values for a steep
+  P₁), and the closed-form energy of that one piece lost enough digits for W to fall at the end
+  of the drop.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, Literal, Self
+from typing import Annotated, Any, Literal, Self
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, Field, model_validator
 
+from preform.material import ParamsModel, Plausible
 from preform.shear.energy import DOMAIN_END, PiecewiseBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import (
+    FAILURE_ANGLE,
+    FIT_END,
+    LOCKING_ANGLE,
     N_PER_MM_TO_N_PER_M,
     BeyondRange,
+    Coefficients,
     SignedShearLaw,
     degree_polynomial_to_radians,
+    force_peak,
+    negative_law_error,
+    negative_stretch,
     polynomial_branch,
+    polynomial_extremes,
+    raise_located,
 )
 
 _COEFFICIENTS = "ascending powers of the shear-angle magnitude in degrees; a_k in N/mm/deg^k"
 
+#: Sub-pieces the failure drop is integrated in (module docstring): each spans 1/8 of the drop,
+#: so a term of degree k of its local expansion is 8^k times smaller than over the whole drop.
+DROP_PIECES = 8
 
-class StitchPolynomialParams(BaseModel):
+FAILURE_WIDTH = Plausible(
+    0.01,
+    45.0,
+    "deg",
+    "the width of the stitch-failure drop",
+    "a stitch gives way over 1–10°; narrower than 0.01° is a step no test resolves, wider than "
+    "45° is no drop",
+)
+
+
+def _parallel_peak(coefficients: list[float], model: Any) -> float:
+    """Largest F_s/L [N/mm] of the pre-failure polynomial over the range it is used on."""
+    end = model.failure_angle_deg if model.failure_angle_deg is not None else model.max_angle_deg
+    return polynomial_extremes(coefficients, 0.0, end)[2]
+
+
+def _post_failure_peak(coefficients: list[float], model: Any) -> float | None:
+    """Largest F_s/L [N/mm] of the post-failure polynomial from the failure angle to the end."""
+    if model.failure_angle_deg is None:
+        return None
+    return polynomial_extremes(coefficients, model.failure_angle_deg, model.max_angle_deg)[2]
+
+
+def _force_rule(measure: Any, where: str) -> Plausible:
+    base = force_peak("max_angle_deg")
+    return Plausible(
+        base.low, base.high, base.unit, f"{base.what} {where}", base.reason, measure=measure
+    )
+
+
+class StitchPolynomialParams(ParamsModel):
     """Parameters of the warp-knit ``stitch_polynomial`` law (YAML ``shear_law`` block)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
     law: Literal["stitch_polynomial"] = Field(description="Selects this law.")
-    parallel_force_coefficients_N_per_mm: list[float] = Field(
+    parallel_force_coefficients_N_per_mm: Annotated[
+        Coefficients, _force_rule(_parallel_peak, "(parallel, up to stitch failure)")
+    ] = Field(
         min_length=1,
         description=f"F_s/L [N/mm] shearing parallel to the stitch (γ > 0), {_COEFFICIENTS}.",
     )
-    perpendicular_force_coefficients_N_per_mm: list[float] = Field(
+    perpendicular_force_coefficients_N_per_mm: Annotated[
+        Coefficients, force_peak("max_angle_perpendicular_deg", "max_angle_deg")
+    ] = Field(
         min_length=1,
         description=f"F_s/L [N/mm] shearing perpendicular to the stitch (γ < 0), {_COEFFICIENTS}.",
     )
-    max_angle_deg: float = Field(
+    max_angle_deg: Annotated[float, FIT_END] = Field(
         gt=0.0, le=90.0, description="End of the fitted range, parallel sense [deg]."
     )
-    max_angle_perpendicular_deg: float | None = Field(
+    max_angle_perpendicular_deg: Annotated[float | None, FIT_END] = Field(
         default=None,
         gt=0.0,
         le=90.0,
         description="End of the fitted range, perpendicular sense [deg]; default max_angle_deg.",
     )
-    failure_angle_deg: float | None = Field(
+    failure_angle_deg: Annotated[float | None, FAILURE_ANGLE] = Field(
         default=None, gt=0.0, lt=90.0, description="Stitch-failure angle, parallel sense [deg]."
     )
-    failure_width_deg: float = Field(
+    failure_width_deg: Annotated[float, FAILURE_WIDTH] = Field(
         default=5.0,
         gt=0.0,
         description="Angular width [deg] over which the force falls to the post-failure branch.",
     )
-    post_failure_force_coefficients_N_per_mm: list[float] | None = Field(
+    post_failure_force_coefficients_N_per_mm: Annotated[
+        Coefficients | None, _force_rule(_post_failure_peak, "(after stitch failure)")
+    ] = Field(
         default=None,
         description=f"F_s/L [N/mm] after stitch failure (parallel sense), {_COEFFICIENTS}.",
     )
@@ -81,7 +136,7 @@ class StitchPolynomialParams(BaseModel):
         default="hold",
         description="Past the fitted range: hold the force, continue its tangent, or extrapolate.",
     )
-    locking_angle_deg: float | None = Field(
+    locking_angle_deg: Annotated[float | None, LOCKING_ANGLE] = Field(
         default=None, gt=0.0, lt=90.0, description="Locking (wrinkling) angle [deg], if known."
     )
 
@@ -102,7 +157,64 @@ class StitchPolynomialParams(BaseModel):
         )
         if not all(math.isfinite(c) for cs in coefficient_lists for c in cs):
             raise ValueError("coefficients must be finite")
+        raise_located(type(self).__name__, self._negative_stretches())
         return self
+
+    def _negative_stretches(self) -> list[Any]:
+        """A located error per polynomial that is negative inside the range where it is used."""
+        end = self.max_angle_deg
+        failure = self.failure_angle_deg
+        post = self.post_failure_force_coefficients_N_per_mm
+        checks: list[tuple[str, list[float], float, float]] = [
+            (
+                "parallel_force_coefficients_N_per_mm",
+                self.parallel_force_coefficients_N_per_mm,
+                0.0,
+                failure if failure is not None else end,
+            ),
+            (
+                "perpendicular_force_coefficients_N_per_mm",
+                self.perpendicular_force_coefficients_N_per_mm,
+                0.0,
+                self.max_angle_perpendicular_deg or end,
+            ),
+        ]
+        if failure is not None and post is not None:
+            checks.append(("post_failure_force_coefficients_N_per_mm", post, failure, end))
+        errors = []
+        for name, coefficients, start, stop in checks:
+            stretch = negative_stretch(coefficients, start, stop)
+            if stretch is not None:
+                errors.append(negative_law_error(name, coefficients, "force", stretch, start, stop))
+        if not errors and failure is not None and post is not None:
+            stretch = self._negative_drop()
+            if stretch is not None:
+                errors.append(
+                    negative_law_error(
+                        "failure_width_deg",
+                        [self.failure_width_deg],
+                        "force",
+                        stretch,
+                        failure,
+                        failure + self.failure_width_deg,
+                    )
+                )
+        return errors
+
+    def _negative_drop(self) -> tuple[float, float] | None:
+        """Where the drop F = P₁ + s·(P₂ − P₁) is most negative [N/mm, deg], if it is: P₁
+        extrapolated past the failure angle may turn negative inside the drop."""
+        assert self.failure_angle_deg is not None
+        assert self.post_failure_force_coefficients_N_per_mm is not None
+        angle = self.failure_angle_deg + self.failure_width_deg * np.linspace(0.0, 1.0, 513)
+        t = (angle - self.failure_angle_deg) / self.failure_width_deg
+        smooth = t * t * (3.0 - 2.0 * t)
+        p1 = npoly.polyval(angle, self.parallel_force_coefficients_N_per_mm)
+        p2 = npoly.polyval(angle, self.post_failure_force_coefficients_N_per_mm)
+        force = p1 + smooth * (p2 - p1)
+        k = int(np.argmin(force))
+        scale = float(np.max(np.abs(force)))
+        return (float(force[k]), float(angle[k])) if force[k] < -1e-9 * scale else None
 
 
 def _shifted(coef_rad: np.ndarray, origin: float) -> np.ndarray:
@@ -132,9 +244,13 @@ def parallel_branch(params: StitchPolynomialParams) -> PiecewiseBranch:
     # Smoothstep s(x) = 3(x/w)² − 2(x/w)³ on the drop, x measured from the failure angle.
     step = np.array([0.0, 0.0, 3.0 / width**2, -2.0 / width**3])
     p1, p2 = _shifted(before, start), _shifted(after, start)
-    drop = npoly.polyadd(p1, npoly.polymul(step, npoly.polysub(p2, p1)))
-    pieces: list[np.ndarray] = [before, np.asarray(drop, dtype=float)]
-    breaks = [0.0, start]
+    drop = np.asarray(npoly.polyadd(p1, npoly.polymul(step, npoly.polysub(p2, p1))), dtype=float)
+    pieces: list[np.ndarray] = [before]
+    breaks = [0.0]
+    for k in range(DROP_PIECES):
+        offset = width * k / DROP_PIECES
+        pieces.append(_shifted(drop, offset))
+        breaks.append(start + offset)
     if params.beyond_range == "extrapolate" or end_fit >= DOMAIN_END:
         pieces.append(_shifted(after, end_drop))
         breaks.append(end_drop)
