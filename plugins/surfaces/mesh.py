@@ -552,7 +552,7 @@ def read_stl(
         bad = np.flatnonzero(~np.all(np.isfinite(corners), axis=(1, 2)))
         if bad.size:
             raise ValueError(f"{file}: triangle {bad[0]} has a non-finite coordinate")
-    return _mesh_from_corners(corners * _scale(units_to_m), mesh_options)
+    return _mesh_from_corners(file, corners * _scale(units_to_m), mesh_options)
 
 
 def _scale(units_to_m: float) -> float:
@@ -562,10 +562,22 @@ def _scale(units_to_m: float) -> float:
     return scale
 
 
-def _mesh_from_corners(corners: FloatArray, mesh_options: dict[str, object]) -> TriangleMesh:
+def _mesh_from_corners(
+    file: Path, corners: FloatArray, mesh_options: dict[str, object]
+) -> TriangleMesh:
     vertices = corners.reshape(-1, 3)
     faces = np.arange(vertices.shape[0]).reshape(-1, 3)
-    return TriangleMesh(vertices, faces, **mesh_options)  # type: ignore[arg-type]
+    return _mesh_of_file(file, vertices, faces, mesh_options)
+
+
+def _mesh_of_file(
+    file: Path, vertices: FloatArray, faces: IntArray, mesh_options: dict[str, object]
+) -> TriangleMesh:
+    """A TriangleMesh whose refusals (no area, no extent) name the file they came from."""
+    try:
+        return TriangleMesh(vertices, faces, **mesh_options)  # type: ignore[arg-type]
+    except ValueError as error:
+        raise ValueError(f"{file}: {error}") from None
 
 
 def _parse_floats(file: Path, line_no: int, tokens: list[str], what: str) -> list[float]:
@@ -737,7 +749,7 @@ def read_obj(
             f"{file}:{triangle_lines[beyond[0]]}: face refers to a vertex beyond the "
             f"{len(vertices)} the file defines"
         )
-    return TriangleMesh(np.array(vertices) * _scale(units_to_m), faces, **mesh_options)  # type: ignore[arg-type]
+    return _mesh_of_file(file, np.array(vertices) * _scale(units_to_m), faces, mesh_options)
 
 
 def _obj_vertex_index(file: Path, line_no: int, token: str, n_read: int) -> int:
