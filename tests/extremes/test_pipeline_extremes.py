@@ -90,3 +90,47 @@ def test_a_drape_without_cells_fails_and_the_rest_complete(
     for summary in out.rglob("summary.json"):
         # Strict JSON: Python's json accepts NaN unless told not to.
         json.loads(summary.read_text(), parse_constant=refuse)
+
+
+HAT_SCENE = """
+name: hat
+tool: {surface: mesh, file: hat_mould.obj}
+ply: {node_spacing_mm: 10, size_mm: [360, 360]}
+start: {point_mm: [0, 0], generator_angle_deg: 90}
+outputs: [drape, cells_csv]
+"""
+
+
+def test_a_run_records_partial_and_warnings_in_words(
+    sandbox: PluginSandbox, tmp_path: Path
+) -> None:
+    """Through the runner: the hat mould is partial with its covered fraction and why; the
+    hemisphere is ok, with its cells past locking said in words; summary.json carries both."""
+    lib_path = tmp_path / "fabrics.yaml"
+    lib_path.write_text(FABRICS)
+    lib = sandbox.library([lib_path])
+    scenes = []
+    for name, text in (("hat", HAT_SCENE), ("small", SMALL_DRAPE)):
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(text)
+        scenes.append(load_scene(path, sandbox.registry))
+    out = tmp_path / "run"
+    cases = make_cases(lib, scenes, out, sandbox.host, discover=False)
+    report = run_cases(cases, out, sandbox.host, engine="serial")
+    by_id = {r.case_id: r for r in report.results}
+
+    hat = by_id["hat/good-weave"]
+    assert hat.status == "partial", hat.error
+    (reason,) = hat.reasons
+    fraction = hat.results["covered_fraction"]
+    assert 0 < fraction < 0.2
+    assert reason.startswith(f"the net covers {100 * fraction:.1f} % of the ply's fabric area")
+    written = json.loads((out / "hat" / "good-weave" / "summary.json").read_text())
+    assert written["status"] == "partial" and written["reasons"] == [reason]
+    assert written["covered_fraction"] == fraction and written["complete"] is False
+
+    dome = by_id["small/good-weave"]
+    assert dome.status == "ok" and dome.reasons == []
+    assert dome.results["covered_fraction"] == 1.0
+    locking = [w for w in dome.warnings if "past the locking angle" in w]
+    assert len(locking) == (1 if dome.results["cells_past_locking"] else 0)

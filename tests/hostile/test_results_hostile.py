@@ -550,3 +550,62 @@ def test_a_complete_search_optimum_has_no_partial_reason(
     ctx = run(context(sandbox, bundled, "plain-weave-150", search_scene(tmp_path)))
     assert ctx.partial_reasons == []
     assert ctx.summary["optimum_covered_fraction"] == 1.0
+
+
+TABULATED = (
+    "{law: tabulated, angle_deg: [0, 20, 40], torque_N_per_m: [0, 0.5, 2.0], beyond_range: linear}"
+)
+
+
+def test_cells_beyond_a_tabulated_laws_last_point_are_said(
+    sandbox: PluginSandbox, tmp_path: Path
+) -> None:
+    lib = broken_library(sandbox, tmp_path, TABULATED)
+    ctx = run(context(sandbox, lib, "broken-weave", hemisphere_scene(tmp_path)))
+    result = ctx.products["drape"].result
+    (message,) = [w for w in ctx.warnings if "data range" in w]
+    count, _ = _count(message)
+    assert count == _independent(result, np.abs(result.shear) > math.radians(40.0))[0] > 0
+    assert "(+40.0° / −40.0°), where the law continues the last tangent" in message
+    assert ctx.summary["cells_outside_law_data"] == count
+
+
+class RangedLaw(BrokenLaw):
+    """A plugin law that states its own data range (negative end, positive end) [rad]."""
+
+    data_range = (math.radians(10.0), math.radians(20.0))
+
+
+def test_a_law_may_state_its_own_data_range(sandbox: PluginSandbox, tmp_path: Path) -> None:
+    from preform.drape.fields import energy_field
+    from preform.drape.verdict import law_range, shear_limit_warnings
+    from preform.plugins.surfaces.basic import Hemisphere
+
+    law = RangedLaw(math.inf, "nan")
+    result = drape(
+        Hemisphere(0.1),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.36, 0.36)),
+        start_xy_m=(0.0, 0.0),
+        generator_angle_rad=math.radians(70),
+    )
+    limits = law_range(law, {"max_angle_deg": 80})  # the law's own range wins over the block
+    assert (limits.data_negative, limits.data_positive) == law.data_range
+    messages, counts = shear_limit_warnings(result, energy_field(result, law), limits)
+    gamma = np.where(result.valid, result.shear, 0.0)
+    want = np.count_nonzero((gamma > law.data_range[1]) | (gamma < -law.data_range[0]))
+    assert counts["cells_outside_law_data"] == want > 0
+    assert "(+20.0° / −10.0°)" in messages[0]
+
+
+def test_a_warp_knit_past_its_fit_in_the_perpendicular_sense_is_said(
+    sandbox: PluginSandbox, bundled: Any, tmp_path: Path
+) -> None:
+    """E-BX-318's stitch law is fitted to 60°; at α = 30° the perpendicular (γ < 0) shear of
+    the drape passes −60°."""
+    ctx = run(context(sandbox, bundled, "E-BX-318", hemisphere_scene(tmp_path, alpha=30)))
+    result = ctx.products["drape"].result
+    (message,) = [w for w in ctx.warnings if "data range" in w]
+    gamma = np.where(result.valid, result.shear, 0.0)
+    assert _count(message)[0] == np.count_nonzero(np.abs(gamma) > math.radians(60)) > 0
+    assert np.count_nonzero(gamma < -math.radians(60)) > 0
