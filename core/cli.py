@@ -323,6 +323,8 @@ def pipeline_run(
 
     host = _host()
     lib = load_library_or_exit(libraries, bundled=not libraries)
+    for warning in lib.warnings:
+        click.echo(f"warning: {warning}", err=True)
     scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
     loaded = []
     problems: list[Any] = []
