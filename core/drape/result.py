@@ -109,7 +109,10 @@ class DrapeResult:
 
     @property
     def complete(self) -> bool:
-        """True when every node inside the ply is placed."""
+        """True when every node inside the ply is placed. A ply larger than the tool is never
+        complete in this sense; whether a drape covers what its scene asked (the overhang past
+        the tool's edge allowed) is ``preform.drape.verdict.coverage``, which the case
+        summary's ``complete`` reports."""
         inside = self.status != NodeStatus.OUTSIDE_PLY
         return bool(np.all(self.status[inside] == NodeStatus.PLACED))
 
