@@ -288,7 +288,7 @@ def test_a_second_run_into_a_held_directory_is_refused(runenv):
 
 
 def test_two_concurrent_runs_one_refused_one_complete(runenv):
-    lib = runenv.library(*(fabric(f"f{i}", work_s=0.3) for i in range(4)))
+    lib = runenv.library(*(fabric(f"f{i}", work_s=1.5) for i in range(4)))
     scene = runenv.scene()
     first = runenv.start(lib, scene, "--engine", "serial")
     deadline = time.monotonic() + 30
