@@ -44,8 +44,9 @@ class _Analytic(BaseModel):
 
     def preflight(self, base_dir: str, limits: Any = None) -> tuple[Any, list[Problem]]:
         """The built surface and no problems, or no surface and why it cannot be built."""
+        build = next(_BUILDERS[c] for c in type(self).__mro__ if c in _BUILDERS)
         try:
-            return _BUILDERS[type(self)](self, base_dir), []
+            return build(self, base_dir), []
         except ValueError as error:
             return None, [((), str(error))]
 
@@ -88,6 +89,21 @@ class HemisphereTool(_Analytic):
                 "fillet_radius_mm needs flange_half_width_mm (a fillet joins the "
                 "hemisphere to a flange)"
             )
+        if self.flange_half_width_mm is not None:
+            # The builder's own checks, said here in the scene's millimetres (and found at
+            # validation rather than when the case runs).
+            r, rho = self.radius_mm, self.fillet_radius_mm
+            if not 0 < rho < r:
+                raise ValueError(
+                    f"a flange needs a fillet: fillet_radius_mm must lie in (0, radius_mm = "
+                    f"{r:g}) mm, got {rho:g}"
+                )
+            foot = (r * r + 2.0 * r * rho) ** 0.5
+            if self.flange_half_width_mm <= foot:
+                raise ValueError(
+                    f"flange_half_width_mm = {self.flange_half_width_mm:g} mm must exceed the "
+                    f"fillet's foot radius √(R² + 2Rρ) = {foot:.4g} mm"
+                )
         return self
 
 
@@ -105,6 +121,15 @@ class ConeTool(_Analytic):
     base_radius_mm: float = Field(gt=0, description="Base radius [mm] (on z = 0).")
     height_mm: float = Field(gt=0, description="Height [mm].")
     top_radius_mm: float = Field(default=0.0, ge=0, description="Truncation radius [mm].")
+
+    @model_validator(mode="after")
+    def _truncation(self) -> ConeTool:
+        if self.top_radius_mm >= self.base_radius_mm:
+            raise ValueError(
+                f"top_radius_mm = {self.top_radius_mm:g} mm must be below base_radius_mm = "
+                f"{self.base_radius_mm:g} mm"
+            )
+        return self
 
 
 class EllipsoidTool(_Analytic):

@@ -517,3 +517,32 @@ def test_a_start_on_the_tool_validates(
 def test_the_bundled_scenes_still_validate(sandbox: PluginSandbox, path: Path) -> None:
     scene, _ = load_scene(path, sandbox.registry)
     assert scene.name == path.stem
+
+
+@pytest.mark.parametrize(
+    "surface, dims, words",
+    [
+        (
+            "hemisphere",
+            "radius_mm: 100\n  flange_half_width_mm: 150",
+            "a flange needs a fillet: fillet_radius_mm must lie in (0, radius_mm = 100) mm, got 0",
+        ),
+        (
+            "hemisphere",
+            "radius_mm: 100\n  flange_half_width_mm: 105\n  fillet_radius_mm: 10",
+            "flange_half_width_mm = 105 mm must exceed the fillet's foot radius √(R² + 2Rρ) = "
+            "109.5 mm",
+        ),
+        (
+            "cone",
+            "base_radius_mm: 100\n  height_mm: 50\n  top_radius_mm: 150",
+            "top_radius_mm = 150 mm must be below base_radius_mm = 100 mm",
+        ),
+    ],
+)
+def test_a_tool_that_cannot_be_built_is_refused_in_millimetres(
+    sandbox: PluginSandbox, tmp_path: Path, surface: str, dims: str, words: str
+) -> None:
+    (error,) = refused(sandbox, analytic_scene(tmp_path, surface=surface, dims=dims))
+    assert error.startswith(f"{tmp_path / 'scene.yaml'}:3:3: tool: ")
+    assert error.endswith(words)
