@@ -19,6 +19,8 @@ BoolArray = NDArray[np.bool_]
 #: Nodes within this fraction of d of the outline count as inside, so a ply of side 10·d has
 #: 11 nodes along it despite rounding.
 _EDGE_TOLERANCE = 1e-9
+#: Node count along a fibre that stands for "more than can be counted" (10¹⁸).
+MAX_COUNT = 10**18
 
 
 @dataclass(frozen=True)
@@ -118,9 +120,23 @@ class PlyOutline:
 
     def grid_shape(self, spacing_m: float) -> tuple[int, int]:
         """Nodes (along u, along v) of :meth:`node_grid` at ``spacing_m`` [m], computed without
-        building the grid: a resource limit can then refuse a ply of 10¹⁰ nodes up front."""
-        i_lo, i_hi, j_lo, j_hi = self._index_range(spacing_m)
-        return max(i_hi - i_lo + 1, 0), max(j_hi - j_lo + 1, 0)
+        building the grid: a resource limit can then refuse a ply of 10¹⁰ nodes up front.
+
+        In floating point, so that a spacing of 1e-300 m (a count past any integer a float
+        converts to) gives :data:`MAX_COUNT` instead of an overflow."""
+        d = float(spacing_m)
+        eps = _EDGE_TOLERANCE * d
+        x_lo, y_lo = self.vertices.min(axis=0)
+        x_hi, y_hi = self.vertices.max(axis=0)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            counts = [
+                float(np.floor((hi + eps) / d) - np.ceil((lo - eps) / d) + 1.0)
+                for lo, hi in ((x_lo, x_hi), (y_lo, y_hi))
+            ]
+        ni, nj = (
+            MAX_COUNT if not np.isfinite(c) or c >= MAX_COUNT else max(int(c), 0) for c in counts
+        )
+        return ni, nj
 
     def node_grid(self, spacing_m: float) -> PlyGrid:
         """The smallest node grid at spacing ``spacing_m`` [m] that covers the outline.
@@ -130,6 +146,9 @@ class PlyOutline:
         """
         d = float(spacing_m)
         eps = _EDGE_TOLERANCE * d
+        ni, nj = self.grid_shape(d)
+        if MAX_COUNT in (ni, nj):
+            raise ValueError(f"a node spacing of {d!r} m gives the ply more than 1e18 nodes")
         i_lo, i_hi, j_lo, j_hi = self._index_range(d)
         if not self.contains(np.zeros((1, 2)), eps)[0] or i_lo > 0 or j_lo > 0:
             raise ValueError("the start point lies outside the ply outline")

@@ -20,7 +20,7 @@ import numpy as np
 
 from preform.drape.fields import energy_field, summary
 from preform.drape.net import DrapeError, drape
-from preform.drape.ply import PlyOutline
+from preform.drape.ply import MAX_COUNT, PlyOutline
 from preform.drape.result import DrapeResult, EnergyField
 from preform.drape.verdict import (
     coverage,
@@ -93,10 +93,15 @@ def node_budget_problem(outline: PlyOutline, spacing_mm: float, max_nodes: int) 
     needed = ni * nj
     if needed <= max_nodes:
         return None
+    if MAX_COUNT in (ni, nj):
+        count = "more than 1e+18 net nodes"
+        memory = "more memory than any machine has"
+    else:
+        count = f"{ni:,} × {nj:,} = {float(needed):.3g} net nodes"
+        memory = f"about {_bytes(float(needed) * BYTES_PER_NODE)} of memory"
     return (
-        f"the ply needs {ni:,} × {nj:,} = {needed:.3g} net nodes at node spacing "
-        f"{spacing_mm:g} mm, more than limits.max_nodes = {max_nodes:,} (about "
-        f"{_bytes(needed * BYTES_PER_NODE)} of memory); use a larger ply.node_spacing_mm or a "
+        f"the ply needs {count} at node spacing {spacing_mm:g} mm, more than "
+        f"limits.max_nodes = {max_nodes:,} ({memory}); use a larger ply.node_spacing_mm or a "
         "smaller ply, or raise limits.max_nodes in the scene if the machine has the memory"
     )
 

@@ -546,3 +546,14 @@ def test_a_tool_that_cannot_be_built_is_refused_in_millimetres(
     (error,) = refused(sandbox, analytic_scene(tmp_path, surface=surface, dims=dims))
     assert error.startswith(f"{tmp_path / 'scene.yaml'}:3:3: tool: ")
     assert error.endswith(words)
+
+
+@pytest.mark.parametrize("spacing", ["1e-300", "5e-324"])
+def test_a_vanishing_spacing_is_refused_not_overflowed(
+    sandbox: PluginSandbox, tmp_path: Path, spacing: str
+) -> None:
+    path = analytic_scene(tmp_path, ply=1e5)
+    path.write_text(path.read_text().replace("node_spacing_mm: 10", f"node_spacing_mm: {spacing}"))
+    message = one_error(sandbox, path, SPACING, "ply.node_spacing_mm")
+    assert message.startswith("the ply needs more than 1e+18 net nodes at node spacing ")
+    assert "(more memory than any machine has)" in message
