@@ -5,8 +5,8 @@
 does what ``concurrent.futures.ProcessPoolExecutor`` cannot: a worker that dies (segfault,
 ``os._exit``, the OOM killer) fails only its own case and is replaced, and a case past its time
 limit is stopped by killing its worker. ``dask`` hands cases to a Dask cluster through
-``Client.get_executor()`` (optional extra ``preform[dask]``); there a time limit is enforced by
-the runner and by the case itself between steps, since Dask cannot stop a running task.
+``Client.submit`` (optional extra ``preform[dask]``); there a time limit is enforced by the
+runner, which cancels the case and restarts its worker, and by the case itself between steps.
 
 Every engine gives back ``concurrent.futures.Future`` objects, and :meth:`Engine.stop` ends
 everything at once (Ctrl-C). Worker processes watch their parent and exit when it is gone, so a
@@ -47,6 +47,10 @@ class Engine:
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
         raise NotImplementedError  # each engine below implements it
+
+    def abandon(self, future: Future[Any]) -> None:
+        """Stop one case the runner gave up on (past its time limit), if the engine can."""
+        future.cancel()
 
     def stop(self) -> None:
         """Stop every running and queued case now (interrupt)."""
@@ -146,10 +150,17 @@ class ProcessEngine(Engine):
 
 
 class DaskEngine(Engine):
-    """A Dask cluster: a LocalCluster of worker processes, or the scheduler at ``address``."""
+    """A Dask cluster: a LocalCluster of worker processes, or the scheduler at ``address``.
+
+    A case past its time limit is cancelled and the worker running it restarted (Dask cannot
+    stop a running task otherwise). On a LocalCluster a case whose worker dies is failed at
+    once (``allowed-failures: 0``) rather than retried on the next worker, which it would kill
+    too; a remote scheduler keeps its own setting.
+    """
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
         try:
+            import dask
             from distributed import Client, LocalCluster
         except ImportError:
             raise RuntimeError(
@@ -159,26 +170,47 @@ class DaskEngine(Engine):
         if scheduler:
             self._client = Client(scheduler)
         else:
-            self._cluster = LocalCluster(
-                n_workers=workers or 2,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-            )
+            with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+                self._cluster = LocalCluster(
+                    n_workers=workers or 2,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                )
             self._client = Client(self._cluster)
         threads = sum(self._client.nthreads().values()) or 1
         self.capacity = max(1, threads)
-        self._executor = self._client.get_executor()
-        self._futures: list[Future[Any]] = []
+        self._running: dict[Future[Any], Any] = {}
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
-        future: Future[T] = self._executor.submit(fn, *args)
-        self._futures.append(future)
+        remote = self._client.submit(fn, *args, pure=False)
+        future: Future[T] = Future()
+        future.set_running_or_notify_cancel()
+
+        def deliver(done: Any) -> None:
+            self._running.pop(future, None)
+            if future.done():
+                return
+            try:
+                future.set_result(done.result())
+            except BaseException as exc:  # delivered through the future, like any executor
+                future.set_exception(exc)
+
+        self._running[future] = remote
+        remote.add_done_callback(deliver)
         return future
 
+    def abandon(self, future: Future[Any]) -> None:
+        remote = self._running.pop(future, None)
+        if remote is None:
+            return
+        workers = [w for w, keys in self._client.processing().items() if remote.key in keys]
+        self._client.cancel([remote], force=True)
+        if workers:
+            self._client.restart_workers(workers, raise_for_error=False)
+
     def stop(self) -> None:
-        for future in self._futures:
-            future.cancel()
+        self._client.cancel(list(self._running.values()), force=True)
         self.close()
 
     def close(self) -> None:

@@ -452,6 +452,8 @@ def _engine_failure(case: Case, exc: BaseException, timeout_s: float | None) -> 
             if code == -signal.SIGKILL:
                 how += " (out of memory? the OOM killer sends it)"
         result.error = f"the worker process running this case died ({how})"
+    elif type(exc).__name__ == "KilledWorker":  # Dask's word for a worker that died
+        result.error = "the worker process running this case died (Dask: KilledWorker)"
     else:
         result.error = f"worker failed: {type(exc).__name__}: {exc}"
     return result
@@ -584,9 +586,10 @@ def _run_on_engine(
                     if case.timeout_s is not None and now - started > case.timeout_s + (
                         TIMEOUT_GRACE_S
                     ):
-                        fut.cancel()
+                        engine.abandon(fut)
                         del pending[fut]
-                        record(case, _engine_failure(case, CaseTimeout(), case.timeout_s), True)
+                        timed_out = _engine_failure(case, CaseTimeout(), case.timeout_s)
+                        record(case, timed_out, write=True)
     except KeyboardInterrupt:
         if engine is not None:
             engine.stop()

@@ -421,6 +421,21 @@ def test_hanging_case_times_out_and_others_finish(runenv, host, engine, fate):
     assert_consistent(runenv.out)
 
 
+@pytest.mark.slow
+def test_dask_dead_and_hanging_cases_cost_only_themselves(runenv, host):
+    lib = runenv.library(
+        fabric("stuck", fate="hang"), fabric("dead", fate="exit"), fabric("fine", work_s=0.2)
+    )
+    report = run_in_process(
+        runenv, host, lib, runenv.scene(), engine="dask", workers=2, timeout_s=3
+    )
+    by = {r.material: r for r in report.results}
+    assert by["stuck"].status == "timed_out"
+    assert by["dead"].status == "failed" and "died (Dask: KilledWorker)" in by["dead"].error
+    assert by["fine"].status == "ok"
+    assert_consistent(runenv.out)
+
+
 def test_serial_hang_times_out_and_scene_limit_wins(runenv, host):
     lib = runenv.library(fabric("stuck", fate="hang"), fabric("quick"))
     scene = runenv.scene(extra="limits: {case_timeout_s: 0.5}\n")
