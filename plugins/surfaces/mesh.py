@@ -466,7 +466,8 @@ def check_mesh_file(path: str | Path, max_bytes: int | None = None) -> int:
     until a writer appears, possibly forever) or a directory is refused, as is a file larger
     than ``max_bytes`` (a scene's ``limits.max_mesh_mb``), judged by ``stat`` so that a 2 GB
     file costs nothing to refuse. ``stat`` follows symbolic links, so a link to a device is
-    refused like the device.
+    refused like the device. An empty file is refused too: besides being no mesh, a size of 0
+    is what ``/proc`` pseudo-files report whatever they hold.
     """
     file = Path(path)
     try:
@@ -493,6 +494,9 @@ def check_mesh_file(path: str | Path, max_bytes: int | None = None) -> int:
         raise MeshFileError(
             f"{file}: is {kind}, not a regular file; a tool mesh must be an STL or OBJ file"
         )
+    if info.st_size == 0:
+        # Also what every /proc pseudo-file reports, some of which never end or block.
+        raise MeshFileError(f"{file}: is empty (0 bytes); a tool mesh must be an STL or OBJ file")
     if max_bytes is not None and info.st_size > max_bytes:
         raise MeshFileError(
             f"{file}: {info.st_size / MB:.1f} MB, larger than the limit of {max_bytes / MB:g} MB "

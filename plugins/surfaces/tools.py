@@ -160,6 +160,11 @@ class MeshTool(BaseModel):
             check_mesh_file(path, _max_bytes(limits))
         except (FileNotFoundError, MeshFileError) as error:
             return None, [(("file",), str(error))]
+        except (OSError, ValueError) as error:
+            # A name the system cannot look up at all (too long, an embedded NUL byte).
+            why = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            name = self.file if len(self.file) <= 80 else self.file[:77] + "..."
+            return None, [(("file",), f"tool mesh {name!r} cannot be looked up: {why}")]
         return None, []
 
 

@@ -184,6 +184,24 @@ def test_a_fifo_is_refused_without_blocking(
     assert "is a FIFO (named pipe), not a regular file" in message
 
 
+@pytest.mark.parametrize(
+    "file, words",
+    [
+        ("empty.stl", "empty.stl: is empty (0 bytes); a tool mesh must be an STL or OBJ file"),
+        ("/proc/self/status", "/proc/self/status: is empty (0 bytes)"),
+        ("x" * 5000 + ".stl", "...' cannot be looked up: File name too long"),
+        ('"a\\0b.stl"', "tool mesh 'a\\x00b.stl' not found next to the scene"),
+    ],
+    ids=["empty", "proc", "long-name", "nul-byte"],
+)
+def test_unreadable_mesh_names_are_located(
+    sandbox: PluginSandbox, tmp_path: Path, no_hang: None, file: str, words: str
+) -> None:
+    (tmp_path / "empty.stl").write_bytes(b"")
+    message = one_error(sandbox, mesh_scene(tmp_path, file), TOOL_FILE, "tool.file")
+    assert words in message
+
+
 def test_an_oversized_mesh_is_refused_by_its_size(sandbox: PluginSandbox, tmp_path: Path) -> None:
     big = tmp_path / "huge.stl"
     with open(big, "wb") as f:
@@ -299,10 +317,10 @@ MALFORMED: dict[str, tuple[str, Any, str]] = {
         lambda b: b[:80] + struct.pack("<I", 0),
         "binary STL with no triangles",
     ),
-    "empty file": (
+    "file shorter than a header": (
         "t.stl",
-        lambda b: b"",
-        "not an STL file: 0 bytes, shorter than a binary header",
+        lambda b: b[:50],
+        "not an STL file: 50 bytes, shorter than a binary header",
     ),
     "ASCII STL with a NaN vertex": (
         "t.stl",
