@@ -315,19 +315,45 @@ class AngleSearchResult:
         }
 
 
+def _scan_layout(lo_rad: float, hi_rad: float, step_rad: float) -> tuple[float, int, int]:
+    """(origin, k_lo, k_hi) of :func:`scan_angles`' grid origin + k·step; raises SearchError
+    for an empty range, and for a step so small the grid's indices overflow."""
+    if not (lo_rad < hi_rad and step_rad > 0):
+        raise SearchError(f"need lo < hi and step > 0, got [{lo_rad}, {hi_rad}], {step_rad}")
+    half = 0.5 * math.pi
+    eps = 1e-9 * step_rad
+    origin = half if lo_rad - eps <= half <= hi_rad + eps else lo_rad
+    low, high = (lo_rad - origin - eps) / step_rad, (hi_rad - origin + eps) / step_rad
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise SearchError(f"a scan step of {step_rad!r} rad is too small to count")
+    return origin, math.ceil(low), math.floor(high)
+
+
+def scan_size(lo_rad: float, hi_rad: float, step_rad: float) -> int:
+    """Number of angles :func:`scan_angles` gives, by arithmetic, so that a budget is checked
+    before a grid is built (a step of 1e-12° must not build 10¹⁴ angles)."""
+    try:
+        origin, k_lo, k_hi = _scan_layout(lo_rad, hi_rad, step_rad)
+    except SearchError:
+        if lo_rad < hi_rad and step_rad > 0:
+            return 2**63  # uncountably many, for any budget
+        raise
+    eps = 1e-9 * step_rad
+    ends = sum(
+        1 for end, k in ((lo_rad, k_lo), (hi_rad, k_hi)) if abs(origin + k * step_rad - end) > eps
+    )
+    return max(k_hi - k_lo + 1, 0) + ends
+
+
 def scan_angles(lo_rad: float, hi_rad: float, step_rad: float) -> FloatArray:
     """Scan grid [rad] over [lo, hi]: 90° ± k·step when 90° is inside, plus both ends.
 
     Laid about 90° (not from ``lo``) so a range symmetric about 90° gives a grid symmetric
     about it, and 90° itself is always sampled when the range contains it.
     """
-    if not (lo_rad < hi_rad and step_rad > 0):
-        raise SearchError(f"need lo < hi and step > 0, got [{lo_rad}, {hi_rad}], {step_rad}")
     half = 0.5 * math.pi
     eps = 1e-9 * step_rad
-    origin = half if lo_rad - eps <= half <= hi_rad + eps else lo_rad
-    k_lo = math.ceil((lo_rad - origin - eps) / step_rad)
-    k_hi = math.floor((hi_rad - origin + eps) / step_rad)
+    origin, k_lo, k_hi = _scan_layout(lo_rad, hi_rad, step_rad)
     grid = [origin + k * step_rad for k in range(k_lo, k_hi + 1)]
     # Mirror pairs computed as half ± k·step are symmetric to the last bit.
     if origin == half:
@@ -396,12 +422,14 @@ def search_generator_angle(
     if not tolerance_rad > 0:
         raise SearchError("tolerance must be positive")
     first = objective.drapes
-    grid = scan_angles(lo, hi, scan_step_rad)
-    if len(grid) > max_drapes:
+    needed = scan_size(lo, hi, scan_step_rad)
+    if needed > max_drapes:
+        # Counted before the grid is built: a step of 1e-12° must not build 10¹⁴ angles.
         raise SearchError(
-            f"the scan alone needs {len(grid)} drapes, more than max_drapes = "
+            f"the scan alone needs {needed:,} drapes, more than max_drapes = "
             f"{max_drapes}; widen the step or raise the budget"
         )
+    grid = scan_angles(lo, hi, scan_step_rad)
     evaluated: dict[float, tuple[DrapeEvaluation, str]] = {}
     for alpha in grid:
         evaluated[float(alpha)] = (objective.evaluate(float(alpha)), "scan")
@@ -647,6 +675,7 @@ __all__ = [
     "SearchError",
     "SearchPoint",
     "scan_angles",
+    "scan_size",
     "search_generator_angle",
     "search_layout",
     "with_generators",

@@ -21,6 +21,13 @@ from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
+#: Most vertices of a ply outline or a generator polyline: the inside test walks the edges one
+#: by one, so a million-vertex outline would take the machine for hours; no ply needs more.
+MAX_POLYGON_VERTICES = 10_000
+#: Most angles of a tabulated shear curve (``shear.angles_deg``): far more than any plot shows,
+#: and a step of 1e-9° over 60° would otherwise ask for 6·10¹⁰ of them.
+MAX_CURVE_ANGLES = 100_000
+
 
 class PlySection(BaseModel):
     """The fabric ply: its node spacing and its outline in the flat."""
@@ -37,6 +44,7 @@ class PlySection(BaseModel):
     )
     outline_mm: list[tuple[float, float]] | None = Field(
         default=None,
+        max_length=MAX_POLYGON_VERTICES,
         description="Polygonal ply outline in the flat [mm], in the fibre (u, v) frame with the "
         "start node at the origin; replaces size_mm.",
     )
@@ -351,6 +359,7 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
             label = ".".join(str(p) for p in ("tool", *where))
             errors.append(err(("tool", *where), label, message))
     ply = scene.ply
+    errors += _section_problems(scene, err)
     if ply is None:
         return errors
     outline = ply_outline(scene)
@@ -394,6 +403,108 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
         problem = start_problem(surface, (point[0] * 1e-3, point[1] * 1e-3))
         if problem is not None:
             errors.append(err(("start", "point_mm"), "start.point_mm", problem))
+    return errors
+
+
+def _section_problems(scene: Scene, err: Any) -> list[SourceError]:
+    """Problems of the start, search and shear sections that would only surface at run time
+    (or take the machine first): checked by arithmetic."""
+    from preform.drape.search import scan_size
+    from preform.pipeline import fidelity
+
+    errors: list[SourceError] = []
+    start = scene.start
+    if start is not None and start.generators == "polyline":
+        if start.generator_polylines_mm is None:
+            errors.append(
+                err(
+                    ("start", "generators"),
+                    "start.generators",
+                    "generators: polyline needs start.generator_polylines_mm (the two plan "
+                    "polylines, each through the start point)",
+                )
+            )
+        else:
+            for k, line in enumerate(start.generator_polylines_mm):
+                if not 2 <= len(line) <= MAX_POLYGON_VERTICES:
+                    errors.append(
+                        err(
+                            ("start", "generator_polylines_mm", k),
+                            f"start.generator_polylines_mm[{k}]",
+                            f"a generator polyline needs 2 to {MAX_POLYGON_VERTICES:,} "
+                            f"vertices, got {len(line):,}",
+                        )
+                    )
+        if scene.search is not None:
+            errors.append(
+                err(
+                    ("start", "generators"),
+                    "start.generators",
+                    "the generator-angle search needs geodesic or plan generators: polylines "
+                    "fix the angle themselves; remove the search section or the polylines",
+                )
+            )
+    search = scene.search
+    if search is not None:
+        span = search.generator_angle_deg
+        lo, hi = (span.min, span.max) if span is not None else (30.0, 150.0)
+        at: tuple[str | int, ...] = (
+            ("search", "generator_angle_deg") if span is not None else ("search",)
+        )
+        label = ".".join(str(p) for p in at)
+        if not 0.0 < lo < hi < 180.0:
+            errors.append(
+                err(
+                    at,
+                    label,
+                    f"the generator-angle range must satisfy 0 < min < max < 180°, "
+                    f"got [{lo:g}°, {hi:g}°]",
+                )
+            )
+        else:
+            knobs = fidelity.resolve(scene)
+            needed = scan_size(np.radians(lo), np.radians(hi), np.radians(knobs.scan_step_deg))
+            if search.scan_step_deg is not None:
+                at = ("search", "scan_step_deg")
+            elif span is not None and span.step is not None:
+                at = ("search", "generator_angle_deg", "step")
+            label = ".".join(str(p) for p in at)
+            if needed > knobs.max_drapes:
+                count = "too many" if needed >= 2**63 else f"{needed:,}"
+                errors.append(
+                    err(
+                        at,
+                        label,
+                        f"a scan of [{lo:g}°, {hi:g}°] every {knobs.scan_step_deg:g}° needs "
+                        f"{count} drapes, more than the budget max_drapes = "
+                        f"{knobs.max_drapes}; widen the step (search.scan_step_deg) or raise "
+                        "search.max_drapes",
+                    )
+                )
+    shear = scene.shear
+    if shear is not None:
+        spec = shear.angles_deg
+        step = spec.step or 1.0
+        if spec.min > spec.max:
+            errors.append(
+                err(
+                    ("shear", "angles_deg"),
+                    "shear.angles_deg",
+                    f"min ({spec.min:g}°) must not exceed max ({spec.max:g}°)",
+                )
+            )
+        else:
+            angles = (spec.max - spec.min) / step + 1
+            if not angles <= MAX_CURVE_ANGLES:
+                errors.append(
+                    err(
+                        ("shear", "angles_deg", "step"),
+                        "shear.angles_deg.step",
+                        f"a step of {step:g}° over [{spec.min:g}°, {spec.max:g}°] gives "
+                        f"{angles:.3g} angles, more than {MAX_CURVE_ANGLES:,}; use a step of at "
+                        f"least {(spec.max - spec.min) / (MAX_CURVE_ANGLES - 1):.3g}°",
+                    )
+                )
     return errors
 
 

@@ -575,3 +575,106 @@ def test_a_vanishing_spacing_is_refused_not_overflowed(
     message = one_error(sandbox, path, SPACING, "ply.node_spacing_mm")
     assert message.startswith("the ply needs more than 1e+18 net nodes at node spacing ")
     assert "(more memory than any machine has)" in message
+
+
+SECTIONS = """\
+name: sections
+tool: {{surface: hemisphere, radius_mm: 100}}
+ply: {{node_spacing_mm: 10, size_mm: [360, 360]}}
+start: {{point_mm: [0, 0]{start}}}
+{extra}
+outputs: [drape]
+"""
+
+SECTION_CASES = {
+    "scan step of 1e-12°": (
+        "",
+        "search: {generator_angle_deg: {min: 30, max: 150}, scan_step_deg: 1e-12}",
+        (5, 52, "search.scan_step_deg"),
+        "a scan of [30°, 150°] every 1e-12° needs 120,000,000,000,003 drapes, more than the "
+        "budget max_drapes = 60",
+    ),
+    "scan step of 1e-300°": (
+        "",
+        "search: {generator_angle_deg: {min: 30, max: 150, step: 1e-300}}",
+        (5, 51, "search.generator_angle_deg.step"),
+        "every 1e-300° needs too many drapes",
+    ),
+    "reversed search range": (
+        "",
+        "search: {generator_angle_deg: {min: 150, max: 30}}",
+        (5, 10, "search.generator_angle_deg"),
+        "the generator-angle range must satisfy 0 < min < max < 180°, got [150°, 30°]",
+    ),
+    "search range past 180°": (
+        "",
+        "search: {generator_angle_deg: {min: 30, max: 200}}",
+        (5, 10, "search.generator_angle_deg"),
+        "got [30°, 200°]",
+    ),
+    "shear step of 1e-9°": (
+        "",
+        "shear: {angles_deg: {min: 0, max: 60, step: 1e-9}}",
+        (5, 39, "shear.angles_deg.step"),
+        "a step of 1e-09° over [0°, 60°] gives 6e+10 angles, more than 100,000",
+    ),
+    "reversed shear range": (
+        "",
+        "shear: {angles_deg: {min: 60, max: 0}}",
+        (5, 9, "shear.angles_deg"),
+        "min (60°) must not exceed max (0°)",
+    ),
+    "polyline without polylines": (
+        ", generators: polyline",
+        "",
+        (4, 27, "start.generators"),
+        "generators: polyline needs start.generator_polylines_mm",
+    ),
+    "polyline with a search": (
+        ", generators: polyline, generator_polylines_mm: [[[0, 0], [50, 0]], [[0, 0], [0, 50]]]",
+        "search: {}",
+        (4, 27, "start.generators"),
+        "the generator-angle search needs geodesic or plan generators",
+    ),
+    "one-point polyline": (
+        ", generators: polyline, generator_polylines_mm: [[[0, 0]], [[0, 0], [0, 50]]]",
+        "",
+        (4, 74, "start.generator_polylines_mm[0]"),
+        "a generator polyline needs 2 to 10,000 vertices, got 1",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(SECTION_CASES))
+def test_section_problems_are_refused_before_running(
+    sandbox: PluginSandbox, tmp_path: Path, case: str
+) -> None:
+    start, extra, (line, column, field), words = SECTION_CASES[case]
+    path = tmp_path / "sections.yaml"
+    path.write_text(SECTIONS.format(start=start, extra=extra))
+    started = time.perf_counter()
+    errors = refused(sandbox, path)
+    assert time.perf_counter() - started < 5
+    assert errors[0].startswith(f"{path}:{line}:{column}: {field}: "), errors
+    assert words in errors[0]
+
+
+def test_a_ply_outline_of_too_many_vertices_is_refused(
+    sandbox: PluginSandbox, tmp_path: Path
+) -> None:
+    import math
+
+    ring = [
+        [round(100 * math.cos(t), 3), round(100 * math.sin(t), 3)]
+        for t in (2 * math.pi * k / 20_001 for k in range(20_001))
+    ]
+    path = tmp_path / "outline.yaml"
+    path.write_text(
+        "name: outline\ntool: {surface: plane}\nply:\n  node_spacing_mm: 10\n"
+        f"  outline_mm: {ring}\nstart: {{point_mm: [0, 0]}}\noutputs: [drape]\n"
+    )
+    (error,) = refused(sandbox, path)
+    assert error == (
+        f"{path}:5:15: ply.outline_mm: List should have at most 10000 items after validation, "
+        "not 20001"
+    )
