@@ -441,7 +441,9 @@ def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
     total = float(area[counted].sum())
     part = float(area[mask].sum())
     percent = 100.0 * part / total if total > 0 else 0.0
-    return f"{int(np.count_nonzero(mask))} cells ({percent:.1f} % of the draped area)"
+    # Cells sheared to near 90° have almost no area: say how little rather than "0.0 %".
+    shown = f"{percent:.1f}" if percent >= 0.1 or percent == 0 else f"{percent:.2g}"
+    return f"{int(np.count_nonzero(mask))} cells ({shown} % of the draped area)"
 
 
 def shear_limit_warnings(
