@@ -388,7 +388,7 @@ def test_the_dependency_shadow_is_the_rectangle_to_the_start(seed: int) -> None:
 
 
 def _count(message: str) -> tuple[int, float]:
-    found = re.match(r"(\d+) cells \(([\d.]+) % of the draped area\)", message)
+    found = re.match(r"(\d+) cells \(([\d.e+-]+) % of the draped area\)", message)
     assert found is not None, message
     return int(found.group(1)), float(found.group(2))
 
