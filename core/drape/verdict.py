@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -178,9 +178,10 @@ class Coverage:
     #: not over the tool at all; the overhang.
     nodes_overhang: int
     #: Where the first missing node nearest the start lies, undeformed, in plan [m], if any.
+    #: Nodes over the tool that are not placed (failed or not reached), the coverage lost.
+    nodes_missing: int = 0
     first_missing_xy_m: tuple[float, float] | None = None
     node_spacing_m: float = 0.0
-    extra: dict[str, Any] = field(default_factory=dict)
 
     @property
     def covered_fraction(self) -> float:
@@ -189,7 +190,7 @@ class Coverage:
 
     @property
     def complete(self) -> bool:
-        """No node over the tool is missing (then ``covered_fraction`` is 1)."""
+        """No cell asked for is missing (then ``covered_fraction`` is 1)."""
         return self.cells_asked == self.cells_covered
 
     def reason(self) -> str:
@@ -243,7 +244,7 @@ class Coverage:
             "coverage_cells_asked": self.cells_asked,
             "coverage_cells_covered": self.cells_covered,
             "nodes_overhang": self.nodes_overhang,
-            "nodes_missing": int(sum(self.missing_nodes.values())),
+            "nodes_missing": self.nodes_missing,
         }
         for key, value in self.missing_nodes.items():
             out[f"nodes_missing_{key}"] = value
@@ -289,8 +290,8 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     if other:
         counts["not_reached_unexplained"] = other
 
-    # Cells: valid ones are covered; a non-valid cell inside the ply is asked for when none of
-    # its corners is past the edge and its undeformed centre lies over the tool.
+    # Cells: valid ones are covered; a non-valid cell inside the ply is asked for when one of
+    # its corners is missing and none is past the edge (so complete ⇔ nothing missing).
     valid = result.cell_status == CellStatus.VALID
     cell_in_ply = result.cell_status != CellStatus.OUTSIDE_PLY
     edge_corner = past_edge[:-1, :-1] | past_edge[1:, :-1] | past_edge[:-1, 1:] | past_edge[1:, 1:]
@@ -308,6 +309,7 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         cells_covered=int(np.count_nonzero(valid)),
         missing_nodes=counts,
         nodes_overhang=int(np.count_nonzero(past_edge | (lost & ~over))),
+        nodes_missing=int(np.count_nonzero(missing)),
         first_missing_xy_m=first,
         node_spacing_m=result.node_spacing,
     )
