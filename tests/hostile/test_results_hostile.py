@@ -609,3 +609,42 @@ def test_a_warp_knit_past_its_fit_in_the_perpendicular_sense_is_said(
     gamma = np.where(result.valid, result.shear, 0.0)
     assert _count(message)[0] == np.count_nonzero(np.abs(gamma) > math.radians(60)) > 0
     assert np.count_nonzero(gamma < -math.radians(60)) > 0
+
+
+def _tools() -> dict[str, Any]:
+    from preform.plugins.surfaces.basic import Cylinder, Hemisphere
+    from preform.plugins.surfaces.domes import EllipsoidDome, FlangedHemisphere, ParaboloidDome
+
+    return {
+        "hemisphere": Hemisphere(0.1),
+        "plane": Plane((0.3, 0.2)),
+        "cylinder": Cylinder(0.05, 0.3),
+        "paraboloid": ParaboloidDome(0.1, 0.08),
+        "ellipsoid": EllipsoidDome((0.12, 0.08, 0.06)),
+        "flanged": FlangedHemisphere(0.1, 0.01, 0.15),
+        "mesh-hemisphere": tessellate_hemisphere(0.1, 24),
+    }
+
+
+TOOLS = _tools()
+
+
+@pytest.mark.parametrize("alpha", [45, 90, 135])
+@pytest.mark.parametrize("tool", list(TOOLS))
+def test_drapes_that_only_overhang_are_complete(tool: str, alpha: float) -> None:
+    """No cry wolf: on smooth tools (analytic and meshed) a ply larger than the tool hangs over
+    its edges, genuine OFF_TOOL nodes all of them, and the drape is complete."""
+    surface = TOOLS[tool]
+    start = (0.02, 0.01)
+    result = drape(
+        surface,
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.36, 0.36)),
+        start_xy_m=start,
+        orientation_rad=0.3,
+        generator_angle_rad=math.radians(alpha),
+    )
+    cover = coverage(result, surface, start)
+    assert cover.complete, cover.reason()
+    assert cover.covered_fraction == 1.0 and cover.nodes_missing == 0
+    assert np.count_nonzero(result.status == NodeStatus.OFF_TOOL) > 0
