@@ -227,7 +227,8 @@ def _judge_optimum_drape(
     ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any]
 ) -> None:
     """Drape once at the optimum and mark the case partial when it does not cover the ply
-    where it lies over the tool (the same words the drape step uses for the same net)."""
+    where it lies over the tool (the same words the drape step uses for the same net). Only
+    for scenes that do not drape anyway."""
     evaluation = objective.evaluate(
         float(optimum["generator_angle_rad"]),
         orientation_rad=optimum.get("orientation_rad"),
@@ -278,7 +279,11 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
     if relax:
         _run_relax(ctx, objective, optimum, relax if isinstance(relax, Mapping) else {})
     _warn_resolution(ctx, search)
-    _judge_optimum_drape(ctx, objective, optimum)
+    from preform.pipeline.planner import plan
+
+    if "drape" not in {step.name for step in plan(ctx.scene, ctx.registry)}:
+        # Otherwise the drape step drapes at the optimum and judges that same net itself.
+        _judge_optimum_drape(ctx, objective, optimum)
     return {"optimum": optimum}
 
 

@@ -156,10 +156,17 @@ search:
 """
 
 
-def search_scene(tmp_path: Path, *, lo: float = 30, hi: float = 150, spacing: float = 10) -> Path:
-    text = HEMISPHERE.format(
-        name="search", spacing=spacing, alpha=90, outputs="[energy_vs_angle, optimum, drape]"
-    ).replace("  generator_angle_deg: 90\n", "")
+def search_scene(
+    tmp_path: Path,
+    *,
+    lo: float = 30,
+    hi: float = 150,
+    spacing: float = 10,
+    outputs: str = "[energy_vs_angle, optimum, drape]",
+) -> Path:
+    text = HEMISPHERE.format(name="search", spacing=spacing, alpha=90, outputs=outputs).replace(
+        "  generator_angle_deg: 90\n", ""
+    )
     return write(tmp_path / "search.yaml", text + SEARCH.format(lo=lo, hi=hi))
 
 
@@ -547,9 +554,23 @@ def test_a_mesh_hemisphere_drape_has_no_partial_reason(
 def test_a_complete_search_optimum_has_no_partial_reason(
     sandbox: PluginSandbox, bundled: Any, tmp_path: Path
 ) -> None:
-    ctx = run(context(sandbox, bundled, "plain-weave-150", search_scene(tmp_path)))
+    path = search_scene(tmp_path, outputs="[energy_vs_angle, optimum]")
+    ctx = run(context(sandbox, bundled, "plain-weave-150", path))
     assert ctx.partial_reasons == []
     assert ctx.summary["optimum_covered_fraction"] == 1.0
+
+
+def test_a_search_on_the_hat_mould_is_partial_without_a_drape_step(
+    sandbox: PluginSandbox, bundled: Any, tmp_path: Path
+) -> None:
+    """A scene asking only for the optimum still learns that the drape there is partial."""
+    text = HAT.format(spacing=10, alpha=90).replace("  generator_angle_deg: 90\n", "")
+    text = text.replace("outputs: [drape]", "outputs: [optimum]")
+    text += "search: {generator_angle_deg: {min: 70, max: 110}, scan_step_deg: 10}\n"
+    ctx = run(context(sandbox, bundled, "plain-weave-150", write(tmp_path / "hs.yaml", text)))
+    (reason,) = ctx.partial_reasons
+    assert reason.startswith("the net covers ") and "stopped on the tool" in reason
+    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.5
 
 
 TABULATED = (
