@@ -186,3 +186,105 @@ def test_preform_library_environment_adds_directories(toy, tmp_path, monkeypatch
     # the environment's fabrics clash with the same names given again on the command line
     with pytest.raises(LibraryError, match="duplicate fabric name 'felt-a'"):
         load_library([first / "a.yaml"], bundled=False, registry=toy.registry)
+
+
+# -- value checks a third-party architecture gets without asking ------------------------------
+
+
+def test_a_plugin_architecture_gets_finite_and_boolean_checks(toy, tmp_path):
+    """The toy fabric derives from FabricBase and declares plain floats: ``inf`` written as
+    text and ``true`` (read as 1 before) are refused where they stand."""
+    bad = write(
+        tmp_path,
+        "bad.yaml",
+        """\
+        - name: felt-inf
+          architecture: toy
+          source: s
+          note: n
+          areal_density_g_m2: Infinity
+        - name: felt-bool
+          architecture: toy
+          source: s
+          note: n
+          areal_density_g_m2: 300
+          width_mm: yes
+        """,
+    )
+    errors = errors_of(toy, bad)
+    assert len(errors) == 2, errors
+    assert errors[0].startswith(f"{bad}:5:23: felt-inf.areal_density_g_m2: non-finite number")
+    assert errors[1].startswith(f"{bad}:11:13: felt-bool.width_mm: true is a boolean")
+
+
+RANGED_PLUGIN = """
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from preform import FabricBase, hookimpl
+from preform.material import ParamsModel, Plausible, size_limit
+
+FELT_THICKNESS = Plausible(0.1, 50.0, "mm", "a felt thickness", "felts are 0.5-20 mm thick")
+
+
+class Layer(ParamsModel):
+    thickness_mm: Annotated[float, FELT_THICKNESS] = Field(gt=0)
+
+
+class RangedFelt(FabricBase):
+    architecture: Literal["ranged"]
+    layers: Annotated[list[Layer], size_limit("tow_layers")]
+
+
+@hookimpl
+def preform_register_architectures(register):
+    register.add(RangedFelt)
+"""
+
+
+@pytest.fixture
+def ranged(preform_plugins, tmp_path):
+    """A third-party architecture that only marks its field with a Plausible range."""
+    import importlib.util
+
+    path = tmp_path / "rangedplug.py"
+    path.write_text(RANGED_PLUGIN)
+    spec = importlib.util.spec_from_file_location("rangedplug", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    preform_plugins.register(module, "ranged")
+    return preform_plugins
+
+
+RANGED = """\
+- name: thick-felt
+  architecture: ranged
+  source: s
+  note: n
+  layers:
+    - thickness_mm: 2.0
+    - thickness_mm: 2000
+"""
+
+
+def test_a_plugin_architecture_gets_plausible_ranges_and_overrides(ranged, tmp_path):
+    path = write(tmp_path, "felt.yaml", RANGED)
+    errors = errors_of(ranged, path)
+    assert errors == [
+        f"{path}:7:21: thick-felt.layers[1].thickness_mm: thickness_mm = 2000 is outside the "
+        "plausible range 0.1–50 mm for a felt thickness; was it given in µm? (range: felts are "
+        "0.5-20 mm thick). If the value is right, add 'layers[1].thickness_mm' to this entry's "
+        "accept_out_of_range"
+    ]
+    path = write(
+        tmp_path, "felt.yaml", RANGED + "  accept_out_of_range: ['layers[1].thickness_mm']\n"
+    )
+    lib = ranged.library([path])
+    assert lib.fabric("thick-felt").accept_out_of_range == ("layers[1].thickness_mm",)
+    assert [str(w) for w in lib.warnings] == [
+        f"{path}:7:21: thick-felt.layers[1].thickness_mm: thickness_mm = 2000 is outside the "
+        "plausible range 0.1–50 mm for a felt thickness; accepted by override "
+        "(accept_out_of_range)"
+    ]
