@@ -74,6 +74,9 @@ def _boolean_errors(value: Any, loc: tuple[str | int, ...] = ()) -> Iterator[Ini
     elif isinstance(value, list | tuple):
         for i, item in enumerate(value):
             yield from _boolean_errors(item, (*loc, i))
+    elif isinstance(value, dict):  # dict[str, float]: the values
+        for key, item in value.items():
+            yield from _boolean_errors(item, (*loc, key))
 
 
 class ParamsModel(BaseModel):
