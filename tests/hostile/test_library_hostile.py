@@ -590,6 +590,38 @@ def test_an_override_accepts_the_value_records_it_and_warns(
     assert "hostile-woven.tow_types.glass.width_mm: width_mm = 60 is outside" in warning[0]
 
 
+def test_an_override_is_in_the_case_data_and_its_input_hash(
+    sandbox: PluginSandbox, tmp_path: Path
+) -> None:
+    """A run's case stores the fabric with its override, and the input hash changes with it:
+    a result computed from an accepted out-of-range value is never mistaken for another."""
+    from preform.pipeline.runner import make_cases
+    from preform.pipeline.scene import load_scene
+
+    scene_path = tmp_path / "scene.yaml"
+    scene_path.write_text(
+        "name: cell\ntool: {surface: hemisphere, radius_mm: 100}\n"
+        "ply: {node_spacing_mm: 20, size_mm: [100, 100]}\n"
+        "start: {point_mm: [0, 0], generator_angle_deg: 90}\noutputs: [drape]\n"
+    )
+    scene = load_scene(scene_path, sandbox.registry)
+    hashes = []
+    for pretension, overrides in (
+        (100.0, None),
+        (100.0, ["shear_law.pretension_N"]),  # not needed (a warning), but still data
+        (2e4, ["shear_law.pretension_N"]),
+    ):
+        entry = set_at(WOVEN, ("shear_law", "pretension_N"), pretension)
+        if overrides:
+            entry["accept_out_of_range"] = overrides
+        written = write_entry(tmp_path, entry)
+        lib = load_library([written.file], bundled=False, env=False, registry=sandbox.registry)
+        (case,) = make_cases(lib, [scene], tmp_path / "out", sandbox.host, discover=False)
+        assert case.fabric_data.get("accept_out_of_range") == overrides
+        hashes.append(case.input_hash)
+    assert len(set(hashes)) == 3  # the first two differ only by the override
+
+
 def test_an_override_of_a_list_accepts_every_item_and_a_law_field(
     sandbox: PluginSandbox, tmp_path: Path
 ) -> None:
