@@ -61,6 +61,14 @@ LOCKING_ANGLE = _angle_rule(
 FAILURE_ANGLE = _angle_rule(
     "a stitch-failure angle", 2.0, 90.0, "chain stitches fail near 35° (paper)"
 )
+TABLE_END = Plausible(
+    FIT_END.low,
+    FIT_END.high,
+    "deg",
+    "the last angle of a table (the end of its measured range)",
+    FIT_END.reason,
+    measure=lambda angles, _model: max(angles) if angles else None,
+)
 FORCE_POINT = Plausible(
     0.0, MAX_FORCE_N_PER_MM, "N/mm", "a picture-frame shear force F_s/L", _FORCE_REASON
 )
@@ -448,7 +456,7 @@ class TabulatedParams(ParamsModel):
     """Parameters of the ``tabulated`` shear law (YAML ``shear_law`` block)."""
 
     law: Literal["tabulated"] = Field(description="Selects the tabulated shear law.")
-    angle_deg: TableColumn = Field(
+    angle_deg: Annotated[TableColumn, TABLE_END] = Field(
         min_length=2, description="Shear angles [deg], strictly ascending, 0 ≤ γ ≤ 90, γ ≥ 0."
     )
     force_N_per_mm: Annotated[TableColumn | None, FORCE_POINT] = Field(
@@ -457,7 +465,7 @@ class TabulatedParams(ParamsModel):
     torque_N_per_m: Annotated[TableColumn | None, TORQUE_POINT] = Field(
         default=None, description="Alternatively, torque per area C [N·m/m²] at angle_deg."
     )
-    angle_negative_deg: TableColumn | None = Field(
+    angle_negative_deg: Annotated[TableColumn | None, TABLE_END] = Field(
         default=None,
         description="Shear-angle magnitudes [deg] of a separate table for γ < 0 (asymmetric law).",
     )

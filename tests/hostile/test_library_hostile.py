@@ -375,7 +375,28 @@ def _value_at(entry: dict[str, Any], path: tuple[str | int, ...]) -> Any:
     return node
 
 
-LARGE = [c for c in FIELD_CASES if c.rule.measure is not None or _large_value(c) is not None]
+#: Measured quantities in degrees (the last angle of a table) cannot pass 90°: a hard limit.
+LARGE = [
+    c
+    for c in FIELD_CASES
+    if (c.rule.unit != "deg" if c.rule.measure is not None else _large_value(c) is not None)
+]
+TABLE_ENDS = [c for c in FIELD_CASES if c.rule.measure is not None and c.rule.unit == "deg"]
+
+
+@pytest.mark.parametrize("case", TABLE_ENDS, ids=[c.id for c in TABLE_ENDS])
+def test_a_table_in_radians_is_a_located_range_error(
+    sandbox: PluginSandbox, tmp_path: Path, case: FieldCase
+) -> None:
+    """Angles of a table given in radians all lie inside [0, 90]: only the range catches them."""
+    radians = [math.radians(a) for a in _value_at(BASES[case.base], case.path)]
+    raw = yaml.safe_dump(radians, default_flow_style=True).strip()
+    written = write_entry(tmp_path, set_at(BASES[case.base], case.path, MARK), raw)
+    errors, _ = load_errors(sandbox, written)
+    label = f"{written.name}.{format_path(case.path)}"
+    assert_one_located(
+        errors, written, label, f"gives {case.rule.what} of 1.0472 deg", "given in radians?"
+    )
 
 
 @pytest.mark.parametrize("case", LARGE, ids=[c.id for c in LARGE])
