@@ -21,10 +21,12 @@ Shape and policy [C]:
   parameters are validated (parallel on [0, failure or end], post-failure on [failure, end],
   perpendicular on [0, its end], the failure drop itself): that is a bad fit, not a fabric.
 * The drop is handed to the energy integration as sub-pieces, each expanded about its own start
-  (``DROP_PIECES``): expanded over the whole drop, P₁ extrapolated past the failure angle and the
-  blend towards P₂ cancel in the monomial coefficients (terms up to 1e5× the values for a steep
-  P₁), and the closed-form energy of that one piece lost enough digits for W to fall at the end
-  of the drop.
+  (``DROP_PIECES``). As one piece over the whole drop, a steep P₁ (extrapolated past the failure
+  angle) and the blend towards P₂ give large high-order coefficients that cancel; the closed-form
+  energy of that piece (antiderivative p − p″ + p⁗ − … against sin and cos) then carries terms
+  millions of times its energy, and its rounding (2e-9 of W for P₁ = 0.001 + 1e9·γ N/mm) made W
+  fall at the end of the drop. Short sub-pieces let the integration's own conditioning guard see
+  this and integrate them by Gauss–Legendre instead, exact to rounding.
 """
 
 from __future__ import annotations
@@ -243,13 +245,16 @@ def parallel_branch(params: StitchPolynomialParams) -> PiecewiseBranch:
     end_fit = math.radians(params.max_angle_deg)
     # Smoothstep s(x) = 3(x/w)² − 2(x/w)³ on the drop, x measured from the failure angle.
     step = np.array([0.0, 0.0, 3.0 / width**2, -2.0 / width**3])
-    p1, p2 = _shifted(before, start), _shifted(after, start)
-    drop = np.asarray(npoly.polyadd(p1, npoly.polymul(step, npoly.polysub(p2, p1))), dtype=float)
     pieces: list[np.ndarray] = [before]
     breaks = [0.0]
     for k in range(DROP_PIECES):
+        # Each sub-piece is built from P₁, P₂ and s expanded about its own start, never by
+        # shifting an expansion of the whole drop (which would carry its cancellation along).
         offset = width * k / DROP_PIECES
-        pieces.append(_shifted(drop, offset))
+        p1, p2 = _shifted(before, start + offset), _shifted(after, start + offset)
+        s = _shifted(step, offset)
+        piece = npoly.polyadd(p1, npoly.polymul(s, npoly.polysub(p2, p1)))
+        pieces.append(np.asarray(piece, dtype=float))
         breaks.append(start + offset)
     if params.beyond_range == "extrapolate" or end_fit >= DOMAIN_END:
         pieces.append(_shifted(after, end_drop))
