@@ -54,11 +54,22 @@ def load(sandbox: PluginSandbox, tmp_path: Path, entries: list[dict[str, Any]]) 
     return sandbox.library([path])
 
 
+#: The override a range error suggests: "add 'PATH' to this entry's accept_out_of_range".
+OVERRIDE_HINT = re.compile(r"add '([^']+)' to this entry's accept_out_of_range")
+
+
 def check_entry(sandbox: PluginSandbox, tmp_path: Path, entry: dict[str, Any]) -> None:
-    """Load → finite derived properties, a unit cell and a sound law; or located errors."""
+    """Load → finite derived properties, a unit cell and a sound law; or located errors.
+
+    Values outside their plausible range are accepted through the override each error
+    suggests: a user may do the same, so geometry and laws must stay sound for them too."""
     try:
         lib = load(sandbox, tmp_path, [entry])
     except LibraryError as exc:
+        overrides = [m.group(1) for e in exc.errors if (m := OVERRIDE_HINT.search(str(e)))]
+        if overrides and len(overrides) == len(exc.errors):
+            check_entry(sandbox, tmp_path, {**entry, "accept_out_of_range": overrides})
+            return
         assert exc.errors
         for error in exc.errors:
             text = str(error)
