@@ -455,4 +455,18 @@ def main() -> None:
         # Ctrl-C while plugins load (a slow import): stop, as click does inside a command
         click.echo("Aborted!", err=True)
         sys.exit(130)
-    group(prog_name="preform")
+    try:
+        code = group.main(prog_name="preform", standalone_mode=False)
+    except click.exceptions.Abort:
+        # Ctrl-C (or SIGTERM) outside a run's own handling, e.g. while the library loads:
+        # the conventional 128 + SIGINT, like an interrupted run, not click's generic 1
+        click.echo("Aborted!", err=True)
+        sys.exit(130)
+    except click.exceptions.ClickException as exc:  # usage errors: click's own words and code
+        exc.show()
+        sys.exit(exc.exit_code)
+    except BrokenPipeError:  # `preform ... | head`: the reader left; nothing to say
+        sys.stderr.close()
+        sys.exit(1)
+    if isinstance(code, int) and not isinstance(code, bool):  # ctx.exit(code)
+        sys.exit(code)

@@ -690,3 +690,20 @@ def test_plan_order_does_not_depend_on_the_hash_seed():
         for seed in ("1", "2", "3", "4", "5")
     }
     assert len(orders) == 1
+
+
+def test_interrupt_while_the_library_loads_exits_130_without_traceback(runenv, monkeypatch, capsys):
+    import preform.cli
+    import preform.library
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(preform.library, "load_library", interrupted)
+    args = runenv.command(runenv.library(fabric("a")), runenv.scene(), "--engine", "serial")
+    monkeypatch.setattr(sys, "argv", ["preform", *args[3:]])
+    with pytest.raises(SystemExit) as info:
+        preform.cli.main()
+    assert info.value.code == 130
+    assert capsys.readouterr().err.strip() == "Aborted!"
+    assert not runenv.out.exists()
