@@ -287,6 +287,18 @@ class Plausible:
     def describe(self) -> str:
         return f"{self.low:g}–{self.high:g} {self.unit}".rstrip()
 
+    def __get_pydantic_json_schema__(self, core_schema: Any, handler: Any) -> dict[str, Any]:
+        # Editors reading `preform schema` see the range next to the field.
+        schema: dict[str, Any] = handler(core_schema)
+        schema["x-plausible-range"] = {
+            "low": self.low,
+            "high": self.high,
+            "unit": self.unit,
+            "of": self.what,
+            "why": self.reason,
+        }
+        return schema
+
 
 @dataclass(frozen=True)
 class PlausibilityCheck:
