@@ -1010,3 +1010,26 @@ def test_the_cli_reports_located_errors_and_exits_1(
         and f"hostile-woven.{format_path(target)}" in output
     )
     assert words in output
+
+
+def test_the_schema_shows_every_range(sandbox: PluginSandbox) -> None:
+    """`preform schema` carries each range next to its field, for editors."""
+    from preform.schema import library_schema
+
+    schema = library_schema(sandbox.registry)
+    found: list[dict[str, Any]] = []
+
+    def walk(node: Any) -> None:
+        if isinstance(node, dict):
+            if "x-plausible-range" in node:
+                found.append(node["x-plausible-range"])
+            for value in node.values():
+                walk(value)
+        elif isinstance(node, list):
+            for value in node:
+                walk(value)
+
+    walk(schema)
+    shown = {(r["low"], r["high"], r["unit"], r["of"]) for r in found}
+    expected = {(c.rule.low, c.rule.high, c.rule.unit, c.rule.what) for c in FIELD_CASES}
+    assert expected <= shown, expected - shown
