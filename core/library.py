@@ -252,9 +252,7 @@ def _range_problems(fabric: FabricBase, err: Any) -> tuple[list[SourceError], li
             warnings.append(
                 err(
                     check.path,
-                    f"{check.field} = {check.value:g} is outside the plausible range "
-                    f"{check.rule.describe()} for {check.rule.what}; accepted by override "
-                    "(accept_out_of_range)",
+                    f"{check.outside()}; accepted by override (accept_out_of_range)",
                 )
             )
         else:

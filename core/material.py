@@ -313,13 +313,18 @@ class PlausibilityCheck:
     def inside(self) -> bool:
         return self.rule.contains(self.value)
 
-    def message(self, override_path: str) -> str:
-        """Why the value is refused, the likely unit mistake, and how to keep it on purpose."""
+    def outside(self) -> str:
+        """``width_mm = 3100 is outside the plausible range 0.05–50 mm for a tow width``."""
         rule = self.rule
         shown = f"{self.field} = {self.value:g}"
         if rule.measure is not None:
             shown = f"{self.field} gives {rule.what} of {self.value:g} {rule.unit}".rstrip()
-        text = f"{shown} is outside the plausible range {rule.describe()} for {rule.what}"
+        return f"{shown} is outside the plausible range {rule.describe()} for {rule.what}"
+
+    def message(self, override_path: str) -> str:
+        """Why the value is refused, the likely unit mistake, and how to keep it on purpose."""
+        rule = self.rule
+        text = self.outside()
         hint = rule.unit_hint(self.value)
         if hint:
             text += f"; was it given in {hint}?"
