@@ -175,7 +175,12 @@ class RunDirectory:
         return self
 
     def __exit__(self, *exc: object) -> None:
-        self._unlock()
+        try:
+            # a worker stopped mid-write (interrupt, time limit) leaves its temporary file;
+            # every worker of this run is gone by now, and the lock keeps others out
+            remove_stale_temporaries(self.path)
+        finally:
+            self._unlock()
 
     def _lock(self) -> None:
         import fcntl
