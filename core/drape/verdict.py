@@ -228,8 +228,12 @@ class Coverage:
             )
         where = ""
         if self.first_missing_xy_m is not None:
-            x, y = (1e3 * v for v in self.first_missing_xy_m)
-            where = f"; the first missing node nearest the start lies near (x, y) = ({x:.0f}, {y:.0f}) mm"
+            # rounded first, then + 0.0, so that -0.4 mm reads "0", not "-0"
+            x, y = (round(1e3 * v) + 0.0 for v in self.first_missing_xy_m)
+            where = (
+                "; the first missing node nearest the start lies near "
+                f"(x, y) = ({x:.0f}, {y:.0f}) mm"
+            )
         return (
             f"the net covers {100 * self.covered_fraction:.1f} % of the ply's fabric area that "
             f"lies over the tool ({self.cells_covered} of {self.cells_asked} cells): "
