@@ -165,13 +165,13 @@ def energy_field(
     """Shear strain energy of a draped net under ``law``.
 
     W(γ) [J/m²] per cell from the signed shear (so an asymmetric law takes the branch the
-    convention in ``preform.drape.result`` says), thinning t/t0 = 1/cos γ, cells past the
+    convention in ``preform.drape.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
     locking angle (|γ| > locking) and past stitch failure (γ > failure, the parallel sense),
     and the total Σ W·d² [J] over the counted cells (A0 = d², the undeformed cell).
 
     Counted cells: valid cells in the part (``result.in_part``), further restricted by
     ``region`` (a boolean mask (ni−1, nj−1) or a predicate on centroids (n, 3) [m]). The
-    per-cell arrays are zero outside them (thinning is 1 there: no deformation counted).
+    per-cell arrays are zero outside them (the thickness ratio is 1 there: no deformation counted).
     """
     counted = result.valid & result.in_part
     if region is not None:
@@ -186,7 +186,7 @@ def energy_field(
         counted = counted & keep
     gamma = np.where(counted, result.shear, 0.0)
     density = np.where(counted, np.asarray(law.energy(gamma), dtype=float), 0.0)
-    thinning = np.where(counted, 1.0 / np.maximum(np.cos(gamma), 1e-12), 1.0)
+    thickness_ratio = np.where(counted, 1.0 / np.maximum(np.cos(gamma), 1e-12), 1.0)
     locking = law.locking_angle
     failure = law.failure_angle
     past_locking = (
@@ -196,7 +196,7 @@ def energy_field(
     total = float(density.sum() * result.node_spacing**2)
     return EnergyField(
         energy_density=density,
-        thinning=thinning,
+        thickness_ratio=thickness_ratio,
         past_locking=np.asarray(past_locking, dtype=bool),
         past_failure=np.asarray(past_failure, dtype=bool),
         total_energy=total,

@@ -123,10 +123,25 @@ class EnergyField:
 
     #: Strain energy per unit undeformed area W(γ) per cell (ni−1, nj−1) [J/m²].
     energy_density: FloatArray
-    #: Thickness ratio t/t0 = 1/cos γ per cell (ni−1, nj−1) [-].
-    thinning: FloatArray
+    #: Thickness ratio t/t0 per cell (ni−1, nj−1) [-]: 1/cos γ today (the fabric keeps its
+    #: fibre volume, so the sheared cell's area d² cos γ thickens it). It is a *thickening*
+    #: (≥ 1); the old name ``thinning`` remains as a deprecated alias. No compaction limit is
+    #: applied here: exporters report cells above a cap (``preform.export.fe_mapping``).
+    thickness_ratio: FloatArray
     #: Cells past the locking angle, and past the stitch-failure angle (ni−1, nj−1).
     past_locking: BoolArray
     past_failure: BoolArray
     #: Total strain energy Σ W·A0 over the valid cells in the part [J] (A0 = d², undeformed).
     total_energy: float
+    #: The model the thickness ratio comes from, recorded with every export.
+    thickness_model: str = "t/t0 = 1/cos γ (constant fibre volume, areal density 1/cos γ)"
+
+    @property
+    def thinning(self) -> FloatArray:
+        """Deprecated name of :attr:`thickness_ratio` (it was never a thinning)."""
+        import warnings
+
+        warnings.warn(
+            "EnergyField.thinning is renamed thickness_ratio", DeprecationWarning, stacklevel=2
+        )
+        return self.thickness_ratio

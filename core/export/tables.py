@@ -31,7 +31,7 @@ CELL_COLUMNS: tuple[str, ...] = (
     "z_mm",
     "shear_deg",
     "area_mm2",
-    "thinning",
+    "thickness_ratio",
     "energy_J_per_m2",
     "past_locking",
     "past_failure",
@@ -43,11 +43,11 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
 
     Columns: ``i``, ``j`` (cell index), ``status`` (CellStatus name, e.g. "VALID",
     "INCOMPLETE"), ``in_part`` (bool), ``x_mm``, ``y_mm``, ``z_mm`` (centroid [mm]),
-    ``shear_deg`` (signed shear [deg]), ``area_mm2`` (draped area [mm²]), ``thinning``
-    (t/t0 = 1/cos γ [-]), ``energy_J_per_m2`` (strain energy density [J/m²]),
+    ``shear_deg`` (signed shear [deg]), ``area_mm2`` (draped area [mm²]),
+    ``thickness_ratio`` (t/t0 [-], 1/cos γ: a thickening; formerly ``thinning``), ``energy_J_per_m2`` (strain energy density [J/m²]),
     ``past_locking`` and ``past_failure`` (nullable bool). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
-    the thinning then follows from the shear.
+    the thickness ratio then follows from the shear.
     """
     n1, n2 = np.asarray(result.cell_status).shape
     ii, jj = np.meshgrid(np.arange(n1), np.arange(n2), indexing="ij")
@@ -72,10 +72,10 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
 
     if energy is not None:
         energy_density = on_valid(energy.energy_density)
-        thinning = on_valid(energy.thinning)
+        thickness_ratio = on_valid(energy.thickness_ratio)
     else:
         energy_density = np.full(n1 * n2, np.nan)
-        thinning = 1.0 / np.cos(shear)
+        thickness_ratio = 1.0 / np.cos(shear)
     table = pd.DataFrame(
         {
             "i": ii.ravel(),
@@ -87,7 +87,7 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
             "z_mm": centroid_mm[:, 2],
             "shear_deg": np.degrees(shear),
             "area_mm2": 1e6 * on_valid(result.area),
-            "thinning": thinning,
+            "thickness_ratio": thickness_ratio,
             "energy_J_per_m2": energy_density,
             "past_locking": flags(None if energy is None else energy.past_locking),
             "past_failure": flags(None if energy is None else energy.past_failure),

@@ -1,7 +1,8 @@
 """VTK unstructured-grid (.vtu) files for ParaView: the unit cell's tow paths and the draped net.
 
-Coordinates are written in metres, as held inside preform; angles in degrees because that is what
-a ParaView user reads off a colour bar. meshio is an optional extra (``preform[vtk]``).
+Coordinates are written in millimetres, the unit of every other preform output (SI stays inside;
+until 0.1 the drape file was in metres; meshio's VTU writer drops field data, so the unit is
+said here and in every array name that has one); angles in degrees because that is what a ParaView user reads off a colour bar. meshio is an optional extra (``preform[vtk]``).
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ if TYPE_CHECKING:
 TOW_KIND_CODES: dict[str, int] = {"warp": 0, "weft": 1, "binder": 2, "tow": 3, "stitch": 4}
 #: Code for a kind not in ``TOW_KIND_CODES`` (a plugin's own kind still exports).
 OTHER_KIND_CODE = 9
+#: Millimetres per metre: files are in mm, preform holds metres.
+MM_PER_M = 1e3
 
 
 def _require_meshio() -> ModuleType:
@@ -36,9 +39,9 @@ def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
     """Write a unit cell's tow centrelines to ``path`` (.vtu) as line segments.
 
     Each tow becomes a chain of VTK "line" cells between its consecutive centreline points
-    (meshio has no poly-line cell). Points are in metres. Cell data on every segment:
+    (meshio has no poly-line cell). Points are in millimetres. Cell data on every segment:
     ``tow`` (index of the tow in ``cell.tows``), ``kind`` (code from ``TOW_KIND_CODES``),
-    ``level``, ``width`` [m] and ``height`` [m].
+    ``level``, ``width_mm`` [mm] and ``height_mm`` [mm].
     """
     meshio = _require_meshio()
     point_blocks: list[np.ndarray] = []
@@ -62,17 +65,17 @@ def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
         [TOW_KIND_CODES.get(t.kind, OTHER_KIND_CODE) for t in cell.tows], dtype=np.int32
     )
     level = np.array([t.level for t in cell.tows], dtype=np.int32)
-    width = np.array([t.width for t in cell.tows], dtype=float)
-    height = np.array([t.height for t in cell.tows], dtype=float)
+    width = MM_PER_M * np.array([t.width for t in cell.tows], dtype=float)
+    height = MM_PER_M * np.array([t.height for t in cell.tows], dtype=float)
     mesh = meshio.Mesh(
-        points=np.concatenate(point_blocks),
+        points=MM_PER_M * np.concatenate(point_blocks),
         cells=[("line", np.concatenate(segment_blocks))],
         cell_data={
             "tow": [tows],
             "kind": [kind[tows]],
             "level": [level[tows]],
-            "width": [width[tows]],
-            "height": [height[tows]],
+            "width_mm": [width[tows]],
+            "height_mm": [height[tows]],
         },
     )
     with atomic_path(path) as tmp:
@@ -84,12 +87,12 @@ def write_drape_vtu(
 ) -> None:
     """Write the draped net to ``path`` (.vtu): placed nodes as points, valid cells as quads.
 
-    Points are in metres. Cells that are not VALID are left out, so the file holds no NaN.
-    Point data: ``i``, ``j`` (net indices), ``residual`` [m]. Cell data: ``i``, ``j``,
+    Points are in millimetres. Cells that are not VALID are left out, so the file holds no NaN.
+    Point data: ``i``, ``j`` (net indices), ``residual_mm`` [mm]. Cell data: ``i``, ``j``,
     ``shear_deg`` (signed shear [deg]), ``fibre_u`` and ``fibre_v`` (unit 3-vectors),
-    ``thinning`` (t/t0 = 1/cos γ [-]), ``status`` (CellStatus code), ``in_part`` (0/1) and,
+    ``thickness_ratio`` (t/t0 = 1/cos γ [-]), ``status`` (CellStatus code), ``in_part`` (0/1) and,
     when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking`` and
-    ``past_failure`` (0/1). Without ``energy`` the thinning is computed from the shear. A net
+    ``past_failure`` (0/1). Without ``energy`` the thickness ratio is computed from the shear. A net
     with no valid cell is written as its placed nodes, one vertex cell each, without cell data.
     """
     meshio = _require_meshio()
@@ -122,15 +125,15 @@ def write_drape_vtu(
     }
     if energy is not None:
         cell_data["energy_J_per_m2"] = np.asarray(energy.energy_density, dtype=float)[ci, cj]
-        cell_data["thinning"] = np.asarray(energy.thinning, dtype=float)[ci, cj]
+        cell_data["thickness_ratio"] = np.asarray(energy.thickness_ratio, dtype=float)[ci, cj]
         cell_data["past_locking"] = np.asarray(energy.past_locking, dtype=np.int32)[ci, cj]
         cell_data["past_failure"] = np.asarray(energy.past_failure, dtype=np.int32)[ci, cj]
     else:
-        cell_data["thinning"] = 1.0 / np.cos(shear)
+        cell_data["thickness_ratio"] = 1.0 / np.cos(shear)
 
     # A file is a result users open and trust: never write a NaN or an infinity into one (the
     # drape step fails such a case first; this guards direct callers).
-    points = np.asarray(result.nodes, dtype=float)[placed]
+    points = MM_PER_M * np.asarray(result.nodes, dtype=float)[placed]
     bad = [name for name, values in cell_data.items() if not np.all(np.isfinite(values))]
     if not np.all(np.isfinite(points)):
         bad.insert(0, "node positions")
@@ -149,7 +152,8 @@ def write_drape_vtu(
         point_data={
             "i": node_i.astype(np.int32),
             "j": node_j.astype(np.int32),
-            "residual": np.nan_to_num(np.asarray(result.residual, dtype=float)[placed]),
+            "residual_mm": MM_PER_M
+            * np.nan_to_num(np.asarray(result.residual, dtype=float)[placed]),
         },
         cell_data={name: [values] for name, values in cell_data.items()} if has_cells else {},
     )

@@ -136,7 +136,7 @@ def test_energy_takes_the_signed_branch_and_flags_limits() -> None:
         gamma = omega - np.pi / 2
         np.testing.assert_allclose(energy.energy_density, 0.5 * k * gamma**2, rtol=1e-12)
         assert energy.total_energy == pytest.approx(9 * 0.5 * k * gamma**2 * d * d, rel=1e-12)
-        np.testing.assert_allclose(energy.thinning, 1 / np.cos(gamma), rtol=1e-12)
+        np.testing.assert_allclose(energy.thickness_ratio, 1 / np.cos(gamma), rtol=1e-12)
         assert energy.past_locking.all() == (abs(gamma) > 0.5)
         # Stitch failure only in the parallel sense (γ > 0).
         assert energy.past_failure.all() == (gamma > 0.3)

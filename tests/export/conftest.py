@@ -107,7 +107,7 @@ def build_energy(
     density = np.where(valid, stiffness * gamma**2, 0.0)
     return EnergyField(
         energy_density=density,
-        thinning=np.where(valid, 1.0 / np.cos(gamma), 0.0),
+        thickness_ratio=np.where(valid, 1.0 / np.cos(gamma), 0.0),
         past_locking=valid & (np.abs(gamma) > np.radians(locking_deg)),
         past_failure=valid & (gamma > np.radians(failure_deg)),
         total_energy=float(np.sum(density[valid & result.in_part]) * result.node_spacing**2),

@@ -25,7 +25,15 @@ def test_cells_table_has_one_row_per_cell_with_units_in_mm_and_degrees(damaged_n
     assert not by_cell.loc[(4, 7), "in_part"] and by_cell.loc[(4, 7), "status"] == "VALID"
 
     invalid = table[table["status"] != "VALID"]
-    numeric = ["x_mm", "y_mm", "z_mm", "shear_deg", "area_mm2", "thinning", "energy_J_per_m2"]
+    numeric = [
+        "x_mm",
+        "y_mm",
+        "z_mm",
+        "shear_deg",
+        "area_mm2",
+        "thickness_ratio",
+        "energy_J_per_m2",
+    ]
     assert invalid[numeric].isna().all().all()
     assert invalid["past_locking"].isna().all()
 
@@ -50,7 +58,7 @@ def test_cells_table_without_energy_leaves_energy_columns_empty(make_net):
     assert table["past_failure"].isna().all()
     np.testing.assert_allclose(table["shear_deg"], -30.0)
     np.testing.assert_allclose(table["area_mm2"], 100.0 * np.cos(np.radians(30.0)))
-    np.testing.assert_allclose(table["thinning"], 1 / np.cos(np.radians(30.0)))
+    np.testing.assert_allclose(table["thickness_ratio"], 1 / np.cos(np.radians(30.0)))
 
 
 def test_csv_and_parquet_read_back(tmp_path, damaged_net, make_energy):

@@ -20,12 +20,15 @@ def test_unit_cell_vtu_reads_back_as_one_polyline_per_tow(tmp_path, unit_cell):
     tow = mesh.cell_data_dict["tow"]["line"]
     for k, t in enumerate(unit_cell.tows):
         mine = lines[tow == k]
-        np.testing.assert_allclose(mesh.points[mine[:, 0]], t.points[:-1])
-        np.testing.assert_allclose(mesh.points[mine[-1, 1]], t.points[-1])
+        # files are in mm, preform holds metres
+        np.testing.assert_allclose(mesh.points[mine[:, 0]], 1e3 * t.points[:-1])
+        np.testing.assert_allclose(mesh.points[mine[-1, 1]], 1e3 * t.points[-1])
         assert np.all(mesh.cell_data_dict["kind"]["line"][tow == k] == TOW_KIND_CODES[t.kind])
         assert np.all(mesh.cell_data_dict["level"]["line"][tow == k] == t.level)
-        np.testing.assert_allclose(mesh.cell_data_dict["width"]["line"][tow == k], t.width)
-        np.testing.assert_allclose(mesh.cell_data_dict["height"]["line"][tow == k], t.height)
+        np.testing.assert_allclose(mesh.cell_data_dict["width_mm"]["line"][tow == k], 1e3 * t.width)
+        np.testing.assert_allclose(
+            mesh.cell_data_dict["height_mm"]["line"][tow == k], 1e3 * t.height
+        )
     assert [p.name for p in tmp_path.iterdir()] == ["cell.vtu"]  # no temp file left behind
 
 
@@ -51,7 +54,7 @@ def test_drape_vtu_holds_placed_nodes_and_valid_cells_only(tmp_path, damaged_net
     np.testing.assert_allclose(data["fibre_v"], damaged_net.fibre_v[i, j])
     assert data["fibre_u"].shape == (len(quads), 3)
     np.testing.assert_allclose(data["energy_J_per_m2"], energy.energy_density[i, j])
-    np.testing.assert_allclose(data["thinning"], 1 / np.cos(damaged_net.shear[i, j]))
+    np.testing.assert_allclose(data["thickness_ratio"], 1 / np.cos(damaged_net.shear[i, j]))
     assert np.array_equal(data["past_locking"], energy.past_locking[i, j].astype(int))
     assert np.array_equal(data["past_failure"], energy.past_failure[i, j].astype(int))
     assert data["past_locking"].any() and not data["past_locking"].all()
@@ -61,11 +64,12 @@ def test_drape_vtu_holds_placed_nodes_and_valid_cells_only(tmp_path, damaged_net
     # Each quad's corners are the net's nodes (i, j), (i+1, j), (i+1, j+1), (i, j+1).
     pi, pj = mesh.point_data["i"], mesh.point_data["j"]
     assert np.array_equal(pi[quads[:, 2]], i + 1) and np.array_equal(pj[quads[:, 2]], j + 1)
-    np.testing.assert_allclose(mesh.points, damaged_net.nodes[pi, pj])
+    np.testing.assert_allclose(mesh.points, 1e3 * damaged_net.nodes[pi, pj])  # mm
+    np.testing.assert_allclose(mesh.point_data["residual_mm"], 1e3 * 1e-12)
     assert np.all(damaged_net.status[pi, pj] == NodeStatus.PLACED)
 
 
-def test_drape_vtu_without_energy_still_has_thinning(tmp_path, make_net):
+def test_drape_vtu_without_energy_still_has_the_thickness_ratio(tmp_path, make_net):
     net = make_net(4, 5, generator_angle_deg=60.0)
     path = tmp_path / "flat.vtu"
     write_drape_vtu(net, None, path)
@@ -73,7 +77,9 @@ def test_drape_vtu_without_energy_still_has_thinning(tmp_path, make_net):
     mesh = meshio.read(path)
     assert "energy_J_per_m2" not in mesh.cell_data_dict
     np.testing.assert_allclose(mesh.cell_data_dict["shear_deg"]["quad"], -30.0)
-    np.testing.assert_allclose(mesh.cell_data_dict["thinning"]["quad"], 1 / np.cos(np.pi / 6))
+    np.testing.assert_allclose(
+        mesh.cell_data_dict["thickness_ratio"]["quad"], 1 / np.cos(np.pi / 6)
+    )
 
 
 def test_drape_vtu_of_a_net_without_valid_cells_keeps_its_nodes(tmp_path, make_net):

@@ -53,7 +53,7 @@ def assert_honest(result: DrapeResult, tolerance: float = TOLERANCE) -> None:
     energy = energy_field(result, LAW)
     assert np.all(np.isfinite(energy.energy_density)) and np.all(energy.energy_density >= 0)
     assert math.isfinite(energy.total_energy) and energy.total_energy >= 0
-    assert np.all(np.isfinite(energy.thinning))
+    assert np.all(np.isfinite(energy.thickness_ratio))
     text = json.dumps(summary(result, energy), allow_nan=False)
     assert summary(result, energy)["nodes_total"] == result.status.size, text
 
