@@ -1,0 +1,113 @@
+"""The LS-DYNA include, read back by a fixed-field parser written here, and checked by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from preform.drape.net import drape
+from preform.drape.ply import PlyOutline
+from preform.export.fe_mapping import map_to_mesh
+from preform.export.lsdyna import write_lsdyna_include
+from preform.export.shell_mesh import shell_mesh
+from preform.plugins.surfaces.basic import Hemisphere, Plane
+
+
+def read_k(text: str) -> dict[str, list[str]]:
+    """Data lines under each keyword, comments ($) dropped."""
+    out: dict[str, list[str]] = {}
+    key = ""
+    for line in text.splitlines():
+        if line.startswith("$"):
+            continue
+        if line.startswith("*"):
+            key = line.strip().upper()
+            out.setdefault(key, [])
+        else:
+            out[key].append(line)
+    return out
+
+
+def shells_beta(lines: list[str]) -> dict[int, tuple[int, list[int], list[float], float]]:
+    out = {}
+    for card1, card2 in zip(lines[::2], lines[1::2], strict=True):
+        ints = [int(card1[k : k + 8]) for k in range(0, 80, 8)]
+        reals = [float(card2[k : k + 16]) for k in range(0, 80, 16)]
+        out[ints[0]] = (ints[1], ints[2:6], reals[:4], reals[4])
+    return out
+
+
+def test_hand_checked_beta_thickness_and_uncovered_set(tmp_path) -> None:
+    """Flat drape, u at 30° from x, v at 120° (α = 90°, no shear): element 1 (nodes along +x
+    first, normal +z) has BETA = 30°; element 2 is the same square with its nodes listed
+    the other way round (normal −z, first edge along +y), so BETA = −(30° − 90°) = 60°; the
+    triangle 3 has its first edge along x and N4 = N3; element 4 lies beyond the ply."""
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.1, 0.1)),
+        orientation_rad=np.radians(30.0),
+    )
+    pts = np.array(
+        [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [400, 0, 0], [410, 0, 0], [410, 10, 0]],
+        float,
+    )
+    mesh = shell_mesh(
+        pts,
+        [[0, 1, 2, 3], [0, 3, 2, 1], [0, 1, 2], [4, 5, 6]],
+        element_ids=np.array([1, 2, 3, 4]),
+        node_ids=np.array([11, 12, 13, 14, 15, 16, 17]),
+    )
+    mapping = map_to_mesh(result, mesh, nominal_thickness_mm=0.25)
+    path = tmp_path / "drape.k"
+    write_lsdyna_include(mapping, path, part_id=7, uncovered_set_id=42)
+    cards = read_k(path.read_text(encoding="ascii"))
+    shells = shells_beta(cards["*ELEMENT_SHELL_BETA"])
+    assert sorted(shells) == [1, 2, 3]
+    pid, nodes, thick, beta = shells[1]
+    assert pid == 7 and nodes == [11, 12, 13, 14]
+    np.testing.assert_allclose(thick, 0.25, rtol=1e-8)
+    np.testing.assert_allclose(beta, 30.0, atol=1e-6)
+    assert shells[2][1] == [11, 14, 13, 12]
+    np.testing.assert_allclose(shells[2][3], 60.0, atol=1e-6)
+    assert shells[3][1] == [11, 12, 13, 13]
+    np.testing.assert_allclose(shells[3][3], 30.0, atol=1e-6)
+    sid, *members = (
+        int(line[k : k + 10]) for line in cards["*SET_SHELL_LIST"] for k in range(0, len(line), 10)
+    )
+    assert sid == 42 and members == [4]
+    assert "*END" in cards
+
+
+def test_beta_reproduces_the_fibre_direction_on_a_hemisphere(tmp_path) -> None:
+    """Read back, rotating each element's N1→N2 edge by BETA about its normal gives the
+    mapped u fibre direction."""
+    result = drape(
+        Hemisphere(0.1),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.005,
+        ply=PlyOutline.rectangle((0.3, 0.3)),
+    )
+    xs = np.arange(-60.0, 60.1, 10.0)
+    x, y = np.meshgrid(xs, xs, indexing="ij")
+    z = np.sqrt(100.0**2 - x**2 - y**2)
+    idx = np.arange(x.size).reshape(x.shape)
+    corners = np.column_stack(
+        [idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()]
+    )
+    mesh = shell_mesh(np.column_stack([x.ravel(), y.ravel(), z.ravel()]), corners)
+    mapping = map_to_mesh(result, mesh)
+    path = tmp_path / "drape.k"
+    write_lsdyna_include(mapping, path)
+    shells = shells_beta(read_k(path.read_text(encoding="ascii"))["*ELEMENT_SHELL_BETA"])
+    assert len(shells) == mesh.n_elements
+    for k, eid in enumerate(mesh.element_ids.tolist()):
+        _, _, thick, beta = shells[eid]
+        assert thick == [0.0] * 4  # t0 unknown: the section's thickness
+        n = mapping.normal[k]
+        e = mesh.first_edges()[k]
+        e = e - (e @ n) * n
+        e /= np.linalg.norm(e)
+        b = np.radians(beta)
+        rotated = np.cos(b) * e + np.sin(b) * np.cross(n, e)
+        np.testing.assert_allclose(rotated, mapping.fibre_u[k], atol=1e-7)
