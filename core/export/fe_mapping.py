@@ -207,6 +207,78 @@ def _signed_angle_deg(ref: FloatArray, vec: FloatArray, n: FloatArray) -> FloatA
     return np.asarray(np.degrees(np.arctan2(sin, cos)))
 
 
+@dataclass(frozen=True)
+class NetHit:
+    """Closest points on a draped net, one per query point."""
+
+    #: Continuous net coordinates (i + s, j + t) of the closest point.
+    a: FloatArray
+    b: FloatArray
+    #: The cell holding it.
+    cell_i: IntArray
+    cell_j: IntArray
+    #: Distance along the net's normal there, and along its surface (non-zero only past
+    #: the net's edge) [mm].
+    gap_mm: FloatArray
+    tangential_mm: FloatArray
+
+
+def closest_on_net(
+    result: DrapeResult, points_mm: FloatArray, region: BoolArray | None = None
+) -> NetHit:
+    """Closest point on the draped net [m] to each of ``points_mm`` (k, 3) [mm], over the
+    cells of ``region`` (default: valid and in the part; it must hold at least one cell).
+
+    Each cell is two triangles split along its (i, j)–(i+1, j+1) diagonal, so (s, t) is
+    linear on each half; the nearest cells by centroid are searched exactly."""
+    from scipy.spatial import cKDTree
+
+    if region is None:
+        region = np.asarray(result.valid & result.in_part, dtype=bool)
+    ci_all, cj_all = np.nonzero(region)
+    if ci_all.size == 0:
+        raise ValueError("the draped net has no cell to map onto")
+    points = np.asarray(points_mm, dtype=float).reshape(-1, 3)
+    m = len(points)
+    nodes = MM_PER_M * np.asarray(result.nodes, dtype=float)
+    centres = MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all]
+    k = min(CANDIDATES, ci_all.size)
+    _, nearest = cKDTree(centres).query(points, k=k)
+    nearest = np.asarray(nearest).reshape(m, k)
+    pi = np.repeat(np.arange(m), k)
+    ci, cj = ci_all[nearest.ravel()], cj_all[nearest.ravel()]
+    p = points[pi]
+    x00, x10 = nodes[ci, cj], nodes[ci + 1, cj]
+    x11, x01 = nodes[ci + 1, cj + 1], nodes[ci, cj + 1]
+    # Triangle A (x00, x10, x11): s = λ_b + λ_c, t = λ_c. Triangle B (x00, x11, x01):
+    # s = λ_b, t = λ_b + λ_c.
+    qa, la, ma = _closest_on_triangles(p, x00, x10, x11)
+    qb, lb_, mb = _closest_on_triangles(p, x00, x11, x01)
+    da = np.linalg.norm(p - qa, axis=1)
+    db = np.linalg.norm(p - qb, axis=1)
+    use_a = da <= db
+    q = np.where(use_a[:, None], qa, qb)
+    dist = np.where(use_a, da, db).reshape(m, k)
+    s = np.where(use_a, la + ma, lb_)
+    t = np.where(use_a, ma, lb_ + mb)
+    tri_normal = _unit(
+        np.where(use_a[:, None], np.cross(x10 - x00, x11 - x00), np.cross(x11 - x00, x01 - x00))
+    )
+    pick = np.arange(m) * k + np.argmin(dist, axis=1)
+    offset = p[pick] - q[pick]
+    n_best = tri_normal[pick]
+    along_normal = np.einsum("ij,ij->i", offset, n_best)
+    tangential = np.linalg.norm(offset - along_normal[:, None] * n_best, axis=1)
+    return NetHit(
+        a=ci[pick] + s[pick],
+        b=cj[pick] + t[pick],
+        cell_i=ci[pick],
+        cell_j=cj[pick],
+        gap_mm=np.abs(along_normal),
+        tangential_mm=tangential,
+    )
+
+
 def map_to_mesh(
     result: DrapeResult,
     mesh: ShellMesh,
@@ -225,8 +297,6 @@ def map_to_mesh(
     exceeded. ``max_gap_mm``: largest normal distance [mm] between an element centroid and
     the net for it to count as covered (default: the node spacing d).
     """
-    from scipy.spatial import cKDTree
-
     d_mm = MM_PER_M * float(result.node_spacing)
     gap_limit = d_mm if max_gap_mm is None else float(max_gap_mm)
     ref = np.asarray(reference_direction, dtype=float)
@@ -238,8 +308,7 @@ def map_to_mesh(
     centroid = mesh.centroids()
     normal = mesh.normals()
     region = np.asarray(result.valid & result.in_part, dtype=bool)
-    ci_all, cj_all = np.nonzero(region)
-    nodes = MM_PER_M * np.asarray(result.nodes, dtype=float)
+    ci_all, _ = np.nonzero(region)
     nan3 = np.full((m, 3), np.nan)
     nan1 = np.full(m, np.nan)
     covered = np.zeros(m, dtype=bool)
@@ -250,46 +319,12 @@ def map_to_mesh(
     b_coord = nan1.copy()
 
     if ci_all.size and m:
-        centres = MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all]
-        k = min(CANDIDATES, ci_all.size)
-        _, nearest = cKDTree(centres).query(centroid, k=k)
-        nearest = np.asarray(nearest).reshape(m, k)
-        pi = np.repeat(np.arange(m), k)
-        ci, cj = ci_all[nearest.ravel()], cj_all[nearest.ravel()]
-        p = centroid[pi]
-        x00, x10 = nodes[ci, cj], nodes[ci + 1, cj]
-        x11, x01 = nodes[ci + 1, cj + 1], nodes[ci, cj + 1]
-        # Triangle A (x00, x10, x11): s = λ_b + λ_c, t = λ_c. Triangle B (x00, x11, x01):
-        # s = λ_b, t = λ_b + λ_c.
-        qa, la, ma = _closest_on_triangles(p, x00, x10, x11)
-        qb, lb_, mb = _closest_on_triangles(p, x00, x11, x01)
-        da = np.linalg.norm(p - qa, axis=1)
-        db = np.linalg.norm(p - qb, axis=1)
-        use_a = da <= db
-        q = np.where(use_a[:, None], qa, qb)
-        dist = np.where(use_a, da, db)
-        s = np.where(use_a, la + ma, lb_)
-        t = np.where(use_a, ma, lb_ + mb)
-        tri_normal = np.where(
-            use_a[:, None],
-            np.cross(x10 - x00, x11 - x00),
-            np.cross(x11 - x00, x01 - x00),
-        )
-        tri_normal = _unit(tri_normal)
-        dist = dist.reshape(m, k)
-        best = np.argmin(dist, axis=1)
-        pick = np.arange(m) * k + best
-        offset = p[pick] - q[pick]
-        n_best = tri_normal[pick]
-        along_normal = np.einsum("ij,ij->i", offset, n_best)
-        tangential = np.linalg.norm(offset - along_normal[:, None] * n_best, axis=1)
-        gap = np.abs(along_normal)
-        covered = (tangential <= EDGE_TOLERANCE * d_mm) & (gap <= gap_limit)
-        cell_i = np.where(covered, ci[pick], -1)
-        cell_j = np.where(covered, cj[pick], -1)
-        a_coord = ci[pick] + s[pick]
-        b_coord = cj[pick] + t[pick]
-        gap = np.where(covered, gap, gap)  # kept for the report either way
+        hit = closest_on_net(result, centroid, region)
+        gap = hit.gap_mm
+        covered = (hit.tangential_mm <= EDGE_TOLERANCE * d_mm) & (gap <= gap_limit)
+        cell_i = np.where(covered, hit.cell_i, -1)
+        cell_j = np.where(covered, hit.cell_j, -1)
+        a_coord, b_coord = hit.a, hit.b
 
     fields: dict[str, FloatArray] = {}
     if covered.any():

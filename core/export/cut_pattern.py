@@ -1,0 +1,358 @@
+"""A flat pattern a cutter can use: a smooth outline, a seam allowance, fibre marks and a label.
+
+The flat is the fabric before draping: net node (i, j) sits at ((i − i0)·d, (j − j0)·d) with
+the start node at the origin, u fibres along x and v fibres along y (the net is a bijection
+between flat and draped cells; ``preform.export.flat_pattern``). Coordinates are mm.
+
+The outline is one of:
+
+- **a part outline** (``part_outline_m``: a closed curve on the tool, [m]), mapped to the flat
+  point by point through the net: closest point on the draped net, then the same (i + s,
+  j + t) in the flat, linear inside each half-cell. This is the outline once scenes have
+  parts;
+- **until then, the boundary of the covered net region** (valid cells in the part): the exact
+  union of its cells, with the outer boundary of each piece smoothed by a closing then an
+  opening of radius ``smoothing``·d/2 (shapely buffers), which takes out the staircase of the
+  cells (a concave step gains what a convex step loses, so the area stays that of the cells
+  to O(d²) per corner; a piece that would lose more than a quarter of its area, i.e. one only a
+  cell or two wide, keeps its staircase). Holes (cells not draped inside the ply) keep their
+  exact staircase: a cutter must not close them.
+
+The seam allowance is the outline offset outwards by ``seam_allowance_mm`` with round joins
+(area grows by a·perimeter + O(a²)). Fibre marks are short u (along x) and v (along y) lines
+on a grid inside the outline; the label names the ply and how it is laid on the tool.
+Darts and cuts are not drawn yet (scenes cannot ask for them).
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+from xml.sax.saxutils import escape
+
+import numpy as np
+from numpy.typing import NDArray
+
+from preform.drape.result import DrapeResult
+from preform.export.atomic import atomic_open, atomic_path
+from preform.export.flat_pattern import flat_pattern
+
+if TYPE_CHECKING:
+    from shapely.geometry import MultiPolygon
+
+FloatArray = NDArray[np.float64]
+MM_PER_M = 1e3
+#: DXF layers, in drawing order.
+LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS")
+
+
+def _require_shapely() -> Any:
+    try:
+        import shapely
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise ImportError('Flat patterns need shapely: pip install "preform[cutting]"') from exc
+    return shapely
+
+
+@dataclass(frozen=True)
+class FibreMark:
+    """A short line along one fibre family in the flat [mm]."""
+
+    family: str
+    start: tuple[float, float]
+    end: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class CutPattern:
+    """The ply in the flat, ready to cut: all lengths mm."""
+
+    #: The cutting outline (pieces with holes).
+    outline: MultiPolygon
+    #: The outline grown by the seam allowance (None without one).
+    allowance: MultiPolygon | None
+    seam_allowance_mm: float
+    marks: tuple[FibreMark, ...]
+    label: str
+    label_at: tuple[float, float]
+    text_height_mm: float
+    node_spacing_mm: float
+    #: Net cells in the covered region, and the fabric area they stand for (cells · d²) [mm²].
+    cell_count: int
+    cells_area_mm2: float
+    #: "part outline" or "covered net region".
+    outline_from: str
+
+    @property
+    def area_mm2(self) -> float:
+        return float(self.outline.area)
+
+    @property
+    def perimeter_mm(self) -> float:
+        return float(self.outline.length)
+
+    @property
+    def allowance_area_mm2(self) -> float | None:
+        return None if self.allowance is None else float(self.allowance.area)
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "outline_from": self.outline_from,
+            "pieces": len(self.outline.geoms),
+            "area_mm2": self.area_mm2,
+            "perimeter_mm": self.perimeter_mm,
+            "cells_area_mm2": self.cells_area_mm2,
+            "seam_allowance_mm": self.seam_allowance_mm,
+            "allowance_area_mm2": self.allowance_area_mm2,
+            "fibre_marks": len(self.marks),
+            "label": self.label,
+            "length_unit": "mm",
+        }
+
+
+def flat_points(result: DrapeResult, points_m: FloatArray) -> FloatArray:
+    """Flat positions (k, 2) [mm] of points (k, 3) [m] on or near the draped net: their closest
+    point on the net, carried to the flat through the same net coordinates (linear inside each
+    half-cell)."""
+    from preform.export.fe_mapping import closest_on_net
+
+    hit = closest_on_net(result, MM_PER_M * np.asarray(points_m, dtype=float).reshape(-1, 3))
+    i0, j0 = result.start_index
+    d_mm = MM_PER_M * result.node_spacing
+    return np.column_stack([(hit.a - i0) * d_mm, (hit.b - j0) * d_mm])
+
+
+def _as_multi(geom: Any) -> MultiPolygon:
+    from shapely.geometry import MultiPolygon, Polygon
+
+    if geom.is_empty:
+        return MultiPolygon()
+    if isinstance(geom, Polygon):
+        return MultiPolygon([geom])
+    if isinstance(geom, MultiPolygon):
+        return geom
+    polys = [g for g in getattr(geom, "geoms", []) if isinstance(g, Polygon)]
+    return MultiPolygon(polys)
+
+
+def _cells_region(result: DrapeResult) -> tuple[Any, int]:
+    from shapely.geometry import Polygon
+    from shapely.ops import unary_union
+
+    staircase = flat_pattern(result)
+    outers = [
+        Polygon(loop)
+        for loop, hole in zip(staircase.loops, staircase.holes, strict=True)
+        if not hole
+    ]
+    holes = [
+        Polygon(loop) for loop, hole in zip(staircase.loops, staircase.holes, strict=True) if hole
+    ]
+    region = unary_union(outers).difference(unary_union(holes)) if outers else Polygon()
+    return region, staircase.cell_count
+
+
+def _smooth(region: Any, radius: float) -> Any:
+    """Closing then opening of each piece's outer boundary (module docstring); holes kept."""
+    from shapely.geometry import Polygon
+    from shapely.ops import unary_union
+
+    if radius <= 0:
+        return region
+    pieces = []
+    for piece in _as_multi(region).geoms:
+        outer = Polygon(piece.exterior)
+        smooth = outer.buffer(radius, quad_segs=8).buffer(-2 * radius, quad_segs=8)
+        smooth = smooth.buffer(radius, quad_segs=8)
+        if smooth.is_empty or smooth.area < 0.75 * outer.area:
+            smooth = outer
+        holes = [Polygon(ring) for ring in piece.interiors]
+        pieces.append(smooth.difference(unary_union(holes)) if holes else smooth)
+    return unary_union(pieces)
+
+
+def _marks(outline: Any, spacing: float, length: float) -> list[FibreMark]:
+    from shapely.geometry import LineString
+
+    if outline.is_empty:
+        return []
+    x0, y0, x1, y1 = outline.bounds
+    xs = np.arange(np.floor(x0 / spacing) * spacing, x1 + spacing, spacing)
+    ys = np.arange(np.floor(y0 / spacing) * spacing, y1 + spacing, spacing)
+    marks = []
+    half = 0.5 * length
+    for x in xs.tolist():
+        for y in ys.tolist():
+            for family, (dx, dy) in (("u", (half, 0.0)), ("v", (0.0, half))):
+                seg = ((x - dx, y - dy), (x + dx, y + dy))
+                if outline.contains(LineString(seg)):
+                    marks.append(FibreMark(family, seg[0], seg[1]))
+    return marks
+
+
+def cut_pattern(
+    result: DrapeResult,
+    *,
+    seam_allowance_mm: float = 0.0,
+    ply_name: str = "ply",
+    smoothing: float = 1.0,
+    part_outline_m: FloatArray | None = None,
+    mark_spacing_mm: float | None = None,
+) -> CutPattern:
+    """The cutting pattern of a drape (module docstring). ``seam_allowance_mm`` ≥ 0;
+    ``smoothing`` scales the smoothing radius d/2 (0: the exact staircase of the cells);
+    ``part_outline_m`` (k, 3) [m] a closed curve on the tool to use as the outline;
+    ``mark_spacing_mm`` the grid of fibre marks (default: about a fifth of the pattern)."""
+    shapely = _require_shapely()
+    from shapely.geometry import Polygon
+
+    if not np.isfinite(seam_allowance_mm) or seam_allowance_mm < 0:
+        raise ValueError(f"seam_allowance_mm must be ≥ 0, got {seam_allowance_mm!r}")
+    if not np.isfinite(smoothing) or smoothing < 0:
+        raise ValueError(f"smoothing must be ≥ 0, got {smoothing!r}")
+    d_mm = MM_PER_M * result.node_spacing
+    cells, cell_count = _cells_region(result)
+    if part_outline_m is not None:
+        flat = flat_points(result, part_outline_m)
+        outline = shapely.make_valid(Polygon(flat))
+        source = "part outline"
+    else:
+        outline = _smooth(cells, 0.5 * d_mm * smoothing)
+        source = "covered net region"
+    outline = _as_multi(outline)
+    allowance = None
+    if seam_allowance_mm > 0 and not outline.is_empty:
+        allowance = _as_multi(outline.buffer(seam_allowance_mm, quad_segs=16))
+    if outline.is_empty:
+        size = d_mm
+        label_at = (0.0, 0.0)
+    else:
+        x0, y0, x1, y1 = outline.bounds
+        size = max(x1 - x0, y1 - y0)
+        point = outline.representative_point()
+        label_at = (float(point.x), float(point.y))
+    spacing = mark_spacing_mm if mark_spacing_mm is not None else max(d_mm, size / 5.0)
+    marks = _marks(outline, spacing, 0.4 * spacing)
+    orientation = float(np.degrees(result.orientation))
+    alpha = float(np.degrees(result.generator_angle))
+    label = (
+        f"{ply_name}: u fibres along x here, laid at {orientation:.1f} deg to the tool x axis "
+        f"(v at {alpha:.1f} deg from u at the start); d = {d_mm:g} mm; units mm"
+    )
+    return CutPattern(
+        outline=outline,
+        allowance=allowance,
+        seam_allowance_mm=float(seam_allowance_mm),
+        marks=tuple(marks),
+        label=label,
+        label_at=label_at,
+        text_height_mm=max(2.0, size / 80.0),
+        node_spacing_mm=d_mm,
+        cell_count=cell_count,
+        cells_area_mm2=cell_count * d_mm * d_mm,
+        outline_from=source,
+    )
+
+
+def _rings(geom: MultiPolygon | None) -> list[tuple[int, int, FloatArray]]:
+    """(piece, ring, vertices without the closing repeat); ring 0 is the outer boundary."""
+    out: list[tuple[int, int, FloatArray]] = []
+    if geom is None:
+        return out
+    for p, piece in enumerate(geom.geoms):
+        for r, ring in enumerate([piece.exterior, *piece.interiors]):
+            out.append((p, r, np.asarray(ring.coords, dtype=float)[:-1]))
+    return out
+
+
+def write_cut_pattern_csv(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
+    """CSV: ``layer`` (outline / allowance), ``piece``, ``ring`` (0 outer, ≥ 1 holes),
+    ``vertex``, ``x_mm``, ``y_mm``; one row per vertex."""
+    with atomic_open(path, "w", encoding="utf-8") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(["layer", "piece", "ring", "vertex", "x_mm", "y_mm"])
+        for layer, geom in (("outline", pattern.outline), ("allowance", pattern.allowance)):
+            for piece, ring, pts in _rings(geom):
+                for v, (x, y) in enumerate(pts.tolist()):
+                    writer.writerow([layer, piece, ring, v, f"{x:.6f}", f"{y:.6f}"])
+
+
+def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
+    """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS and LABELS: closed
+    LWPOLYLINEs for every ring, LINEs for the fibre marks, TEXT for the label."""
+    try:
+        import ezdxf
+        from ezdxf import units
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise ImportError('DXF output needs ezdxf: pip install "preform[cutting]"') from exc
+    doc = ezdxf.new("R2010")
+    doc.units = units.MM
+    doc.header["$MEASUREMENT"] = 1  # metric
+    for name, colour in zip(LAYERS, (7, 1, 5, 3), strict=True):
+        doc.layers.add(name, color=colour)
+    msp = doc.modelspace()
+    for layer, geom in (("OUTLINE", pattern.outline), ("ALLOWANCE", pattern.allowance)):
+        for _, _, pts in _rings(geom):
+            msp.add_lwpolyline(pts.tolist(), close=True, dxfattribs={"layer": layer})
+    for mark in pattern.marks:
+        msp.add_line(mark.start, mark.end, dxfattribs={"layer": "FIBRE_MARKS"})
+    text = msp.add_text(
+        pattern.label, height=pattern.text_height_mm, dxfattribs={"layer": "LABELS"}
+    )
+    text.set_placement(pattern.label_at)
+    with atomic_path(path) as tmp:
+        doc.saveas(tmp)
+
+
+def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
+    """SVG at 1:1 (mm; y negated so it looks as the DXF): the outline filled, the allowance
+    dashed, fibre marks in blue (u) and red (v), the label as text."""
+    geoms = [g for g in (pattern.allowance, pattern.outline) if g is not None and not g.is_empty]
+    margin = 5.0
+    if geoms:
+        bounds = np.array([g.bounds for g in geoms])
+        x0, y0 = bounds[:, 0].min(), bounds[:, 1].min()
+        x1, y1 = bounds[:, 2].max(), bounds[:, 3].max()
+    else:
+        x0 = y0 = x1 = y1 = 0.0
+    width, height = x1 - x0 + 2 * margin, y1 - y0 + 2 * margin
+    stroke = max(0.1, 0.05 * pattern.node_spacing_mm)
+
+    def path_d(geom: MultiPolygon | None) -> str:
+        parts = []
+        for _, _, pts in _rings(geom):
+            parts.append("M " + " L ".join(f"{x:.4f},{-y:.4f}" for x, y in pts.tolist()) + " Z")
+        return " ".join(parts)
+
+    lines = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width:.4f}mm" height="{height:.4f}mm" '
+        f'viewBox="{x0 - margin:.4f} {-y1 - margin:.4f} {width:.4f} {height:.4f}">',
+        f"  <title>{escape(pattern.label)}</title>",
+    ]
+    if pattern.allowance is not None:
+        lines.append(
+            f'  <path id="allowance" d="{path_d(pattern.allowance)}" fill="none" '
+            f'stroke="#666666" stroke-dasharray="{4 * stroke:.3f}" stroke-width="{stroke:.4f}"/>'
+        )
+    lines.append(
+        f'  <path id="outline" d="{path_d(pattern.outline)}" fill="#d9e6f2" '
+        f'fill-rule="evenodd" stroke="#1f3b57" stroke-width="{stroke:.4f}"/>'
+    )
+    for mark in pattern.marks:
+        colour = "#1f3b73" if mark.family == "u" else "#9a2a1f"
+        (ax, ay), (bx, by) = mark.start, mark.end
+        lines.append(
+            f'  <line class="fibre-{mark.family}" x1="{ax:.4f}" y1="{-ay:.4f}" x2="{bx:.4f}" '
+            f'y2="{-by:.4f}" stroke="{colour}" stroke-width="{stroke:.4f}"/>'
+        )
+    lx, ly = pattern.label_at
+    lines.append(
+        f'  <text x="{lx:.4f}" y="{-ly:.4f}" font-size="{pattern.text_height_mm:.3f}">'
+        f"{escape(pattern.label)}</text>"
+    )
+    lines.append("</svg>")
+    with atomic_open(path, "w", encoding="utf-8") as handle:
+        handle.write("\n".join(lines) + "\n")

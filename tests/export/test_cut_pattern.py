@@ -1,0 +1,150 @@
+"""The cutting pattern: area, seam allowance, part outlines through the net, and the files read
+back (ezdxf, XML, CSV)."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import ezdxf
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from preform.drape.net import drape
+from preform.drape.ply import PlyOutline
+from preform.export.cut_pattern import (
+    cut_pattern,
+    flat_points,
+    write_cut_pattern_csv,
+    write_cut_pattern_dxf,
+    write_cut_pattern_svg,
+)
+from preform.plugins.surfaces.basic import Hemisphere, Plane
+
+
+def hemisphere_drape(d: float):
+    return drape(
+        Hemisphere(0.1),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=d,
+        ply=PlyOutline.rectangle((0.4, 0.4)),
+        generator_angle_rad=np.radians(80.0),
+    )
+
+
+HEMI = hemisphere_drape(0.005)
+
+
+@pytest.mark.parametrize("d", [0.01, 0.005])
+def test_area_is_the_covered_fabric_area_and_the_outline_is_not_a_staircase(d) -> None:
+    result = hemisphere_drape(d)
+    pattern = cut_pattern(result)
+    cells = np.count_nonzero(result.valid & result.in_part)
+    assert pattern.cell_count == cells
+    # measured: 2e-4 (d = 10 mm), 8e-6 (d = 5 mm) of the fabric area d² per cell
+    assert abs(pattern.area_mm2 - cells * (1e3 * d) ** 2) < 1e-3 * cells * (1e3 * d) ** 2
+    staircase = cut_pattern(result, smoothing=0.0)
+    assert staircase.area_mm2 == pytest.approx(cells * (1e3 * d) ** 2, rel=1e-12)
+    # a staircase only turns by 90°; the smoothed outline has no right-angle corner
+    ring = np.asarray(pattern.outline.geoms[0].exterior.coords)[:-1]
+    e1 = ring - np.roll(ring, 1, axis=0)
+    e2 = np.roll(ring, -1, axis=0) - ring
+    cos = np.sum(e1 * e2, axis=1) / np.linalg.norm(e1, axis=1) / np.linalg.norm(e2, axis=1)
+    assert np.min(cos) > 0.5  # no turn sharper than 60° at any vertex
+    assert pattern.perimeter_mm < 0.9 * staircase.perimeter_mm
+
+
+@settings(max_examples=15, deadline=None)
+@given(a=st.floats(0.1, 8.0))
+def test_seam_allowance_grows_the_area_by_a_times_the_perimeter(a) -> None:
+    pattern = cut_pattern(HEMI, seam_allowance_mm=a)
+    growth = pattern.allowance_area_mm2 - pattern.area_mm2
+    # round joins: a·P + a² × (total turning at convex corners, at most ~2π over a closed curve)
+    assert abs(growth - a * pattern.perimeter_mm) <= 2 * np.pi * a * a + 1e-6 * pattern.area_mm2
+    assert pattern.allowance.contains(pattern.outline)
+
+
+def test_rectangle_on_a_plate_flattens_to_itself_with_rounded_corners_only() -> None:
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.2, 0.1)),
+        orientation_rad=0.7,
+        generator_angle_rad=np.radians(65.0),
+    )
+    pattern = cut_pattern(result)
+    assert pattern.outline.bounds == pytest.approx((-100.0, -50.0, 100.0, 50.0))
+    r = 5.0  # d/2: the opening rounds each of the four convex corners
+    assert pattern.area_mm2 == pytest.approx(200 * 100 - 4 * (1 - np.pi / 4) * r * r, rel=1e-3)
+    assert "laid at 40.1 deg" in pattern.label
+    assert {m.family for m in pattern.marks} == {"u", "v"}
+    for mark in pattern.marks:
+        (x0, y0), (x1, y1) = mark.start, mark.end
+        assert (y0 == y1) if mark.family == "u" else (x0 == x1)
+
+
+def test_part_outline_maps_through_the_net_inside_cells() -> None:
+    """A circle of radius 40 mm on a plate, draped at α = 60°: in the flat it is the ellipse
+    the inverse shear makes of it, area π·40²/sin 60° (the flat is the unsheared fabric)."""
+    alpha = np.radians(60.0)
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.3, 0.3)),
+        generator_angle_rad=alpha,
+    )
+    phi = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    circle = np.column_stack([0.04 * np.cos(phi), 0.04 * np.sin(phi), np.zeros_like(phi)])
+    pattern = cut_pattern(result, part_outline_m=circle)
+    assert pattern.outline_from == "part outline"
+    polygon_area = 0.5 * 400 * 40**2 * np.sin(2 * np.pi / 400)
+    assert pattern.area_mm2 == pytest.approx(polygon_area / np.sin(alpha), rel=1e-9)
+    # net coordinates: the point d·(a, b) of the flat is at d·(a·t_u + b·t_v) on the plate
+    xy = flat_points(result, circle[:3])
+    t_u, t_v = np.array([1.0, 0.0]), np.array([np.cos(alpha), np.sin(alpha)])
+    back = xy[:, :1] * t_u + xy[:, 1:] * t_v
+    np.testing.assert_allclose(back, 1e3 * circle[:3, :2], atol=1e-9)
+
+
+def test_files_read_back(tmp_path) -> None:
+    pattern = cut_pattern(HEMI, seam_allowance_mm=10.0, ply_name="E-BX 318, ply 1")
+    write_cut_pattern_dxf(pattern, tmp_path / "p.dxf")
+    doc = ezdxf.readfile(tmp_path / "p.dxf")
+    assert doc.units == ezdxf.units.MM
+    assert {"OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS"} <= {
+        layer.dxf.name for layer in doc.layers
+    }
+    msp = doc.modelspace()
+    outline = [e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "OUTLINE"]
+    assert len(outline) == 1 and outline[0].closed
+    pts = np.array([p[:2] for p in outline[0].get_points()])
+    ring = np.asarray(pattern.outline.geoms[0].exterior.coords)[:-1]
+    np.testing.assert_allclose(pts, ring, atol=1e-9)
+    assert len(msp.query("LINE")) == len(pattern.marks) > 4
+    texts = [e.dxf.text for e in msp.query("TEXT")]
+    assert texts == [pattern.label] and "E-BX 318, ply 1" in texts[0]
+
+    write_cut_pattern_svg(pattern, tmp_path / "p.svg")
+    root = ET.parse(tmp_path / "p.svg").getroot()
+    assert root.attrib["width"].endswith("mm")
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    ids = [p.attrib["id"] for p in root.findall("s:path", ns)]
+    assert ids == ["allowance", "outline"]
+    assert len(root.findall("s:line", ns)) == len(pattern.marks)
+
+    write_cut_pattern_csv(pattern, tmp_path / "p.csv")
+    table = pd.read_csv(tmp_path / "p.csv")
+    out = table[table.layer == "outline"][["x_mm", "y_mm"]].to_numpy()
+    x, y = out[:, 0], out[:, 1]
+    area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    assert area == pytest.approx(pattern.area_mm2, rel=1e-6)
+    assert set(table.layer) == {"outline", "allowance"}
+
+
+def test_bad_allowance_is_refused() -> None:
+    with pytest.raises(ValueError, match="seam_allowance_mm"):
+        cut_pattern(HEMI, seam_allowance_mm=-1.0)
