@@ -21,9 +21,10 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 def preform_register_steps(register: StepRegistrar) -> None:
     from preform.drape import search_steps
     from preform.drape import steps as drape_steps
+    from preform.export import export_steps
     from preform.pipeline.core_steps import STEPS
 
-    for step in [*STEPS, *drape_steps.STEPS, *search_steps.STEPS]:
+    for step in [*STEPS, *drape_steps.STEPS, *search_steps.STEPS, *export_steps.STEPS]:
         register.add(step)
 
 
@@ -31,7 +32,13 @@ def preform_register_steps(register: StepRegistrar) -> None:
 def preform_register_exporters(register: ExporterRegistrar) -> None:
     from preform.drape import search_steps
     from preform.drape import steps as drape_steps
+    from preform.export import export_steps
     from preform.pipeline.core_steps import EXPORTERS
 
-    for step in [*EXPORTERS, *drape_steps.EXPORTERS, *search_steps.EXPORTERS]:
+    for step in [
+        *EXPORTERS,
+        *drape_steps.EXPORTERS,
+        *search_steps.EXPORTERS,
+        *export_steps.EXPORTERS,
+    ]:
         register.add(step)

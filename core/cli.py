@@ -424,9 +424,11 @@ def run_report_lines(report: Any) -> list[str]:
 
 
 def _add_physics_commands() -> None:
+    from preform.pipeline.export_command import export_command
     from preform.shear.commands import fit_command, shear_command
     from preform.tradeoff import bench
 
+    cli.add_command(export_command, "export")
     cli.add_command(shear_command, "shear")
     cli.add_command(fit_command, "fit")
     cli.add_command(bench, "bench")

@@ -80,10 +80,13 @@ def abaqus_include_text(
             f"{summary['elements_above_thickness_cap']} (not capped; "
             f"ELSET={name}_ABOVE_CAP)."
         )
-    out.append(f"*ELSET, ELSET={name}_COVERED")
-    out += _set_lines(ids[cov]) or ["** (none)"]
-    out.append(f"*ELSET, ELSET={name}_UNCOVERED")
-    out += _set_lines(ids[~cov]) or ["** (none)"]
+    for label, members in (("COVERED", ids[cov]), ("UNCOVERED", ids[~cov])):
+        # Abaqus refuses an *ELSET without data lines: an empty set is said in a comment
+        if members.size:
+            out.append(f"*ELSET, ELSET={name}_{label}")
+            out += _set_lines(members)
+        else:
+            out.append(f"** ELSET {name}_{label} would be empty: no such element")
     for flag, label in (
         (mapping.past_locking, "PAST_LOCKING"),
         (mapping.past_failure, "PAST_FAILURE"),

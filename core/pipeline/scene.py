@@ -15,6 +15,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
+from preform.pipeline.export_section import ExportSection
 from preform.registry import Registry
 from preform.validation import located_errors
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
@@ -233,6 +234,9 @@ class Scene(BaseModel):
     )
     materials: str | None = Field(
         default=None, description="Glob of fabric names this scene applies to (default all)."
+    )
+    export: ExportSection | None = Field(
+        default=None, description="Mapping onto your FE mesh and the cutting pattern."
     )
     outputs: list[str] = Field(min_length=1, description="Products and files to produce.")
     #: Directory of the scene file (resolves relative tool mesh paths); not from YAML.

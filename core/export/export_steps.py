@@ -1,0 +1,221 @@
+"""Pipeline steps of the downstream exports: the drape mapped onto the user's FE mesh, and the
+cutting pattern. Outputs a scene can ask for:
+
+| output | files | needs |
+|---|---|---|
+| ``mesh_mapping`` | (none: the mapping, for the others) | ``export.mesh`` |
+| ``element_table`` | ``elements.csv`` (one row per element, mm, deg) | ``export.mesh`` |
+| ``element_vtu`` | ``elements.vtu`` (the user's mesh with the same fields, mm) | ``export.mesh`` |
+| ``abaqus_include`` | ``drape_abaqus.inc`` | ``export.mesh`` |
+| ``lsdyna_include`` | ``drape_lsdyna.k`` | ``export.mesh`` |
+| ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm) | the drape |
+
+Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
+elements covered is the covered fraction) and are listed in every file; elements above the
+compaction cap are a warning. A mesh that cannot be read fails the case with the file's error.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+from typing import Any
+
+from preform.pipeline.export_section import ExportSection
+from preform.pipeline.status import CaseFailure
+from preform.pipeline.step import CaseContext, Step
+
+
+def export_options(ctx: CaseContext) -> ExportSection:
+    section = getattr(ctx.scene, "export", None)
+    return section if section is not None else ExportSection()
+
+
+def nominal_thickness_mm(ctx: CaseContext, options: ExportSection) -> float | None:
+    """t0 [mm]: the scene's, else the fabric's derived ``thickness_mm``, else unknown."""
+    if options.nominal_thickness_mm is not None:
+        return float(options.nominal_thickness_mm)
+    derived: dict[str, Any] = {}
+    # a fabric whose derivation fails still exports, only without a thickness in mm
+    with contextlib.suppress(Exception):
+        derived = dict(ctx.fabric.derived())
+    value = derived.get("thickness_mm")
+    return float(value) if isinstance(value, (int, float)) and value > 0 else None
+
+
+def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.fe_mapping import map_to_mesh
+    from preform.export.shell_mesh import read_shell_mesh
+
+    options = export_options(ctx)
+    if options.mesh is None:
+        raise CaseFailure("export.mesh: the scene names no FE mesh to map the drape onto")
+    path = Path(ctx.scene.base_dir) / options.mesh
+    try:
+        mesh = read_shell_mesh(path, unit_mm=options.mesh_unit_mm)
+    except (ValueError, OSError) as error:
+        raise CaseFailure(f"export.mesh: {error}") from None
+    ply = ctx.products["drape"]
+    mapping = map_to_mesh(
+        ply.result,
+        mesh,
+        ply.energy,
+        reference_direction=options.reference_direction,
+        nominal_thickness_mm=nominal_thickness_mm(ctx, options),
+        thickness_cap_ratio=options.thickness_cap_ratio,
+        max_gap_mm=options.max_gap_mm,
+    )
+    summary = mapping.summary()
+    for key in (
+        "elements",
+        "elements_covered",
+        "elements_uncovered",
+        "elements_past_locking",
+        "elements_past_failure",
+        "elements_above_thickness_cap",
+        "max_thickness_ratio",
+    ):
+        if key in summary:
+            ctx.summary[f"mesh_{key}"] = summary[key]
+    uncovered = summary["elements_uncovered"]
+    if uncovered:
+        first = ", ".join(str(e) for e in summary["uncovered_element_ids"][:10])
+        more = " ..." if uncovered > 10 else ""
+        ctx.partial(
+            f"the drape covers {summary['elements_covered']} of {summary['elements']} "
+            f"elements of {options.mesh}; {uncovered} uncovered (ids {first}{more}) are listed "
+            "in the exports and given no value",
+            summary["covered_fraction"],
+        )
+    capped = summary["elements_above_thickness_cap"]
+    if capped:
+        ctx.warn(
+            f"{capped} element(s) of {options.mesh} have t/t0 above the compaction cap "
+            f"{options.thickness_cap_ratio:g} (up to {summary['max_thickness_ratio']:.3g}); "
+            "the thickness is reported as computed, not capped"
+        )
+    return {"mesh_mapping": mapping}
+
+
+def write_element_table_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.element_table import write_element_table
+
+    write_element_table(ctx.products["mesh_mapping"], ctx.case_dir / "elements.csv")
+    return {"element_table": "elements.csv"}
+
+
+def write_element_vtu_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.mapped_vtu import write_mapped_vtu
+
+    write_mapped_vtu(ctx.products["mesh_mapping"], ctx.case_dir / "elements.vtu")
+    return {"element_vtu": "elements.vtu"}
+
+
+def write_abaqus_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.abaqus import write_abaqus_include
+
+    write_abaqus_include(
+        ctx.products["mesh_mapping"],
+        ctx.case_dir / "drape_abaqus.inc",
+        prefix=export_options(ctx).prefix,
+        title=f"{ctx.fabric.name}, scene {ctx.scene.name}",
+    )
+    return {"abaqus_include": "drape_abaqus.inc"}
+
+
+def write_lsdyna_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.lsdyna import write_lsdyna_include
+
+    write_lsdyna_include(
+        ctx.products["mesh_mapping"],
+        ctx.case_dir / "drape_lsdyna.k",
+        part_id=export_options(ctx).part_id,
+        title=f"{ctx.fabric.name}, scene {ctx.scene.name}",
+    )
+    return {"lsdyna_include": "drape_lsdyna.k"}
+
+
+def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.cut_pattern import (
+        cut_pattern,
+        write_cut_pattern_csv,
+        write_cut_pattern_dxf,
+        write_cut_pattern_svg,
+    )
+
+    ply = ctx.products["drape"]
+    pattern = cut_pattern(
+        ply.result,
+        seam_allowance_mm=export_options(ctx).seam_allowance_mm,
+        ply_name=f"{ctx.fabric.name} ({ctx.scene.name})",
+    )
+    files = ["cut_pattern.dxf", "cut_pattern.svg", "cut_pattern.csv"]
+    write_cut_pattern_dxf(pattern, ctx.case_dir / files[0])
+    write_cut_pattern_svg(pattern, ctx.case_dir / files[1])
+    write_cut_pattern_csv(pattern, ctx.case_dir / files[2])
+    ctx.summary["cut_pattern_area_mm2"] = pattern.area_mm2
+    ctx.summary["cut_pattern_perimeter_mm"] = pattern.perimeter_mm
+    if pattern.allowance_area_mm2 is not None:
+        ctx.summary["cut_pattern_allowance_area_mm2"] = pattern.allowance_area_mm2
+    return {"cut_pattern": files}
+
+
+STEPS = [
+    Step(
+        "mesh_mapping",
+        ("mesh_mapping",),
+        ("drape",),
+        "1",
+        run_mesh_mapping,
+        "The drape mapped onto the scene's FE mesh (export.mesh): directions, shear, thickness.",
+        scene_sections=("export",),
+    ),
+]
+
+EXPORTERS = [
+    Step(
+        "element_table",
+        ("element_table",),
+        ("mesh_mapping",),
+        "1",
+        write_element_table_step,
+        "elements.csv: one row per FE element (mm, deg), uncovered ones included",
+        writes_files=True,
+    ),
+    Step(
+        "element_vtu",
+        ("element_vtu",),
+        ("mesh_mapping",),
+        "1",
+        write_element_vtu_step,
+        "elements.vtu: the FE mesh with the mapped fields, for ParaView (mm)",
+        writes_files=True,
+    ),
+    Step(
+        "abaqus_include",
+        ("abaqus_include",),
+        ("mesh_mapping",),
+        "1",
+        write_abaqus_step,
+        "drape_abaqus.inc: *DISTRIBUTION/*ORIENTATION per element, thickness, element sets",
+        writes_files=True,
+    ),
+    Step(
+        "lsdyna_include",
+        ("lsdyna_include",),
+        ("mesh_mapping",),
+        "1",
+        write_lsdyna_step,
+        "drape_lsdyna.k: *ELEMENT_SHELL_BETA per covered element, uncovered set",
+        writes_files=True,
+    ),
+    Step(
+        "cut_pattern",
+        ("cut_pattern",),
+        ("drape",),
+        "1",
+        write_cut_pattern_step,
+        "cut_pattern.dxf/.svg/.csv: smooth outline, seam allowance, fibre marks, label (mm)",
+        writes_files=True,
+    ),
+]

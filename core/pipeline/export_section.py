@@ -1,0 +1,58 @@
+"""The scene's ``export`` section: what the downstream exporters need (the user's mesh, the
+reference direction, thickness, seam allowance). Lengths in mm, as everywhere in a scene."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+
+class ExportSection(BaseModel):
+    """Options of the mesh-mapping and cutting-pattern exporters."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    mesh: str | None = Field(
+        default=None,
+        description="The user's shell mesh of the part (Abaqus .inp, Nastran .bdf, or any "
+        "format meshio reads, e.g. .stl, .obj, .vtu), relative to the scene file.",
+    )
+    mesh_unit_mm: float = Field(
+        default=1.0, gt=0, description="Length of one mesh file unit [mm] (1000 for metres)."
+    )
+    reference_direction: tuple[float, float, float] = Field(
+        default=(1.0, 0.0, 0.0),
+        description="Global direction the fibre angles are measured from (projected into "
+        "each element).",
+    )
+    nominal_thickness_mm: float | None = Field(
+        default=None,
+        gt=0,
+        description="Undeformed ply thickness t0 [mm]; default: the fabric's own "
+        "(derived thickness_mm) where it has one.",
+    )
+    thickness_cap_ratio: float | None = Field(
+        default=None,
+        gt=1,
+        description="Compaction limit of t/t0: elements above it are reported, not capped.",
+    )
+    max_gap_mm: float | None = Field(
+        default=None,
+        gt=0,
+        description="Largest distance [mm] from an element centroid to the draped net for "
+        "the element to count as covered (default: the node spacing).",
+    )
+    seam_allowance_mm: float = Field(
+        default=0.0, ge=0, description="Seam allowance around the cutting pattern [mm]."
+    )
+    prefix: str = Field(
+        default="PREFORM", description="Name prefix of Abaqus sets, distributions, orientations."
+    )
+    part_id: int = Field(
+        default=1, ge=1, description="LS-DYNA PID of elements whose mesh gives none."
+    )
+
+    @field_validator("reference_direction")
+    @classmethod
+    def _nonzero(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        if sum(x * x for x in v) == 0:
+            raise ValueError("the reference direction must not be the zero vector")
+        return v

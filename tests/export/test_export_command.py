@@ -1,0 +1,159 @@
+"""`preform export` and the exporter steps of a scene, end to end."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+from click.testing import CliRunner
+
+from preform.cli import cli
+from preform.pipeline.scene import bundled_scene_dir
+
+SKIN = bundled_scene_dir().parent / "tools" / "hemisphere_skin.inp"
+
+SCENE = """\
+name: small-cap
+tool: {{surface: hemisphere, radius_mm: 100}}
+ply: {{node_spacing_mm: 5, size_mm: [100, 100]}}
+start: {{point_mm: [0, 0], orientation_deg: 0, generator_angle_deg: 90}}
+export: {{mesh: {mesh}, seam_allowance_mm: 4, thickness_cap_ratio: 1.001}}
+outputs: [drape, abaqus_include, lsdyna_include, element_table, element_vtu, cut_pattern]
+"""
+
+
+def write_scene(tmp_path: Path) -> Path:
+    path = tmp_path / "small-cap.yaml"
+    path.write_text(SCENE.format(mesh=SKIN))
+    return path
+
+
+def elset(text: str, name: str) -> list[int]:
+    lines = text.splitlines()
+    at = lines.index(f"*ELSET, ELSET={name}")
+    out: list[int] = []
+    for line in lines[at + 1 :]:
+        if line.startswith("*"):
+            break
+        out += [int(v) for v in line.split(",") if v.strip()]
+    return out
+
+
+def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) -> None:
+    scene = write_scene(tmp_path)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "export",
+            "abaqus",
+            "table",
+            "flat-pattern",
+            "--material",
+            "plain-weave-600",
+            "--scene",
+            str(scene),
+            "--out",
+            str(out),
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.output)
+    assert report["status"] == "partial"  # a 100 mm ply cannot cover the 176 mm skin
+    assert report["written"] == {
+        "abaqus": "drape_abaqus.inc",
+        "table": "elements.csv",
+        "flat-pattern": ["cut_pattern.dxf", "cut_pattern.svg", "cut_pattern.csv"],
+    }
+    mesh = report["mesh"]
+    assert mesh["elements"] == 392 and 0 < mesh["elements_uncovered"] < 392
+    table = pd.read_csv(out / "elements.csv")
+    assert sorted(table.loc[~table.covered, "element_id"]) == sorted(mesh["uncovered_element_ids"])
+    text = (out / "drape_abaqus.inc").read_text()
+    assert sorted(elset(text, "PREFORM_UNCOVERED")) == sorted(mesh["uncovered_element_ids"])
+    assert report["units"] == {"length": "mm", "angle": "deg"}
+    assert any("compaction cap" in w for w in report["warnings"])
+    assert report["cut_pattern_allowance_area_mm2"] > report["cut_pattern_area_mm2"]
+
+
+def test_export_command_overrides_and_refusals(tmp_path) -> None:
+    scene = write_scene(tmp_path)
+    runner = CliRunner()
+    bad = runner.invoke(cli, ["export", "abaqus", "--material", "nope", "--scene", str(scene)])
+    assert bad.exit_code == 2 and "unknown material" in bad.output
+    wrong = runner.invoke(
+        cli,
+        [
+            "export",
+            "table",
+            "--material",
+            "plain-weave-600",
+            "--scene",
+            "hemisphere",
+            "--reference-direction",
+            "0,0,0",
+        ],
+    )
+    assert wrong.exit_code == 2
+    no_mesh = runner.invoke(
+        cli, ["export", "lsdyna", "--material", "plain-weave-600", "--scene", "hemisphere"]
+    )
+    assert no_mesh.exit_code == 2 and "--mesh" in no_mesh.output
+    missing = runner.invoke(
+        cli,
+        [
+            "export",
+            "table",
+            "--material",
+            "plain-weave-600",
+            "--scene",
+            str(scene),
+            "--mesh",
+            str(tmp_path / "absent.inp"),
+            "--out",
+            str(tmp_path / "o"),
+            "--json",
+        ],
+    )
+    assert missing.exit_code == 1
+    assert "export.mesh" in json.loads(missing.output)["error"]
+
+
+def test_scene_outputs_run_in_the_pipeline_and_mark_the_case_partial(tmp_path) -> None:
+    scene = write_scene(tmp_path)
+    out = tmp_path / "run"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "pipeline",
+            "run",
+            "--scene",
+            str(scene),
+            "--materials",
+            "plain-weave-600",
+            "--out",
+            str(out),
+            "--engine",
+            "serial",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    case = out / "small-cap" / "plain-weave-600"
+    summary = json.loads((case / "summary.json").read_text())
+    assert summary["status"] == "partial"
+    covered = summary["mesh_elements_covered"]
+    assert summary["complete"]  # the drape covers its ply; the mesh reaches beyond it
+    assert summary["covered_fraction"] == covered / 392
+    assert any("uncovered" in reason for reason in summary["reasons"])
+    for name in (
+        "drape_abaqus.inc",
+        "drape_lsdyna.k",
+        "elements.csv",
+        "elements.vtu",
+        "cut_pattern.dxf",
+        "cut_pattern.svg",
+        "cut_pattern.csv",
+    ):
+        assert (case / name).is_file(), name
