@@ -10,8 +10,8 @@ How (and how accurate):
 2. **Covered or not.** An element is covered when that closest point is the foot of a
    perpendicular (its offset along the net's surface is at most 5 % of the node spacing d, so
    the centroid is not beyond the net's edge) and the gap normal to the net is at most
-   ``max_gap_mm`` (default d, which tolerates a mesh faceted differently from the tool).
-   Elements that are not covered are *reported* (``covered`` False, NaN fields, counted and
+   ``max_gap_mm`` (default d, which tolerates a mesh faceted differently from the tool), and
+   the element has an area (a degenerate one has no plane). Elements that are not covered are *reported* (``covered`` False, NaN fields, counted and
    listed), never given a default value.
 3. **Interpolation inside cells.** The drape's fields live at cell centres (i + ½, j + ½);
    a covered element gets the bilinear interpolation of the four cell centres around
@@ -322,6 +322,8 @@ def map_to_mesh(
         hit = closest_on_net(result, centroid, region)
         gap = hit.gap_mm
         covered = (hit.tangential_mm <= EDGE_TOLERANCE * d_mm) & (gap <= gap_limit)
+        # a degenerate element (zero area) has no plane to put a direction in
+        covered &= np.all(np.isfinite(normal), axis=1)
         cell_i = np.where(covered, hit.cell_i, -1)
         cell_j = np.where(covered, hit.cell_j, -1)
         a_coord, b_coord = hit.a, hit.b

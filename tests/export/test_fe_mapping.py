@@ -314,3 +314,55 @@ def test_readers_keep_abaqus_and_nastran_labels(tmp_path) -> None:
     with pytest.raises(ValueError, match="no shell elements"):
         (tmp_path / "empty.inp").write_text("*NODE\n1, 0, 0, 0\n")
         read_shell_mesh(tmp_path / "empty.inp")
+
+
+def test_our_own_tool_mesh_reads_through_meshio_and_maps() -> None:
+    """The bundled hemisphere STL (mm): triangles labelled by position, every element the
+    drape reaches is covered, and each mapped direction lies in its triangle's plane."""
+    from preform.pipeline.scene import bundled_scene_dir
+
+    mesh = read_shell_mesh(bundled_scene_dir().parent / "tools" / "hemisphere_r100.stl")
+    assert mesh.labels_from == "position" and mesh.is_triangle.all()
+    result = drape(
+        Hemisphere(0.1),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.005,
+        ply=PlyOutline.rectangle((0.12, 0.12)),
+    )
+    mapping = map_to_mesh(result, mesh)
+    cov = mapping.covered
+    assert 0 < cov.sum() < mesh.n_elements
+    # every element whose centroid is within 40 mm of the axis lies under the 120 mm ply
+    near_axis = np.hypot(*mapping.centroid_mm[:, :2].T) < 40.0
+    assert near_axis.any() and cov[near_axis].all()
+    dots = np.abs(np.sum(mapping.fibre_u[cov] * mapping.normal[cov], axis=1))
+    assert dots.max() < 1e-9
+    np.testing.assert_allclose(np.linalg.norm(mapping.fibre_v[cov], axis=1), 1.0)
+
+
+def test_far_and_degenerate_elements_are_not_covered() -> None:
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.1, 0.1)),
+    )
+    pts = np.array(
+        [
+            [0, 0, 0],
+            [10, 0, 0],
+            [10, 10, 0],
+            [0, 10, 0],
+            [0, 0, 30],
+            [10, 0, 30],
+            [10, 10, 30],
+            [20, 0, 0],
+        ],
+        float,
+    )
+    # on the ply; 30 mm above it (gap > d = 10 mm); a zero-area sliver on the ply
+    mesh = shell_mesh(pts, [[0, 1, 2, 3], [4, 5, 6], [0, 1, 7]])
+    mapping = map_to_mesh(result, mesh)
+    assert mapping.covered.tolist() == [True, False, False]
+    np.testing.assert_allclose(mapping.gap_mm[1], 30.0)
+    assert map_to_mesh(result, mesh, max_gap_mm=31.0).covered.tolist() == [True, True, False]
