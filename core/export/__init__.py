@@ -6,6 +6,7 @@ writer runs.
 """
 
 from preform.export.abaqus import write_abaqus_include
+from preform.export.ansys import write_ansys_macro
 from preform.export.cut_pattern import (
     cut_pattern,
     write_cut_pattern_csv,
@@ -44,6 +45,7 @@ __all__ = [
     "shell_mesh",
     "unit_cell_figure",
     "write_abaqus_include",
+    "write_ansys_macro",
     "write_cut_pattern_csv",
     "write_cut_pattern_dxf",
     "write_cut_pattern_svg",

@@ -8,6 +8,7 @@ cutting pattern. Outputs a scene can ask for:
 | ``element_vtu`` | ``elements.vtu`` (the user's mesh with the same fields, mm) | ``export.mesh`` |
 | ``abaqus_include`` | ``drape_abaqus.inc`` | ``export.mesh`` |
 | ``lsdyna_include`` | ``drape_lsdyna.k`` | ``export.mesh`` |
+| ``ansys_macro`` | ``drape_ansys.mac`` (APDL: LOCAL + EMODIF ESYS per element) | ``export.mesh`` |
 | ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm) | the drape |
 
 Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
@@ -135,6 +136,17 @@ def write_lsdyna_step(ctx: CaseContext) -> dict[str, Any]:
     return {"lsdyna_include": "drape_lsdyna.k"}
 
 
+def write_ansys_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.ansys import write_ansys_macro
+
+    write_ansys_macro(
+        ctx.products["mesh_mapping"],
+        ctx.case_dir / "drape_ansys.mac",
+        prefix=export_options(ctx).prefix,
+    )
+    return {"ansys_macro": "drape_ansys.mac"}
+
+
 def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.cut_pattern import (
         cut_pattern,
@@ -207,6 +219,15 @@ EXPORTERS = [
         "1",
         write_lsdyna_step,
         "drape_lsdyna.k: *ELEMENT_SHELL_BETA per covered element, uncovered set",
+        writes_files=True,
+    ),
+    Step(
+        "ansys_macro",
+        ("ansys_macro",),
+        ("mesh_mapping",),
+        "1",
+        write_ansys_step,
+        "drape_ansys.mac: APDL element coordinate systems (u fibres), components",
         writes_files=True,
     ),
     Step(

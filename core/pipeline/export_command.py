@@ -18,12 +18,13 @@ import click
 TARGETS: dict[str, str] = {
     "abaqus": "abaqus_include",
     "lsdyna": "lsdyna_include",
+    "ansys": "ansys_macro",
     "table": "element_table",
     "vtu": "element_vtu",
     "flat-pattern": "cut_pattern",
 }
 #: Targets that need the user's FE mesh.
-NEEDS_MESH = frozenset({"abaqus", "lsdyna", "table", "vtu"})
+NEEDS_MESH = frozenset({"abaqus", "lsdyna", "ansys", "table", "vtu"})
 
 
 def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, float] | None:
@@ -80,9 +81,9 @@ def export_command(
     libraries: tuple[str, ...],
     as_json: bool,
 ) -> None:
-    """Write TARGETS (abaqus, lsdyna, table, vtu, flat-pattern) for one fabric's drape.
+    """Write TARGETS (abaqus, lsdyna, ansys, table, vtu, flat-pattern) for one fabric's drape.
 
-    abaqus/lsdyna/table/vtu map the drape onto your shell mesh (--mesh, or the scene's
+    abaqus/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the scene's
     export.mesh); flat-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
     mm and degrees. Exit code 0 when written (also when some elements are not covered: they
     are listed), 1 when the drape or the export failed, 2 for bad input.
@@ -122,7 +123,7 @@ def export_command(
         if value is not None:
             section[key] = list(value) if isinstance(value, tuple) else value
     if NEEDS_MESH & set(targets) and "mesh" not in section:
-        click.echo("abaqus, lsdyna, table and vtu need your mesh: --mesh FILE", err=True)
+        click.echo("abaqus, lsdyna, ansys, table and vtu need your mesh: --mesh FILE", err=True)
         sys.exit(2)
     data["export"] = section
     data["outputs"] = [TARGETS[t] for t in dict.fromkeys(targets)]

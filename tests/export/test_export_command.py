@@ -19,7 +19,8 @@ tool: {{surface: hemisphere, radius_mm: 100}}
 ply: {{node_spacing_mm: 5, size_mm: [100, 100]}}
 start: {{point_mm: [0, 0], orientation_deg: 0, generator_angle_deg: 90}}
 export: {{mesh: {mesh}, seam_allowance_mm: 4, thickness_cap_ratio: 1.001}}
-outputs: [drape, abaqus_include, lsdyna_include, element_table, element_vtu, cut_pattern]
+outputs: [drape, abaqus_include, lsdyna_include, ansys_macro, element_table, element_vtu,
+  cut_pattern]
 """
 
 
