@@ -366,3 +366,23 @@ def test_far_and_degenerate_elements_are_not_covered() -> None:
     assert mapping.covered.tolist() == [True, False, False]
     np.testing.assert_allclose(mapping.gap_mm[1], 30.0)
     assert map_to_mesh(result, mesh, max_gap_mm=31.0).covered.tolist() == [True, True, False]
+
+
+def test_element_table_parquet_keeps_dtypes(tmp_path) -> None:
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.1, 0.1)),
+    )
+    pts = np.array(
+        [[0, 0, 0], [10, 0, 0], [10, 10, 0], [300, 0, 0], [310, 0, 0], [310, 10, 0]], float
+    )
+    mapping = map_to_mesh(result, shell_mesh(pts, [[0, 1, 2], [3, 4, 5]]))
+    write_element_table(mapping, tmp_path / "elements.parquet")
+    table = pd.read_parquet(tmp_path / "elements.parquet")
+    assert table["covered"].tolist() == [True, False]
+    assert str(table["past_locking"].dtype) == "boolean" and table[
+        "past_locking"
+    ].isna().tolist() == [False, True]
+    np.testing.assert_allclose(table["shear_deg"][0], 0.0, atol=1e-9)
