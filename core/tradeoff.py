@@ -48,6 +48,7 @@ from typing import Any
 import click
 import numpy as np
 
+from preform.commands.options import InputError, echo_json, json_option, library_options
 from preform.pipeline import fidelity
 from preform.pipeline.scene import (
     NumericsSection,
@@ -524,11 +525,14 @@ def run_tradeoff(
     quick: bool = False,
     repeat: int = 1,
     progress: Callable[[TradeoffRow], None] | None = None,
+    libraries: Sequence[str | os.PathLike[str]] = (),
+    bundled: bool = True,
 ) -> TradeoffResult:
     """Measure the trade for ``material`` on ``scene`` (a file or a bundled scene's name).
 
     ``repeat``: runs shorter than 5 s are timed this many times, keeping the best.
-    ``progress`` is called with each finished row (errors not yet filled).
+    ``progress`` is called with each finished row (errors not yet filled). ``libraries`` add
+    to the bundled library (``bundled=False`` leaves it out), as ``--library`` does.
     """
     from preform.drape.steps import build_surface
     from preform.library import load_library
@@ -537,7 +541,7 @@ def run_tradeoff(
     registry = default_host().registry
     path = resolve_scene_path(str(scene))
     loaded, _ = load_scene(path, registry)
-    fabric = load_library(registry=registry).fabric(material)
+    fabric = load_library(libraries, bundled=bundled, registry=registry).fabric(material)
     surface = build_surface(loaded, registry)
     settings = tradeoff_settings(loaded, float(surface.size), quick=quick)
     rows: list[TradeoffRow] = []
@@ -710,6 +714,7 @@ bench = click.Group(
     default="./preform-bench",
     show_default=True,
     type=click.Path(file_okay=False),
+    metavar="DIR",
     help="Folder for tradeoff.csv and tradeoff.png.",
 )
 @click.option("--quick", is_flag=True, help="A few settings and a coarse reference (seconds).")
@@ -720,8 +725,17 @@ bench = click.Group(
     type=click.IntRange(1, 10),
     help="Time runs under 5 s this many times and keep the best.",
 )
+@library_options
+@json_option
 def tradeoff_command(
-    scene_spec: str, material: str, out_dir: str, quick: bool, repeat: int
+    scene_spec: str,
+    material: str,
+    out_dir: str,
+    quick: bool,
+    repeat: int,
+    libraries: tuple[str, ...],
+    no_bundled: bool,
+    as_json: bool,
 ) -> None:
     """Wall time, memory and error against a converged reference, per fidelity setting."""
 
@@ -732,20 +746,44 @@ def tradeoff_command(
             err=True,
         )
 
+    from preform.library import LibraryError
+
     try:
-        result = run_tradeoff(scene_spec, material, quick=quick, repeat=repeat, progress=show)
-    except SceneError as exc:
-        raise click.ClickException(str(exc)) from None
+        result = run_tradeoff(
+            scene_spec,
+            material,
+            quick=quick,
+            repeat=repeat,
+            progress=show,
+            libraries=libraries,
+            bundled=not no_bundled,
+        )
+    except (SceneError, LibraryError) as exc:
+        raise InputError(str(exc)) from None
     except (KeyError, ValueError) as exc:
-        raise click.ClickException(str(exc).strip("'\"")) from None
+        raise InputError(str(exc).strip("'\"")) from None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(result, out / "tradeoff.csv")
     plot_tradeoff(result, out / "tradeoff.png")
-    click.echo(
-        f"command: preform bench tradeoff --scene {scene_spec} --material {material}"
-        + (" --quick" if quick else "")
+    command = f"preform bench tradeoff --scene {scene_spec} --material {material}" + (
+        " --quick" if quick else ""
     )
+    if as_json:
+        echo_json(
+            {
+                "command": command,
+                "scene": result.scene,
+                "material": result.material,
+                "reference": result.reference_label,
+                "baseline": result.baseline_label,
+                "reference_check": result.reference_check,
+                "rows": [row.as_dict() for row in result.rows],
+                "files": [str(out / "tradeoff.csv"), str(out / "tradeoff.png")],
+            }
+        )
+        return
+    click.echo(f"command: {command}")
     click.echo(format_table(result))
     click.echo(describe_reference(result))
     click.echo(f"wrote {out / 'tradeoff.csv'} and {out / 'tradeoff.png'}")

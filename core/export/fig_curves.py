@@ -117,7 +117,7 @@ def _mark_angles(ax: Axes, curves: Mapping[str, Any]) -> None:
 
 def energy_vs_angle_figure(
     curves: Mapping[str, Sequence[tuple[float, float]]],
-    path: str | os.PathLike[str],
+    path: str | os.PathLike[str] | None,
     *,
     optima: Mapping[str, float] | None = None,
     title: str | None = None,
@@ -176,6 +176,42 @@ def energy_vs_angle_figure(
         ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     else:
         ax.legend(fontsize="small")
+    fig.tight_layout()
+    if path is not None:  # None: the figure only (the Python API, a notebook)
+        save_figure(fig, path)
+    return fig
+
+
+def fit_figure(
+    curves: Mapping[str, Mapping[str, Any]],
+    path: str | os.PathLike[str],
+    *,
+    title: str | None = None,
+    size_px: tuple[int, int] = (900, 600),
+) -> Figure:
+    """A fitted shear law against the test data it was fitted to: F_s/L [N/mm] against |γ| [deg].
+
+    ``curves`` maps a sense name to ``{"data": (angle_deg, force_N_per_mm), "fit": (angle_deg,
+    force_N_per_mm), "label": str}``: the data as points, the fit as a line in the same colour.
+    Returns the figure (already saved).
+    """
+    if not curves:
+        raise ValueError("curves is empty: nothing to draw")
+    fig = new_figure(size_px)
+    ax = fig.subplots()
+    colours = ("#b2182b", "#2166ac", "#1a9850", "#762a83")
+    for n, (sense, spec) in enumerate(curves.items()):
+        colour = colours[n % len(colours)]
+        angle, force = (np.asarray(v, dtype=float) for v in spec["data"])
+        ax.plot(angle, force, "o", color=colour, ms=3, alpha=0.5, label=f"{sense}: test data")
+        grid, model = (np.asarray(v, dtype=float) for v in spec["fit"])
+        ax.plot(grid, model, "-", color=colour, lw=2, label=str(spec.get("label", sense)))
+    ax.set_xlabel("shear angle |γ| [deg]")
+    ax.set_ylabel("shear force per unit length F$_s$/L [N/mm]")
+    ax.set_xlim(left=0.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="upper left")
+    ax.set_title(title or "Shear law fitted to test data")
     fig.tight_layout()
     save_figure(fig, path)
     return fig
