@@ -65,3 +65,11 @@ def test_build_artefacts_are_not_tracked():
         ["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True
     ).stdout.split()
     assert not [p for p in tracked if ".egg-info" in p or "__pycache__" in p]
+
+
+def test_the_cell_status_legend_matches_the_code():
+    from preform.drape.result import CellStatus
+
+    text = (ROOT / "docs" / "results.md").read_text()
+    for status in CellStatus:
+        assert f"| `{status.name}` | {int(status)} |" in text
