@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
-import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -12,17 +12,30 @@ from typing import Any
 import click
 
 from preform import __version__
-
-LIBRARY_OPTION_HELP = (
-    "Extra library file or directory (repeatable); added to the bundled library and "
-    "PREFORM_LIBRARY."
+from preform.commands.options import (
+    EXIT_INTERNAL,
+    LIBRARY_HELP,
+    echo_json,
+    fabric_or_exit,
+    fail,
+    json_option,
+    library_options,
+    load_library_or_exit,
 )
 
+LIBRARY_OPTION_HELP = LIBRARY_HELP
+_echo_json = echo_json
+_fail = fail
 
-def _echo_json(obj: Any) -> None:
-    from preform.pipeline.runner import _clean_json
-
-    click.echo(json.dumps(_clean_json(obj), indent=2, sort_keys=False, default=str))
+EXIT_CODES_HELP = """\b
+Exit codes:
+  0    done; no case failed
+  1    done, with failures: invalid files (materials validate), cases failed or timed out
+  2    bad usage or input, nothing was run: unknown option, fabric or scene; invalid library
+       or scene file
+  3    an unexpected error inside preform or a plugin: rerun with --debug, report it
+  130  interrupted (Ctrl-C, SIGTERM)
+"""
 
 
 def _host() -> Any:
@@ -31,26 +44,48 @@ def _host() -> Any:
     return default_host()
 
 
-def _fail(lines: list[Any], code: int = 2) -> None:
-    for line in lines:
-        click.echo(str(line), err=True)
-    sys.exit(code)
+class PreformGroup(click.Group):
+    """The root group: an unexpected exception in any command ends in one line on stderr and
+    exit code 3, never a traceback, unless ``--debug`` (or ``PREFORM_DEBUG=1``) asks for it."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
+            raise
+        except Exception as exc:
+            if ctx.meta.get("preform.debug") or os.environ.get("PREFORM_DEBUG") == "1":
+                raise
+            from preform.pipeline.runner import _error_text
+
+            click.echo(f"error: {_error_text(exc)}", err=True)
+            click.echo(
+                "This is a bug in preform or a plugin, not in your input: run the command "
+                "again as `preform --debug ...` for the traceback and report it.",
+                err=True,
+            )
+            ctx.exit(EXIT_INTERNAL)
 
 
-def load_library_or_exit(paths: tuple[str, ...], *, bundled: bool = True) -> Any:
-    """Load the library; print every located error and exit 2 on failure."""
-    from preform.library import LibraryError, load_library
-
-    try:
-        return load_library(paths, bundled=bundled, registry=_host().registry)
-    except LibraryError as exc:
-        _fail([*exc.errors, f"{len(exc.errors)} error(s); nothing was run."])
-
-
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(
+    cls=PreformGroup,
+    context_settings={"help_option_names": ["-h", "--help"]},
+    epilog=EXIT_CODES_HELP,
+)
 @click.version_option(__version__, prog_name="preform")
-def cli() -> None:
-    """preform: fabric-architecture-aware drape simulation for composite preforms."""
+@click.option(
+    "--debug",
+    is_flag=True,
+    help="Show the traceback of an unexpected error (also PREFORM_DEBUG=1).",
+)
+@click.pass_context
+def cli(ctx: click.Context, debug: bool) -> None:
+    """preform: fabric-architecture-aware drape simulation for composite preforms.
+
+    Lengths are in mm and angles in degrees everywhere you type or read them; --library adds
+    to the bundled library (--no-bundled leaves it out); --json prints only JSON on stdout.
+    """
+    ctx.meta["preform.debug"] = debug
 
 
 # -- plugins --------------------------------------------------------------------------------
@@ -93,11 +128,11 @@ def materials() -> None:
 
 
 @materials.command("list")
-@click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
-@click.option("--json", "as_json", is_flag=True)
-def materials_list(libraries: tuple[str, ...], as_json: bool) -> None:
+@library_options
+@json_option
+def materials_list(libraries: tuple[str, ...], no_bundled: bool, as_json: bool) -> None:
     """The fabrics of the library."""
-    lib = load_library_or_exit(libraries)
+    lib = load_library_or_exit(libraries, bundled=not no_bundled)
     rows = [
         {
             "name": f.name,
@@ -107,13 +142,13 @@ def materials_list(libraries: tuple[str, ...], as_json: bool) -> None:
         }
         for f in lib
     ]
+    for warning in lib.warnings:
+        click.echo(f"warning: {warning}", err=True)
     if as_json:
         _echo_json(rows)
         return
     for row in rows:
         click.echo(f"{row['name']:<24} {row['architecture']:<12} {row['origin']}")
-    for warning in lib.warnings:
-        click.echo(f"warning: {warning}", err=True)
 
 
 def fabric_document(fabric: Any) -> dict[str, Any]:
@@ -128,34 +163,69 @@ def fabric_document(fabric: Any) -> dict[str, Any]:
     return data
 
 
+#: Significant digits of derived properties in ``materials show`` text (JSON keeps all): four
+#: is what a datasheet gives, and what a check against one needs.
+SHOWN_DIGITS = 4
+
+
+def rounded(value: Any, digits: int = SHOWN_DIGITS) -> Any:
+    """``value`` with every float rounded to ``digits`` significant digits (nested)."""
+    if isinstance(value, dict):
+        return {k: rounded(v, digits) for k, v in value.items()}
+    if isinstance(value, list):
+        return [rounded(v, digits) for v in value]
+    if isinstance(value, float) and value == value and abs(value) != float("inf"):
+        return float(f"{value:.{digits}g}")
+    return value
+
+
 @materials.command("show")
 @click.argument("name")
-@click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
-@click.option("--json", "as_json", is_flag=True)
-def materials_show(name: str, libraries: tuple[str, ...], as_json: bool) -> None:
-    """One fabric's validated parameters (in the YAML's units) and derived properties."""
-    lib = load_library_or_exit(libraries)
-    try:
-        fabric = lib.fabric(name)
-    except KeyError as exc:
-        _fail([exc.args[0]])
+@library_options
+@json_option
+def materials_show(name: str, libraries: tuple[str, ...], no_bundled: bool, as_json: bool) -> None:
+    """One fabric's validated parameters (in the YAML's units) and derived properties.
+
+    The text shows derived properties to 4 significant digits; --json gives them in full.
+    """
+    lib = load_library_or_exit(libraries, bundled=not no_bundled)
+    fabric = fabric_or_exit(lib, name)
     doc = fabric_document(fabric)
     if as_json:
         _echo_json(doc)
         return
     import yaml
 
+    if "derived" in doc:
+        doc["derived"] = rounded(doc["derived"])
     click.echo(f"# {lib.origins[name]}")
+    click.echo(f"# derived: {SHOWN_DIGITS} significant digits (--json: all)")
     click.echo(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True).rstrip())
 
 
 @materials.command("validate")
 @click.argument("paths", nargs=-1, required=True, type=click.Path())
-def materials_validate(paths: tuple[str, ...]) -> None:
-    """Validate library files or directories; every error at once as FILE:LINE:COL."""
+@json_option
+def materials_validate(paths: tuple[str, ...], as_json: bool) -> None:
+    """Validate library files or directories; every error at once as FILE:LINE:COL.
+
+    Exit code 1 when any error is found. --json: {"valid", "fabrics", "errors", "warnings"}.
+    """
     from preform.library import validate_files
 
     fabrics, errors, warnings = validate_files([Path(p) for p in paths], _host().registry)
+    if as_json:
+        _echo_json(
+            {
+                "valid": not errors,
+                "fabrics": [fabric.name for fabric, _ in fabrics],
+                "errors": [str(e) for e in errors],
+                "warnings": [str(w) for w in warnings],
+            }
+        )
+        if errors:
+            sys.exit(1)
+        return
     for w in warnings:
         click.echo(f"warning: {w}", err=True)
     if errors:
@@ -183,17 +253,26 @@ def _repeats(_ctx: Any, _param: Any, value: str) -> tuple[int, int]:
     show_default=True,
     help="Unit cells to draw along each direction, NxM.",
 )
-@click.option("--out", "png", type=click.Path(), default=None, help="PNG file (default NAME.png).")
+@click.option(
+    "--out",
+    "png",
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
+    default=None,
+    help="Figure file; .png, .svg or .pdf (default NAME.png).",
+)
 @click.option(
     "--vtu",
-    type=click.Path(),
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
     default=None,
     help="Also write the tow paths as a VTK .vtu file for ParaView.",
 )
 @click.option(
     "--colour-by", type=click.Choice(["level", "type"]), default="level", show_default=True
 )
-@click.option("--library", "libraries", multiple=True, type=click.Path(), help=LIBRARY_OPTION_HELP)
+@library_options
+@json_option
 def view(
     name: str,
     repeats: tuple[int, int],
@@ -201,25 +280,30 @@ def view(
     vtu: str | None,
     colour_by: str,
     libraries: tuple[str, ...],
+    no_bundled: bool,
+    as_json: bool,
 ) -> None:
     """A 3D picture of a fabric's unit cell (tows as ribbons), and optionally a VTU file."""
     from preform.export.fig_unit_cell import unit_cell_figure
     from preform.export.vtu import write_unit_cell_vtu
 
-    lib = load_library_or_exit(libraries)
-    try:
-        fabric = lib.fabric(name)
-    except KeyError as exc:
-        _fail([exc.args[0]])
+    lib = load_library_or_exit(libraries, bundled=not no_bundled)
+    fabric = fabric_or_exit(lib, name)
     cell = fabric.unit_cell()
     if cell is None:
         _fail([f"architecture {fabric.architecture!r} has no unit-cell model to view"])
     out = Path(png or f"{name}.png")
     unit_cell_figure(cell, out, colour_by=colour_by, repeats=repeats, title=name)
-    click.echo(f"wrote {out}")
+    written = {"figure": str(out), "vtu": None}
     if vtu:
         write_unit_cell_vtu(cell.tiled(*repeats), Path(vtu))
-        click.echo(f"wrote {vtu}")
+        written["vtu"] = vtu
+    if as_json:
+        _echo_json({"material": name, "repeats": list(repeats), "files": written})
+        return
+    for path in written.values():
+        if path:
+            click.echo(f"wrote {path}")
 
 
 # -- schema ---------------------------------------------------------------------------------
@@ -244,22 +328,32 @@ def pipeline() -> None:
 
 
 @pipeline.command("run")
-@click.argument("libraries", nargs=-1, type=click.Path())
+@click.argument("libraries", nargs=-1, type=click.Path(), metavar="[LIBRARY]...")
+@library_options(dest="extra_libraries")
 @click.option(
     "--scene",
     "scenes",
     multiple=True,
-    help="Scene file, or the name of a bundled scene (repeatable). Default: the "
-    "bundled default scene.",
+    help="Scene file, or the name of a bundled scene (repeatable; `preform scenes list`). "
+    "Default: the bundled default scene.",
 )
 @click.option(
     "--materials", "materials_glob", default=None, help="Only fabrics whose name matches this glob."
 )
 @click.option(
+    "--fidelity",
+    type=click.Choice(["draft", "standard", "fine"]),
+    default=None,
+    help="Replace every scene's fidelity preset (recorded with each case, part of its input "
+    "hash). Knobs a scene sets by hand still win.",
+)
+@click.option(
     "--out",
     "out_dir",
     default="preform-results",
+    # not file_okay=False: the run directory's own check says more ("nothing was run")
     type=click.Path(),
+    metavar="DIR",
     show_default=True,
     help="Results directory (created; runs into it add to it).",
 )
@@ -286,25 +380,35 @@ def pipeline() -> None:
 )
 @click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
+@json_option
 def pipeline_run(
     libraries: tuple[str, ...],
-    scenes: tuple[str, ...],
-    materials_glob: str | None,
-    out_dir: str,
-    engine: str,
-    scheduler: str | None,
-    workers: int | None,
-    case_timeout_s: float | None,
-    force: bool,
-    explain: bool,
+    extra_libraries: tuple[str, ...] = (),
+    no_bundled: bool = False,
+    scenes: tuple[str, ...] = (),
+    materials_glob: str | None = None,
+    fidelity: str | None = None,
+    out_dir: str = "preform-results",
+    engine: str = "process",
+    scheduler: str | None = None,
+    workers: int | None = None,
+    case_timeout_s: float | None = None,
+    force: bool = False,
+    explain: bool = False,
+    as_json: bool = False,
 ) -> None:
-    """Run every (material, scene) case. LIBRARY paths replace the bundled library when given.
+    """Run every (material, scene) case.
+
+    LIBRARY paths, like --library, add to the bundled library and PREFORM_LIBRARY;
+    --no-bundled uses only yours.
 
     Each case ends with a status: ok (complete and finite), partial (finite, but covers less
     than the scene asked: see covered_fraction and reasons), failed, timed_out, interrupted;
     skipped counts cases kept from an earlier run with identical inputs. Exit code 0 when no
-    case failed or timed out, 1 otherwise, 130 when interrupted.
+    case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
+    summary (every case with its status, reasons, warnings and error) and nothing else.
     """
+    from preform.pipeline.overrides import load_scene_changed, with_fidelity
     from preform.pipeline.planner import explain as explain_plan
     from preform.pipeline.runner import (
         DEFAULT_CASE_TIMEOUT_S,
@@ -314,15 +418,11 @@ def pipeline_run(
         make_cases,
         run_cases,
     )
-    from preform.pipeline.scene import (
-        SceneError,
-        default_scene_path,
-        load_scene,
-        resolve_scene_path,
-    )
+    from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
+    from preform.pipeline.summary import run_summary
 
     host = _host()
-    lib = load_library_or_exit(libraries, bundled=not libraries)
+    lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
     for warning in lib.warnings:
         click.echo(f"warning: {warning}", err=True)
     scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
@@ -330,15 +430,26 @@ def pipeline_run(
     problems: list[Any] = []
     for path in scene_paths:
         try:
-            loaded.append(load_scene(path, host.registry))
+            loaded.append(load_scene_changed(path, host.registry, with_fidelity(fidelity)))
         except SceneError as exc:
             problems += exc.errors
     if problems:
         _fail([*problems, f"{len(problems)} error(s) in scene(s); nothing was run."])
     if explain:
-        for scene, _ in loaded:
-            click.echo(f"scene {scene.name}: outputs {', '.join(scene.outputs)}")
-            for line in explain_plan(scene, host.registry):
+        plans = [
+            {
+                "scene": scene.name,
+                "outputs": list(scene.outputs),
+                "plan": explain_plan(scene, host.registry),
+            }
+            for scene, _ in loaded
+        ]
+        if as_json:
+            _echo_json(plans)
+            return
+        for entry in plans:
+            click.echo(f"scene {entry['scene']}: outputs {', '.join(entry['outputs'])}")
+            for line in entry["plan"]:
                 click.echo(f"  {line}")
         return
     out = Path(out_dir)
@@ -361,7 +472,13 @@ def pipeline_run(
             ],
             code=1,
         )
-    inputs = {"libraries": input_files_record(lib.files), "scenes": input_files_record(scene_paths)}
+    inputs: dict[str, Any] = {
+        "libraries": input_files_record(lib.files),
+        "scenes": input_files_record(scene_paths),
+        "bundled_library": not no_bundled,
+    }
+    if fidelity is not None:
+        inputs["fidelity_override"] = fidelity
     from rich.progress import Progress
 
     try:
@@ -383,11 +500,14 @@ def pipeline_run(
     except OSError as exc:  # the results directory became unwritable (disk full, ...)
         _fail([f"error: could not write the results into {out}/: {exc}"], code=1)
     for line in run_report_lines(report):
-        click.echo(line, err=line.startswith(("FAILED", "TIMED OUT", "INTERRUPTED")))
-    if report.interrupted:
-        sys.exit(130)
-    if any(r.status in ("failed", "timed_out") for r in report.results):
-        sys.exit(1)
+        # with --json, stdout holds the JSON only: the words go to stderr
+        problem = line.startswith(("FAILED", "TIMED OUT", "INTERRUPTED"))
+        click.echo(line, err=as_json or problem)
+    summary = run_summary(report)
+    if as_json:
+        _echo_json(summary)
+    if summary["exit_code"]:
+        sys.exit(summary["exit_code"])
 
 
 def run_report_lines(report: Any) -> list[str]:
@@ -424,10 +544,12 @@ def run_report_lines(report: Any) -> list[str]:
 
 
 def _add_physics_commands() -> None:
+    from preform.commands.scenes import scenes
     from preform.pipeline.export_command import export_command
     from preform.shear.commands import fit_command, shear_command
     from preform.tradeoff import bench
 
+    cli.add_command(scenes, "scenes")
     cli.add_command(export_command, "export")
     cli.add_command(shear_command, "shear")
     cli.add_command(fit_command, "fit")

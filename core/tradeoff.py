@@ -48,6 +48,7 @@ from typing import Any
 import click
 import numpy as np
 
+from preform.commands.options import InputError, echo_json, json_option, library_options
 from preform.pipeline import fidelity
 from preform.pipeline.scene import (
     NumericsSection,
@@ -524,11 +525,14 @@ def run_tradeoff(
     quick: bool = False,
     repeat: int = 1,
     progress: Callable[[TradeoffRow], None] | None = None,
+    libraries: Sequence[str | os.PathLike[str]] = (),
+    bundled: bool = True,
 ) -> TradeoffResult:
     """Measure the trade for ``material`` on ``scene`` (a file or a bundled scene's name).
 
     ``repeat``: runs shorter than 5 s are timed this many times, keeping the best.
-    ``progress`` is called with each finished row (errors not yet filled).
+    ``progress`` is called with each finished row (errors not yet filled). ``libraries`` add
+    to the bundled library (``bundled=False`` leaves it out), as ``--library`` does.
     """
     from preform.drape.steps import build_surface
     from preform.library import load_library
@@ -537,7 +541,7 @@ def run_tradeoff(
     registry = default_host().registry
     path = resolve_scene_path(str(scene))
     loaded, _ = load_scene(path, registry)
-    fabric = load_library(registry=registry).fabric(material)
+    fabric = load_library(libraries, bundled=bundled, registry=registry).fabric(material)
     surface = build_surface(loaded, registry)
     settings = tradeoff_settings(loaded, float(surface.size), quick=quick)
     rows: list[TradeoffRow] = []
@@ -583,22 +587,40 @@ def write_csv(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
             writer.writerow({k: "" if values[k] is None else values[k] for k in CSV_COLUMNS})
 
 
+#: Relative energy difference below which --quick (no convergence check of its reference)
+#: calls two settings equal: the rim cells' staircase alone moves E by more (fidelity notes).
+QUICK_ENERGY_RESOLUTION = 1e-3
+
+
+def error_floors(result: TradeoffResult) -> dict[str, float]:
+    """The smallest error each panel can resolve: the reference's own resolution (how far one
+    step less fine lands from it), or with ``--quick`` its refinement tolerance for the angle
+    and ``QUICK_ENERGY_RESOLUTION`` for the energy. Smaller errors say nothing about a setting
+    (a standard run against a quick reference at the same spacing differs by 1e-10)."""
+    check = result.reference_check or {}
+    ref = result.row(result.reference_label)
+    angle = check.get("angle_error_deg") or ref.tolerance_deg
+    energy = check.get("energy_rel_error") or QUICK_ENERGY_RESOLUTION
+    return {"angle_error_deg": float(angle), "energy_rel_error": float(energy)}
+
+
 def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
     """Error against wall time (log-log): optimum-angle error and relative energy error, one
-    panel each, the Pareto front joined; zero errors (the reference) drawn on the floor."""
+    panel each, the Pareto front joined; errors below the reference's resolution (zero for the
+    reference itself) drawn on a floor that says so (:func:`error_floors`)."""
     from preform.export.figures import new_figure, save_figure
 
-    fig = new_figure((1400, 600))
+    fig = new_figure((1400, 650))
+    floors = error_floors(result)
     panels = (
-        ("angle_error_deg", "pareto_angle", "|optimum angle error| [deg]"),
-        ("energy_rel_error", "pareto_energy", "|relative energy error| [-]"),
+        ("angle_error_deg", "pareto_angle", "|optimum angle error| [deg]", "{:.2g}°"),
+        ("energy_rel_error", "pareto_energy", "|relative energy error| [-]", "{:.1e}"),
     )
-    for index, (attr, flag, ylabel) in enumerate(panels):
+    for index, (attr, flag, ylabel, fmt) in enumerate(panels):
         ax = fig.add_subplot(1, 2, index + 1)
         values = np.array([getattr(r, attr) for r in result.rows], dtype=float)
-        positive = values[np.isfinite(values) & (values > 0)]
-        floor = float(positive.min()) / 10 if positive.size else 1e-6
-        shown = np.where(values > 0, values, floor)
+        floor = floors[attr]
+        shown = np.where(np.isfinite(values) & (values > floor), values, floor)
         times = np.array([r.wall_s for r in result.rows])
         labelled: list[Any] = []
         for k, row in enumerate(result.rows):
@@ -610,7 +632,7 @@ def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
                 colour, marker = "#1a9850", "D"
             elif not row.on_front:
                 colour, marker = "#2166ac", "^"
-            ax.scatter(times[k], shown[k], c=colour, marker=marker, s=36, zorder=3)
+            ax.scatter(times[k], shown[k], c=colour, marker=marker, s=40, zorder=3)
             # Rows that change nothing pile up on the standard's point: name the first only.
             here = np.log10([times[k], shown[k]])
             if any(np.all(np.abs(here - p) < 0.04) for p in labelled):
@@ -619,7 +641,7 @@ def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
             ax.annotate(
                 row.label,
                 (times[k], shown[k]),
-                fontsize=7,
+                fontsize=8,
                 xytext=(3, 3),
                 textcoords="offset points",
             )
@@ -634,17 +656,26 @@ def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
             zorder=2,
             label="Pareto front (straight generators)",
         )
-        ax.axhline(floor, color="#999999", lw=0.8, ls=":", label="0 (reference) drawn here")
+        ax.axhline(
+            floor,
+            color="#999999",
+            lw=0.8,
+            ls=":",
+            label=f"reference's resolution ({fmt.format(floor)}): smaller errors drawn here",
+        )
+        top = float(np.nanmax(shown)) if np.isfinite(shown).any() else floor
+        ax.set_ylim(floor / 2, max(top * 2, floor * 10))
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("wall time per case [s]")
         ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8, loc="lower left")
+        ax.legend(fontsize=8, loc="upper right")
     fig.suptitle(
-        f"{result.scene}, {result.material}: error against the reference vs wall time "
-        "(squares: presets, triangles: curved generators)"
+        f"{result.scene}, {result.material}: error against the reference vs wall time\n"
+        "squares: presets; diamonds: reference; triangles: curved generators; dots: one knob"
     )
+    fig.tight_layout()
     save_figure(fig, path)
 
 
@@ -710,6 +741,7 @@ bench = click.Group(
     default="./preform-bench",
     show_default=True,
     type=click.Path(file_okay=False),
+    metavar="DIR",
     help="Folder for tradeoff.csv and tradeoff.png.",
 )
 @click.option("--quick", is_flag=True, help="A few settings and a coarse reference (seconds).")
@@ -720,8 +752,17 @@ bench = click.Group(
     type=click.IntRange(1, 10),
     help="Time runs under 5 s this many times and keep the best.",
 )
+@library_options
+@json_option
 def tradeoff_command(
-    scene_spec: str, material: str, out_dir: str, quick: bool, repeat: int
+    scene_spec: str,
+    material: str,
+    out_dir: str,
+    quick: bool,
+    repeat: int,
+    libraries: tuple[str, ...],
+    no_bundled: bool,
+    as_json: bool,
 ) -> None:
     """Wall time, memory and error against a converged reference, per fidelity setting."""
 
@@ -732,20 +773,44 @@ def tradeoff_command(
             err=True,
         )
 
+    from preform.library import LibraryError
+
     try:
-        result = run_tradeoff(scene_spec, material, quick=quick, repeat=repeat, progress=show)
-    except SceneError as exc:
-        raise click.ClickException(str(exc)) from None
+        result = run_tradeoff(
+            scene_spec,
+            material,
+            quick=quick,
+            repeat=repeat,
+            progress=show,
+            libraries=libraries,
+            bundled=not no_bundled,
+        )
+    except (SceneError, LibraryError) as exc:
+        raise InputError(str(exc)) from None
     except (KeyError, ValueError) as exc:
-        raise click.ClickException(str(exc).strip("'\"")) from None
+        raise InputError(str(exc).strip("'\"")) from None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(result, out / "tradeoff.csv")
     plot_tradeoff(result, out / "tradeoff.png")
-    click.echo(
-        f"command: preform bench tradeoff --scene {scene_spec} --material {material}"
-        + (" --quick" if quick else "")
+    command = f"preform bench tradeoff --scene {scene_spec} --material {material}" + (
+        " --quick" if quick else ""
     )
+    if as_json:
+        echo_json(
+            {
+                "command": command,
+                "scene": result.scene,
+                "material": result.material,
+                "reference": result.reference_label,
+                "baseline": result.baseline_label,
+                "reference_check": result.reference_check,
+                "rows": [row.as_dict() for row in result.rows],
+                "files": [str(out / "tradeoff.csv"), str(out / "tradeoff.png")],
+            }
+        )
+        return
+    click.echo(f"command: {command}")
     click.echo(format_table(result))
     click.echo(describe_reference(result))
     click.echo(f"wrote {out / 'tradeoff.csv'} and {out / 'tradeoff.png'}")

@@ -1,5 +1,9 @@
 """The kinematic drape: tool surfaces, the pin-jointed net, its shear and energy fields."""
 
+import sys as _sys
+import types as _types
+from typing import Any as _Any
+
 from preform.drape.chebyshev import chebyshev_angle
 from preform.drape.fields import energy_field, summary
 from preform.drape.generators import ClosedFormGeodesics, PlanPolylines
@@ -24,3 +28,19 @@ __all__ = [
     "energy_field",
     "summary",
 ]
+
+
+class _DrapePackage(_types.ModuleType):
+    """``preform.drape`` is this package and, called, the Python API's ``preform.drape(...)``
+    (``preform.api.drape``: mm and degrees, a pipeline case). The import system binds the
+    package to ``preform.drape`` whenever it is imported, so the API function cannot own the
+    name; a callable package gives ``preform.drape(fabric, ...)`` and keeps
+    ``preform.drape.net`` and ``from preform.drape import drape`` (the SI engine) working."""
+
+    def __call__(self, *args: _Any, **kwargs: _Any) -> _Any:
+        from preform.api import drape as api_drape
+
+        return api_drape(*args, **kwargs)
+
+
+_sys.modules[__name__].__class__ = _DrapePackage

@@ -287,13 +287,12 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.fig_drape import fibre_pattern_figure
 
     ply: DrapedPly = ctx.products["drape"]
-    alpha = np.degrees(ply.result.generator_angle)
     every = max(1, round(5e-3 / ply.result.node_spacing))  # a tow line every ~5 mm
     fibre_pattern_figure(
         ply.result,
         ply.energy,
         ctx.case_dir / "fibre_pattern.png",
-        title=f"{ctx.fabric.name}: generator angle {alpha:.1f}°",
+        title=ctx.fabric.name,  # the figure adds the angle, nodes and energy
         tow_every=every,
     )
     return {"fibre_pattern_png": "fibre_pattern.png"}

@@ -117,7 +117,7 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
 def fibre_pattern_figure(
     result: DrapeResult,
     energy: EnergyField | None,
-    path: str | os.PathLike[str],
+    path: str | os.PathLike[str] | None,
     *,
     title: str | None = None,
     tow_every: int = 1,
@@ -143,5 +143,6 @@ def fibre_pattern_figure(
     if energy is not None:
         summary += f", total shear energy {energy.total_energy:.4g} J"
     fig.suptitle(f"{title}\n{summary}" if title else summary)
-    save_figure(fig, path)
+    if path is not None:  # None: the figure only (the Python API, a notebook)
+        save_figure(fig, path)
     return fig

@@ -17,8 +17,14 @@ from preform.export.figures import new_figure, save_figure
 from preform.geometry.unit_cell import TowPath, UnitCell
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+
+#: Largest in-plane size of a view [mm]: a unit cell wider than this (a warp-knit's repeat of
+#: 60 × 71 mm and 214 tows) is shown as a detail of this size from its middle instead of tiled,
+#: since tows thinner than a pixel or two read as a texture, not as a construction.
+DETAIL_MM = 25.0
 
 #: Smallest visual height of the z box, as a fraction of the in-plane size, before the figure
 #: exaggerates z on its own: a crimp of 0.1 mm over a 10 mm cell is otherwise invisible.
@@ -87,9 +93,10 @@ def unit_cell_figure(
     colour_by: Literal["level", "type"] = "level",
     repeats: tuple[int, int] = (1, 1),
     title: str | None = None,
-    size_px: tuple[int, int] = (1000, 800),
+    size_px: tuple[int, int] = (1400, 700),
     vertical_exaggeration: float | None = None,
     view: tuple[float, float] = (35.0, -60.0),
+    detail_mm: float | None = DETAIL_MM,
 ) -> Figure:
     """Draw ``cell`` (tiled ``repeats`` times) as 3D ribbons and save it to ``path``.
 
@@ -97,8 +104,14 @@ def unit_cell_figure(
     ``cell.labels["levels"]``) or by ``type`` (tow type name, or the kind when unnamed). Axes are
     in mm with equal scale on x and y; z is drawn ``vertical_exaggeration`` times larger, by
     default (None) just enough for the z box to be ``MIN_Z_BOX_FRACTION`` of the cell (1 when
-    the cell is thick enough; the factor is given in the z label; tick values stay true mm). ``view`` is (elevation, azimuth) [deg]. ``size_px`` is the saved
-    (width, height) [pixels]. Returns the figure (already saved).
+    the cell is thick enough; the factor is given in the z label; tick values stay true mm).
+    ``view`` is (elevation, azimuth) [deg]. ``size_px`` is the saved (width, height) [pixels].
+
+    Two panels: the 3D view (``fig.axes[0]``, with the legend) and a plan view from above
+    (``fig.axes[1]``), upper tows drawn over lower ones, which shows a warp-knit's stitching
+    and tow angles at a glance. A cell wider than ``detail_mm`` [mm] in plan is shown as a
+    ``detail_mm`` square from its middle, untiled (None: always the whole, tiled). Returns the
+    figure (already saved).
     """
     if colour_by not in ("level", "type"):
         raise ValueError(f"colour_by must be 'level' or 'type', got {colour_by!r}")
@@ -107,6 +120,9 @@ def unit_cell_figure(
     from matplotlib.ticker import MaxNLocator
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+    window = _detail_window(cell, detail_mm)
+    if window is not None:
+        repeats = (1, 1)
     shown = cell.tiled(*repeats) if tuple(repeats) != (1, 1) else cell
     groups: dict[object, list[TowPath]] = {}
     for tow in shown.tows:
@@ -124,6 +140,16 @@ def unit_cell_figure(
             # Pieces about as long as the tow is wide: matplotlib depth-sorts whole polygons, so
             # long straight quads would be drawn in front of tows that cross over them.
             ribbon = 1e3 * tow_ribbon(tow, max_segment=tow.width)  # mm on the axes
+            if window is not None:
+                (x0, y0), (x1, y1) = window
+                centre = ribbon.mean(axis=1)
+                inside = (
+                    (centre[:, 0] >= x0)
+                    & (centre[:, 0] <= x1)
+                    & (centre[:, 1] >= y0)
+                    & (centre[:, 1] <= y1)
+                )
+                ribbon = ribbon[inside]
             quads.append(ribbon)
             colours.append(np.repeat(colour[None, :], len(ribbon), axis=0))
         handles.append(
@@ -135,10 +161,13 @@ def unit_cell_figure(
         )
 
     fig = new_figure(size_px)
-    ax = fig.add_subplot(projection="3d")
+    # the 3D view first: it is fig.axes[0], the one with the legend
+    ax = fig.add_subplot(1, 2, 2, projection="3d")
+    plan = fig.add_subplot(1, 2, 1)
     if quads:
         verts = np.concatenate(quads)
         faces = np.concatenate(colours)
+        _plan_view(plan, verts, faces)
         # One collection for every tow, so matplotlib depth-sorts crossing tows against each
         # other; edges in the face colour hide the seams between a ribbon's quads.
         ax.add_collection3d(
@@ -165,6 +194,64 @@ def unit_cell_figure(
     exaggerated = vertical_exaggeration is not None and vertical_exaggeration > 1.0 + 1e-9
     ax.set_zlabel(f"z [mm], drawn ×{vertical_exaggeration:.3g}" if exaggerated else "z [mm]")
     ax.legend(handles=handles, loc="upper left", title=f"by {colour_by}", fontsize="small")
-    ax.set_title(title or f"Unit cell, {len(cell.tows)} paths, {repeats[0]}×{repeats[1]} repeats")
+    extent = _plan_extent(cell)
+    if window is not None:
+        (x0, y0), (x1, y1) = window
+        what = (
+            f"detail {x1 - x0:.3g} × {y1 - y0:.3g} mm of a {extent[0]:.3g} × {extent[1]:.3g} mm "
+            f"unit cell ({len(cell.tows)} paths)"
+        )
+    else:
+        what = (
+            f"unit cell {extent[0]:.3g} × {extent[1]:.3g} mm, {len(cell.tows)} paths, "
+            f"{repeats[0]}×{repeats[1]} repeats"
+        )
+    ax.set_title("3D view")
+    fig.suptitle(f"{title}: {what}" if title else what.capitalize())
+    fig.tight_layout()
     save_figure(fig, path)
     return fig
+
+
+def _plan_extent(cell: UnitCell) -> tuple[float, float]:
+    """In-plane size of the cell's tow centrelines [mm] (x, y)."""
+    pts = np.concatenate([np.asarray(t.points, dtype=float).reshape(-1, 3) for t in cell.tows])
+    span = 1e3 * (pts.max(axis=0) - pts.min(axis=0))
+    return float(span[0]), float(span[1])
+
+
+def _detail_window(
+    cell: UnitCell, detail_mm: float | None
+) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """The ``detail_mm`` square [mm] in the middle of a cell wider than that, else None."""
+    if detail_mm is None or not cell.tows:
+        return None
+    pts = 1e3 * np.concatenate(
+        [np.asarray(t.points, dtype=float).reshape(-1, 3) for t in cell.tows]
+    )
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    if max(hi[0] - lo[0], hi[1] - lo[1]) <= detail_mm:
+        return None
+    centre = 0.5 * (lo + hi)
+    half = 0.5 * detail_mm
+    return (centre[0] - half, centre[1] - half), (centre[0] + half, centre[1] + half)
+
+
+def _plan_view(ax: Axes, verts: np.ndarray, faces: np.ndarray) -> None:
+    """The ribbons seen from above [mm], the highest drawn last (on top)."""
+    from matplotlib.collections import PolyCollection
+
+    order = np.argsort(verts[:, :, 2].mean(axis=1), kind="stable")
+    ax.add_collection(
+        PolyCollection(
+            list(verts[order, :, :2]),
+            facecolors=faces[order],
+            edgecolors=faces[order] * [0.7, 0.7, 0.7, 1.0],
+            linewidths=0.2,
+        )
+    )
+    ax.autoscale_view()
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title("Plan view (upper tows drawn over lower ones)")

@@ -1,4 +1,5 @@
-"""``preform export``: drape one fabric over a scene's tool and write downstream files.
+"""``preform export NAME TARGET...``: drape one fabric over a scene's tool and write
+downstream files.
 
 The command runs the same steps as ``preform pipeline run`` (the scene's drape, or its
 least-energy drape when the scene searches), in this process, then the exporters of the chosen
@@ -7,12 +8,13 @@ targets, into ``--out``. Options given here override the scene's ``export`` sect
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
 import click
+
+from preform.commands.options import EXIT_FAILED, echo_json, fail, json_option, library_options
 
 #: Command-line target -> the scene output (exporter product) it asks for.
 TARGETS: dict[str, str] = {
@@ -40,16 +42,21 @@ def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, fl
 
 
 @click.command("export")
+@click.argument("name")
 @click.argument("targets", nargs=-1, required=True, type=click.Choice(sorted(TARGETS)))
-@click.option("--material", "material", required=True, help="Fabric name in the library.")
 @click.option(
     "--scene",
     "scene_spec",
     default="hemisphere",
     show_default=True,
-    help="Scene file or bundled scene name (its tool, ply and start).",
+    help="Scene file or bundled scene name (its tool, ply, start and export section).",
 )
-@click.option("--mesh", type=click.Path(dir_okay=False), help="Your shell mesh (.inp, .bdf, ...).")
+@click.option(
+    "--mesh",
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
+    help="Your shell mesh (.inp, .bdf, or any meshio format); default: the scene's export.mesh.",
+)
 @click.option(
     "--mesh-unit-mm", type=float, default=None, help="Length of one mesh unit in mm (default 1)."
 )
@@ -64,12 +71,20 @@ def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, fl
     "--thickness-cap", type=float, default=None, help="Compaction limit of t/t0 (flagged)."
 )
 @click.option("--seam-allowance-mm", type=float, default=None, help="Seam allowance [mm].")
-@click.option("--out", "out_dir", default="preform-export", show_default=True)
-@click.option("--library", "libraries", multiple=True, help="Extra library file or directory.")
-@click.option("--json", "as_json", is_flag=True, help="Summary as JSON on stdout.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False),
+    metavar="DIR",
+    default="preform-export",
+    show_default=True,
+    help="Directory the files go to.",
+)
+@library_options
+@json_option
 def export_command(
+    name: str,
     targets: tuple[str, ...],
-    material: str,
     scene_spec: str,
     mesh: str | None,
     mesh_unit_mm: float | None,
@@ -79,34 +94,35 @@ def export_command(
     seam_allowance_mm: float | None,
     out_dir: str,
     libraries: tuple[str, ...],
+    no_bundled: bool,
     as_json: bool,
 ) -> None:
-    """Write TARGETS (abaqus, lsdyna, ansys, table, vtu, flat-pattern) for one fabric's drape.
+    """Drape fabric NAME as the scene says and write TARGETS (abaqus, lsdyna, ansys, table,
+    vtu, flat-pattern).
 
     abaqus/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the scene's
     export.mesh); flat-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
-    mm and degrees. Exit code 0 when written (also when some elements are not covered: they
-    are listed), 1 when the drape or the export failed, 2 for bad input.
+    mm and degrees. Elements the drape does not cover are listed in every file, never given a
+    value. Exit code 0 when written (also when some elements are not covered), 1 when the
+    drape or the export failed, 2 for bad input.
     """
-    from preform.cli import _host, load_library_or_exit
+    from preform.commands.options import fabric_or_exit, load_library_or_exit
     from preform.pipeline.planner import PlanError, plan
     from preform.pipeline.scene import SceneError, load_scene, resolve_scene_path, scene_from_data
     from preform.pipeline.status import CaseFailure
     from preform.pipeline.step import CaseContext
+    from preform.plugin_manager import default_host
 
-    host = _host()
-    lib = load_library_or_exit(libraries, bundled=True)
-    fabric = lib.fabrics.get(material)
-    if fabric is None:
-        names = ", ".join(sorted(lib.fabrics))
-        click.echo(f"unknown material {material!r}; the library has: {names}", err=True)
-        sys.exit(2)
+    host = default_host()
+    lib = load_library_or_exit(libraries, bundled=not no_bundled)
+    fabric = fabric_or_exit(lib, name)
+    scene_path = resolve_scene_path(scene_spec)
+    if not scene_path.is_file():
+        fail([f"error: no scene file {scene_spec!r} and no bundled scene of that name"])
     try:
-        scene_path = resolve_scene_path(scene_spec)
         _scene, data = load_scene(scene_path, host.registry)
-    except (SceneError, OSError, ValueError) as error:
-        click.echo(str(error), err=True)
-        sys.exit(2)
+    except SceneError as error:
+        fail([*error.errors, "nothing was run."])
     data = dict(data)
     section = dict(data.get("export") or {})
     if mesh is not None:
@@ -123,16 +139,14 @@ def export_command(
         if value is not None:
             section[key] = list(value) if isinstance(value, tuple) else value
     if NEEDS_MESH & set(targets) and "mesh" not in section:
-        click.echo("abaqus, lsdyna, ansys, table and vtu need your mesh: --mesh FILE", err=True)
-        sys.exit(2)
+        fail(["error: abaqus, lsdyna, ansys, table and vtu need your mesh: --mesh FILE"])
     data["export"] = section
     data["outputs"] = [TARGETS[t] for t in dict.fromkeys(targets)]
     try:
         scene = scene_from_data(data, str(scene_path.parent), host.registry)
         steps = plan(scene, host.registry)
     except (PlanError, ValueError) as error:
-        click.echo(f"{scene_path}: {error}", err=True)
-        sys.exit(2)
+        fail([f"error: {scene_path}: {error}"])
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ctx = CaseContext(fabric=fabric, scene=scene, registry=host.registry, case_dir=out)
@@ -151,7 +165,7 @@ def export_command(
     mapping = ctx.products.get("mesh_mapping")
     report: dict[str, Any] = {
         "status": status,
-        "material": material,
+        "material": name,
         "scene": scene.name,
         "out": str(out),
         "written": {t: written.get(TARGETS[t]) for t in targets if TARGETS[t] in written},
@@ -182,7 +196,11 @@ def export_command(
         if key in ctx.summary:
             report[key] = ctx.summary[key]
     if as_json:
-        click.echo(json.dumps(report, indent=2, default=str))
+        echo_json(report)
+        for line in report["warnings"]:
+            click.echo(f"warning: {line}", err=True)
+        if error_text:
+            click.echo(f"failed: {error_text}", err=True)
     else:
         for target, files in report["written"].items():
             file_names = files if isinstance(files, list) else [files]
@@ -198,7 +216,7 @@ def export_command(
                 )
             )
         for line in report["warnings"]:
-            click.echo(f"warning: {line}")
+            click.echo(f"warning: {line}", err=True)
         if error_text:
             click.echo(f"failed: {error_text}", err=True)
-    sys.exit(1 if error_text else 0)
+    sys.exit(EXIT_FAILED if error_text else 0)

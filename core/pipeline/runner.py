@@ -247,8 +247,15 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}{where}"
 
 
-def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
+def execute_case(
+    case: Case,
+    host: PluginHost | None = None,
+    on_context: Callable[[CaseContext], None] | None = None,
+) -> CaseResult:
     """Run one case and write its folder. Never raises for a failure of the case itself.
+
+    ``on_context`` (in-process callers: the Python API) is given the case's context after its
+    steps ran or stopped, so the products (the draped net, the search) can be kept in memory.
 
     The status: ``failed`` on an error, a ``CaseFailure`` or a non-finite number in the results;
     ``timed_out`` past the case's time limit (checked between steps here; the process engine
@@ -312,6 +319,8 @@ def execute_case(case: Case, host: PluginHost | None = None) -> CaseResult:
         # what the steps said before it stopped still helps to read the failure
         result.warnings = list(ctx.warnings)
         result.reasons = result.reasons or list(ctx.partial_reasons)
+    if ctx is not None and on_context is not None:
+        on_context(ctx)
     result.wall_time_s = time.perf_counter() - started
     try:
         write_json(case_dir / "summary.json", case_record(case, result))

@@ -18,8 +18,8 @@ same angle magnitudes with γ < 0, its angle, torque and force signed (negative)
 from __future__ import annotations
 
 import csv
-import json
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,14 @@ import click
 import numpy as np
 from numpy.typing import ArrayLike
 
+from preform.commands.options import (
+    InputError,
+    echo_json,
+    fabric_or_exit,
+    json_option,
+    library_options,
+    load_library_or_exit,
+)
 from preform.shear.fit import (
     PolynomialFit,
     TableFit,
@@ -102,27 +110,38 @@ def _law_name(entry: Any) -> str:
 @click.command("shear")
 @click.argument("name")
 @click.option("--angles", default="0:60:5", show_default=True, help="START:STOP:STEP [deg].")
-@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-@click.option("--png", type=click.Path(dir_okay=False), help="Write force and energy plots.")
 @click.option(
-    "--library", "libraries", multiple=True, type=click.Path(exists=True), help="Extra library."
+    "--out",
+    "figure",
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
+    help="Write the force and energy curves as a figure (.png, .svg, .pdf).",
 )
+@click.option("--png", "png", type=click.Path(dir_okay=False), hidden=True)  # old name of --out
+@library_options
+@json_option
 def shear_command(
-    name: str, angles: str, as_json: bool, png: str | None, libraries: tuple[str, ...]
+    name: str,
+    angles: str,
+    figure: str | None,
+    png: str | None,
+    libraries: tuple[str, ...],
+    no_bundled: bool,
+    as_json: bool,
 ) -> None:
     """Print the shear force and energy curves of fabric NAME, both senses."""
-    from preform.library import load_library  # the library loads plugins: import on use
-
     try:
         grid = parse_angles(angles)
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="--angles") from error
-    lib = load_library(list(libraries))
-    curves = shear_curves(lib.shear_law(name), grid, name, _law_name(lib.fabric(name)))
-    if png:
-        plot_shear_curves(curves, png)
+    lib = load_library_or_exit(libraries, bundled=not no_bundled)
+    fabric = fabric_or_exit(lib, name)
+    curves = shear_curves(lib.shear_law(name), grid, name, _law_name(fabric))
+    path = figure or png
+    if path:
+        plot_shear_curves(curves, path)
     if as_json:
-        click.echo(json.dumps(curves, indent=2))
+        echo_json(curves)
         return
     click.echo(f"{name}: law {curves['law']}")
     click.echo(f"{'|γ| deg':>8} {'F+ N/mm':>10} {'W+ J/m²':>10} {'F- N/mm':>10} {'W- J/m²':>10}")
@@ -131,6 +150,8 @@ def shear_command(
             f"{pos['angle_deg']:8.2f} {pos['force_N_per_mm']:10.4f} {pos['energy_J_per_m2']:10.4f}"
             f" {abs(neg['force_N_per_mm']):10.4f} {neg['energy_J_per_m2']:10.4f}"
         )
+    if path:
+        click.echo(f"wrote {path}")
 
 
 def read_test_csv(path: str | Path) -> list[dict[str, str]]:
@@ -140,6 +161,38 @@ def read_test_csv(path: str | Path) -> list[dict[str, str]]:
     if not rows or not {"displacement_mm", "force_N"} <= set(rows[0]):
         raise ValueError(f"{path}: need a header with displacement_mm and force_N")
     return rows
+
+
+@dataclass
+class FitReport:
+    """What ``preform fit`` found: the ``shear_law`` block, comment lines on its quality, and
+    per sense the normalised data (angle [deg], F_s/L [N/mm]) and the fit drawn against it."""
+
+    block: dict[str, Any]
+    comments: list[str]
+    through_zero: bool
+    data: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    fits: dict[str, PolynomialFit | TableFit] = field(default_factory=dict)
+    #: Per sense, the constant a free fit of the same degree gives [N/mm] (polynomials forced
+    #: through zero only): how far the data are from passing through zero.
+    free_intercept_N_per_mm: dict[str, float] = field(default_factory=dict)
+
+    def as_json(self) -> dict[str, Any]:
+        senses = {}
+        for sense, fit in self.fits.items():
+            q = fit.quality
+            senses[sense] = {
+                "r_squared": q.r_squared,
+                "rmse_N_per_mm": q.rmse_N_per_mm,
+                "points": q.points,
+                "free_intercept_N_per_mm": self.free_intercept_N_per_mm.get(sense),
+            }
+        return {
+            "shear_law": self.block,
+            "through_zero": self.through_zero,
+            "senses": senses,
+            "comments": self.comments,
+        }
 
 
 def fit_test_data(
@@ -152,13 +205,43 @@ def fit_test_data(
     sense: str = "parallel",
     degree: int | None = 3,
     step_deg: float = 2.0,
+    through_zero: bool = True,
 ) -> tuple[dict[str, Any], list[str]]:
     """Normalise test rows and fit them; returns (shear_law block, comment lines on quality).
 
     ``degree=None`` gives a tabulated law. ``sense="both"`` needs a ``sense`` column
     (parallel/perpendicular) and gives an asymmetric law; one sense gives a symmetric law from
-    the rows of that sense (all rows when there is no ``sense`` column).
+    the rows of that sense (all rows when there is no ``sense`` column). ``through_zero``:
+    polynomials without a constant term (see ``preform.shear.fit.fit_polynomial``).
     """
+    report = fit_report(
+        rows,
+        test,
+        side_mm=side_mm,
+        height_mm=height_mm,
+        width_mm=width_mm,
+        fabric_side_mm=fabric_side_mm,
+        sense=sense,
+        degree=degree,
+        step_deg=step_deg,
+        through_zero=through_zero,
+    )
+    return report.block, report.comments
+
+
+def fit_report(
+    rows: list[dict[str, str]],
+    test: str,
+    side_mm: float | None = None,
+    height_mm: float | None = None,
+    width_mm: float | None = None,
+    fabric_side_mm: float | None = None,
+    sense: str = "parallel",
+    degree: int | None = 3,
+    step_deg: float = 2.0,
+    through_zero: bool = True,
+) -> FitReport:
+    """:func:`fit_test_data`, keeping the normalised data and the fits (for the plot)."""
 
     def normalise(selected: list[dict[str, str]]) -> tuple[np.ndarray, np.ndarray]:
         delta = np.array([float(r["displacement_mm"]) for r in selected])
@@ -186,22 +269,61 @@ def fit_test_data(
             raise ValueError(f"no rows with sense {which!r}")
         return chosen
 
-    def fit(which: str) -> PolynomialFit | TableFit:
-        angle, force = normalise(select(which))
-        return fit_polynomial(angle, force, degree) if degree else fit_table(angle, force, step_deg)
-
     senses = ["parallel", "perpendicular"] if sense == "both" else [sense]
-    fits = [fit(s) for s in senses]
-    block = shear_law_block(fits[0], fits[1] if len(fits) > 1 else None)
+    report = FitReport({}, [], through_zero)
+    for which in senses:
+        angle, force = normalise(select(which))
+        report.data[which] = (angle, force)
+        if degree:
+            report.fits[which] = fit_polynomial(angle, force, degree, through_zero=through_zero)
+            if through_zero:
+                free = fit_polynomial(angle, force, degree, through_zero=False)
+                report.free_intercept_N_per_mm[which] = free.coefficients_N_per_mm[0]
+        else:
+            report.fits[which] = fit_table(angle, force, step_deg)
+    fits = [report.fits[s] for s in senses]
+    report.block = shear_law_block(fits[0], fits[1] if len(fits) > 1 else None)
     comments = [f"fitted by preform fit from {test} data ({', '.join(senses)})"]
+    if degree:
+        comments.append(
+            f"polynomial of degree {degree} "
+            + (
+                "forced through zero (no constant term; --free-intercept fits one)"
+                if through_zero
+                else "with a fitted constant term (--free-intercept)"
+            )
+        )
     for s, f in zip(senses, fits, strict=True):
         q = f.quality
-        comments.append(
-            f"{s}: R² = {q.r_squared:.4f}, RMSE = {q.rmse_N_per_mm:.4g} N/mm, {q.points} points"
-        )
+        line = f"{s}: R² = {q.r_squared:.4f}, RMSE = {q.rmse_N_per_mm:.4g} N/mm, {q.points} points"
+        if s in report.free_intercept_N_per_mm:
+            line += f"; a free fit's constant would be {report.free_intercept_N_per_mm[s]:.3g} N/mm"
+        comments.append(line)
     if sense == "perpendicular":
         comments.append("perpendicular data only: the block is symmetric; merge as negative sense")
-    return block, comments
+    report.comments = comments
+    return report
+
+
+def plot_fit(report: FitReport, path: str | Path, title: str | None = None) -> None:
+    """The fitted F_s/L against the normalised test data [N/mm over deg], one colour per sense."""
+    from preform.export.fig_curves import fit_figure
+
+    curves = {}
+    for sense, fit in report.fits.items():
+        angle, force = report.data[sense]
+        grid = np.linspace(0.0, float(np.max(np.abs(angle))), 200)
+        if isinstance(fit, PolynomialFit):
+            model = fit(grid)
+        else:
+            model = np.interp(grid, fit.angle_deg, fit.force_N_per_mm)
+        q = fit.quality
+        curves[sense] = {
+            "data": (np.abs(angle), np.abs(force)),
+            "fit": (grid, model),
+            "label": f"{sense}: R² = {q.r_squared:.3f}, RMSE {q.rmse_N_per_mm:.3g} N/mm",
+        }
+    fit_figure(curves, path, title=title)
 
 
 @click.command("fit")
@@ -215,8 +337,27 @@ def fit_test_data(
     "--sense", type=click.Choice(["parallel", "perpendicular", "both"]), default="parallel"
 )
 @click.option("--degree", type=int, default=3, show_default=True, help="0: tabulated law.")
+@click.option(
+    "--through-zero/--free-intercept",
+    default=True,
+    show_default=True,
+    help="Polynomial without a constant term, so F(0) = 0 (an unsheared fabric carries no "
+    "force), or with a fitted one. The comments give a free fit's constant either way.",
+)
 @click.option("--step-deg", type=float, default=2.0, show_default=True, help="Table bin [deg].")
-@click.option("--out", type=click.Path(dir_okay=False), help="Write the YAML block here.")
+@click.option(
+    "--out",
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
+    help="Write the YAML block to FILE instead of printing it.",
+)
+@click.option(
+    "--plot",
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
+    help="Write the fit against the data as a figure (.png, .svg, .pdf).",
+)
+@json_option
 def fit_command(
     data: str,
     test: str,
@@ -226,12 +367,19 @@ def fit_command(
     width_mm: float | None,
     sense: str,
     degree: int,
+    through_zero: bool,
     step_deg: float,
     out: str | None,
+    plot: str | None,
+    as_json: bool,
 ) -> None:
-    """Normalise a shear test (DATA.csv: displacement_mm, force_N[, sense]) and fit a law."""
+    """Normalise a shear test (DATA.csv: displacement_mm, force_N[, sense]) and fit a law.
+
+    Prints the shear_law YAML block (with its fit quality as comments), or writes it to --out;
+    --json prints the block, the quality per sense and the files written.
+    """
     try:
-        block, comments = fit_test_data(
+        report = fit_report(
             read_test_csv(data),
             test,
             side_mm=side_mm,
@@ -241,10 +389,26 @@ def fit_command(
             sense=sense,
             degree=degree or None,
             step_deg=step_deg,
+            through_zero=through_zero,
         )
     except ValueError as error:
-        raise click.ClickException(str(error)) from error
-    text = block_to_yaml(block, comments)
+        raise InputError(str(error)) from error
+    text = block_to_yaml(report.block, report.comments)
     if out:
-        Path(out).write_text(text, encoding="utf-8")
-    click.echo(text, nl=False)
+        from preform.export.atomic import atomic_open
+
+        with atomic_open(out, "w", encoding="utf-8") as handle:
+            handle.write(text)
+    if plot:
+        plot_fit(report, plot, title=f"{Path(data).name}: {test} fit")
+    if as_json:
+        echo_json({**report.as_json(), "files": {"yaml": out, "plot": plot}})
+        return
+    if not out:
+        click.echo(text, nl=False)
+        return
+    for line in report.comments[1:]:
+        click.echo(line)
+    for path in (out, plot):
+        if path:
+            click.echo(f"wrote {path}")

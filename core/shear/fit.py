@@ -1,7 +1,8 @@
 """Fit normalised shear data (angle [deg], F_s/L [N/mm]) to a ``polynomial`` or ``tabulated`` law.
 
-Polynomial: least squares in F_s/L over powers 1..N of the angle in degrees, with no constant
-term, so the fitted curve passes through zero (an unsheared fabric carries no shear force).
+Polynomial: least squares in F_s/L over powers 1..N of the angle in degrees; by default with no
+constant term, so the fitted curve passes through zero (an unsheared fabric carries no shear
+force), or with one (``through_zero=False``; ``preform fit --free-intercept``).
 Tabulated: the points are averaged in bins of ``step_deg`` and negative averages set to zero.
 Fit quality is reported against the data as R² and RMSE [N/mm]. ``shear_law_block`` turns one or
 two fits (γ > 0 and γ < 0) into a ``shear_law`` mapping that validates as it is.
@@ -74,18 +75,30 @@ def _quality(data: FloatArray, model: FloatArray) -> FitQuality:
     return FitQuality(r2, float(np.sqrt(sse / data.size)), int(data.size))
 
 
-def fit_polynomial(angle_deg: ArrayLike, force_N_per_mm: ArrayLike, degree: int) -> PolynomialFit:
-    """Least-squares polynomial through zero of F_s/L [N/mm] in the shear angle [deg].
+def fit_polynomial(
+    angle_deg: ArrayLike,
+    force_N_per_mm: ArrayLike,
+    degree: int,
+    *,
+    through_zero: bool = True,
+) -> PolynomialFit:
+    """Least-squares polynomial of F_s/L [N/mm] in the shear angle [deg].
 
+    ``through_zero`` (the default) leaves out the constant term, so the curve passes through
+    zero: an unsheared fabric carries no shear force. With ``through_zero=False`` the constant
+    a_0 [N/mm] is fitted too (a test rig's friction or a preload offset shows there).
     Angles and forces are taken as magnitudes (one sense per call). ``degree`` ≥ 1.
     """
     if degree < 1:
         raise ValueError("degree must be at least 1")
     a, f = _clean(angle_deg, force_N_per_mm)
     scale = float(a.max()) or 1.0  # scaled powers keep the normal equations well conditioned
-    design = (a[:, None] / scale) ** np.arange(1, degree + 1)
+    first = 1 if through_zero else 0
+    powers = np.arange(first, degree + 1)
+    design = (a[:, None] / scale) ** powers
     solution, *_ = np.linalg.lstsq(design, f, rcond=None)
-    coefficients = (0.0, *(solution / scale ** np.arange(1, degree + 1)).tolist())
+    fitted = (solution / scale**powers).tolist()
+    coefficients = (0.0, *fitted) if through_zero else tuple(fitted)
     fit = PolynomialFit(tuple(coefficients), float(a.max()), FitQuality(0.0, 0.0, 0))
     return PolynomialFit(fit.coefficients_N_per_mm, fit.max_angle_deg, _quality(f, fit(a)))
 

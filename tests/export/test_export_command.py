@@ -48,11 +48,10 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
         cli,
         [
             "export",
+            "plain-weave-600",
             "abaqus",
             "table",
             "flat-pattern",
-            "--material",
-            "plain-weave-600",
             "--scene",
             str(scene),
             "--out",
@@ -61,7 +60,7 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
         ],
     )
     assert result.exit_code == 0, result.output
-    report = json.loads(result.output)
+    report = json.loads(result.stdout)
     assert report["status"] == "partial"  # a 100 mm ply cannot cover the 176 mm skin
     assert report["written"] == {
         "abaqus": "drape_abaqus.inc",
@@ -79,36 +78,26 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
     assert report["cut_pattern_allowance_area_mm2"] > report["cut_pattern_area_mm2"]
 
 
-def test_export_command_overrides_and_refusals(tmp_path) -> None:
+def test_export_command_refusals(tmp_path) -> None:
     scene = write_scene(tmp_path)
     runner = CliRunner()
-    bad = runner.invoke(cli, ["export", "abaqus", "--material", "nope", "--scene", str(scene)])
-    assert bad.exit_code == 2 and "unknown material" in bad.output
+    bad = runner.invoke(cli, ["export", "nope", "abaqus", "--scene", str(scene)])
+    assert bad.exit_code == 2 and "no fabric named 'nope'" in bad.stderr
+    no_scene = runner.invoke(cli, ["export", "plain-weave-600", "abaqus", "--scene", "nosuch"])
+    assert no_scene.exit_code == 2 and "no bundled scene" in no_scene.stderr
     wrong = runner.invoke(
         cli,
-        [
-            "export",
-            "table",
-            "--material",
-            "plain-weave-600",
-            "--scene",
-            "hemisphere",
-            "--reference-direction",
-            "0,0,0",
-        ],
+        ["export", "plain-weave-600", "table", "--reference-direction", "0,0,0"],
     )
-    assert wrong.exit_code == 2
-    no_mesh = runner.invoke(
-        cli, ["export", "lsdyna", "--material", "plain-weave-600", "--scene", "hemisphere"]
-    )
-    assert no_mesh.exit_code == 2 and "--mesh" in no_mesh.output
+    assert wrong.exit_code == 2 and "not all zero" in wrong.stderr
+    no_mesh = runner.invoke(cli, ["export", "plain-weave-600", "lsdyna"])
+    assert no_mesh.exit_code == 2 and "--mesh" in no_mesh.stderr
     missing = runner.invoke(
         cli,
         [
             "export",
-            "table",
-            "--material",
             "plain-weave-600",
+            "table",
             "--scene",
             str(scene),
             "--mesh",
@@ -119,7 +108,8 @@ def test_export_command_overrides_and_refusals(tmp_path) -> None:
         ],
     )
     assert missing.exit_code == 1
-    assert "export.mesh" in json.loads(missing.output)["error"]
+    assert "export.mesh" in json.loads(missing.stdout)["error"]
+    assert "failed: export.mesh" in missing.stderr
 
 
 def test_scene_outputs_run_in_the_pipeline_and_mark_the_case_partial(tmp_path) -> None:

@@ -131,6 +131,7 @@ def test_interrupted_run_resumes_without_redoing_or_corrupting(toy, tmp_path):
         "pipeline",
         "run",
         str(lib_path),
+        "--no-bundled",  # LIBRARY adds to the bundled library
         "--scene",
         str(scene),
         "--out",
@@ -197,6 +198,7 @@ def test_manifest_records_inputs_and_versions(toy, tmp_path):
             "pipeline",
             "run",
             str(lib_path),
+            "--no-bundled",  # LIBRARY adds to the bundled library
             "--scene",
             str(scene),
             "--out",
@@ -232,6 +234,7 @@ def test_explain_prints_plan_without_running(toy, tmp_path):
             "pipeline",
             "run",
             str(lib_path),
+            "--no-bundled",  # LIBRARY adds to the bundled library
             "--scene",
             str(scene),
             "--explain",

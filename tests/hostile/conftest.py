@@ -132,6 +132,7 @@ class RunEnv:
             "pipeline",
             "run",
             str(library),
+            "--no-bundled",  # LIBRARY adds to the bundled library
             "--scene",
             str(scene),
             "--out",

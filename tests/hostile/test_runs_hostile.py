@@ -171,7 +171,7 @@ def test_rerun_with_another_hash_seed_skips(runenv):
     scene = runenv.scene(outputs="[work_txt, work]")
     first = runenv.run(lib, scene, "--engine", "serial")
     assert first.returncode == 0, first.stderr
-    for seed in ("1", "2", "3"):
+    for seed in ("1", "2"):
         env = {**runenv.env, "PYTHONHASHSEED": seed}
         proc = subprocess.run(
             runenv.command(lib, scene, "--engine", "serial"),
@@ -687,7 +687,7 @@ def test_plan_order_does_not_depend_on_the_hash_seed():
             timeout=60,
             check=True,
         ).stdout
-        for seed in ("1", "2", "3", "4", "5")
+        for seed in ("1", "2", "3")
     }
     assert len(orders) == 1
 

@@ -1,0 +1,608 @@
+"""The Python API: a thin, typed facade over the steps the command line runs, in mm and degrees.
+
+::
+
+    import preform
+
+    lib = preform.load_library()                        # bundled + PREFORM_LIBRARY (+ paths)
+    fabric = lib.fabric("E-BX-318")
+    d = preform.drape(fabric, generator_angle_deg=80)   # the bundled hemisphere scene
+    d.status, d.summary["max_abs_shear_deg"], d.to_pandas(), d.plot(), d.to_vtu("d.vtu")
+    best = preform.least_energy("E-BX-318", generator_angle_range_deg=(40, 140))
+    best.optimum_generator_angle_deg, best.energy_vs_angle, best.drape.to_pandas()
+    run = preform.run(scenes=["shear"], out_dir="results")   # every fabric, as `pipeline run`
+
+Every call runs one (material, scene) case exactly as ``preform pipeline run`` does: the same
+scene validation, the same planned steps, ``preform.pipeline.runner.execute_case``, the same
+status (``ok``, ``partial``, ``failed``) with the same reasons and warnings. Arguments carry their
+unit in their name (``_mm``, ``_deg``); results are in mm, degrees and J, as in the tables. SI
+stays inside the steps. Nothing here imports numpy, pandas or matplotlib before it is used.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from preform.library import Library
+    from preform.material import FabricBase
+    from preform.pipeline.runner import CaseResult, RunReport
+    from preform.pipeline.scene import Scene
+    from preform.pipeline.step import CaseContext
+
+PathLike = str | os.PathLike[str]
+
+#: Keyword arguments of :func:`scene` and where each goes in the scene (units in the names).
+SCENE_KEYWORDS: dict[str, tuple[str, ...]] = {
+    "name": ("name",),
+    "tool": ("tool",),
+    "node_spacing_mm": ("ply", "node_spacing_mm"),
+    "ply_size_mm": ("ply", "size_mm"),
+    "ply_outline_mm": ("ply", "outline_mm"),
+    "start_point_mm": ("start", "point_mm"),
+    "orientation_deg": ("start", "orientation_deg"),
+    "generator_angle_deg": ("start", "generator_angle_deg"),
+    "generators": ("start", "generators"),
+    "fidelity": ("fidelity",),
+    "outputs": ("outputs",),
+}
+
+#: The scenes the API starts from when given none (bundled; see ``preform scenes list``).
+DRAPE_SCENE = "hemisphere"
+LEAST_ENERGY_SCENE = "hemisphere-min-energy"
+#: The generator-angle range searched when a scene has no ``search`` section [deg].
+DEFAULT_RANGE_DEG = (30.0, 150.0)
+
+
+def _host() -> Any:
+    from preform.plugin_manager import default_host
+
+    return default_host()
+
+
+def _plain(value: Any) -> Any:
+    """Tuples and arrays as lists, numpy scalars as Python numbers: YAML-ready scene data."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if hasattr(value, "tolist"):
+        return _plain(value.tolist())
+    return value
+
+
+# -- library and fabrics ----------------------------------------------------------------------
+
+
+def load_library(
+    paths: PathLike | Sequence[PathLike] = (),
+    *,
+    bundled: bool = True,
+    env: bool = True,
+) -> Library:
+    """The materials library: the bundled fabrics (unless ``bundled=False``), the paths in
+    ``PREFORM_LIBRARY`` (unless ``env=False``), then ``paths`` (a file or folder, or several),
+    as ``--library`` and ``--no-bundled`` do. Raises ``preform.library.LibraryError`` listing
+    every problem as ``FILE:LINE:COL: field: message``.
+
+    ``library.fabric(name)`` gives a fabric; ``library.names()`` lists them.
+    """
+    from preform.library import load_library as load
+
+    listed = [paths] if isinstance(paths, str | os.PathLike) else list(paths)
+    return load(listed, bundled=bundled, env=env, registry=_host().registry)
+
+
+def fabric(name: str, library: Library | None = None) -> FabricBase:
+    """The fabric called ``name`` from ``library`` (default: :func:`load_library`). A
+    ``KeyError`` suggests close names."""
+    return (library or load_library()).fabric(name)
+
+
+def _fabric(spec: Any, library: Library | None) -> FabricBase:
+    return fabric(spec, library) if isinstance(spec, str) else spec
+
+
+# -- scenes -------------------------------------------------------------------------------------
+
+
+def _changes(keywords: Mapping[str, Any]) -> dict[tuple[str, ...], Any]:
+    changes: dict[tuple[str, ...], Any] = {}
+    for key, value in keywords.items():
+        if value is None:
+            continue
+        if key == "generator_angle_range_deg":
+            low, high = (float(v) for v in value)
+            changes[("search", "generator_angle_deg")] = {"min": low, "max": high}
+        elif key in SCENE_KEYWORDS:
+            changes[SCENE_KEYWORDS[key]] = _plain(value)
+        else:
+            known = ", ".join([*SCENE_KEYWORDS, "generator_angle_range_deg"])
+            raise TypeError(f"unknown scene keyword {key!r}; known: {known}")
+    return changes
+
+
+def _scene_and_data(
+    spec: Any, changes: Mapping[tuple[str, ...], Any]
+) -> tuple[Scene, dict[str, Any]]:
+    from preform.pipeline.overrides import changed_data, load_scene_changed, scene_from_mapping
+    from preform.pipeline.scene import Scene, resolve_scene_path
+
+    registry = _host().registry
+    if isinstance(spec, Scene):
+        data = spec.model_dump(mode="json", exclude_none=True)
+        return scene_from_mapping(
+            changed_data(data, changes), registry, base_dir=spec.base_dir, label=spec.name
+        )
+    if isinstance(spec, Mapping):
+        return scene_from_mapping(changed_data(_plain(spec), changes), registry)
+    path = resolve_scene_path(os.fspath(spec))
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"no scene file {os.fspath(spec)!r} and no bundled scene of that name "
+            "(`preform scenes list`)"
+        )
+    return load_scene_changed(path, registry, changes)
+
+
+def scene(
+    spec: Any = DRAPE_SCENE,
+    *,
+    name: str | None = None,
+    tool: Mapping[str, Any] | None = None,
+    node_spacing_mm: float | None = None,
+    ply_size_mm: tuple[float, float] | None = None,
+    ply_outline_mm: Sequence[tuple[float, float]] | None = None,
+    start_point_mm: tuple[float, float] | None = None,
+    orientation_deg: float | None = None,
+    generator_angle_deg: float | None = None,
+    generators: str | None = None,
+    generator_angle_range_deg: tuple[float, float] | None = None,
+    fidelity: str | None = None,
+    outputs: Sequence[str] | None = None,
+) -> Scene:
+    """A validated scene: ``spec`` (a bundled scene's name, a scene file, a mapping of scene
+    data, or a ``Scene``) with the keyword arguments set.
+
+    ``tool`` is the YAML's tool block (``{"surface": "hemisphere", "radius_mm": 100}``;
+    ``preform schema --scene`` lists every surface); ``node_spacing_mm``, ``ply_size_mm`` (along
+    the two fibre families), ``ply_outline_mm`` and ``start_point_mm`` (plan x, y) are in mm;
+    ``orientation_deg`` (plan direction of the first generator), ``generator_angle_deg`` (angle
+    between the generators) and ``generator_angle_range_deg`` (the least-energy search's range)
+    in degrees; ``fidelity`` is ``draft``, ``standard`` or ``fine``. Invalid values raise
+    ``preform.pipeline.scene.SceneError`` with located messages, as a scene file would.
+    """
+    given = locals()
+    keywords = {k: given[k] for k in (*SCENE_KEYWORDS, "generator_angle_range_deg")}
+    return _scene_and_data(spec, _changes(keywords))[0]
+
+
+# -- one case -----------------------------------------------------------------------------------
+
+
+@dataclass(repr=False)
+class CaseRun:
+    """One (material, scene) case run from Python: the pipeline's own result and summary.
+
+    ``status`` is ``ok``, ``partial`` or ``failed`` (or ``timed_out``), decided by the pipeline
+    exactly as for ``preform pipeline run``; ``reasons`` say why a result is partial,
+    ``warnings`` what to know about a complete one, ``error`` why it failed. ``summary`` is the
+    case's ``summary.json``: its scalar results (mm, degrees, J), status, reasons, warnings and
+    timings.
+    """
+
+    fabric: FabricBase
+    scene: Scene
+    #: The pipeline's record of the case (``preform.pipeline.runner.CaseResult``).
+    case: CaseResult
+    summary: dict[str, Any]
+    #: The case's products in memory (SI, internal): the net, the search.
+    products: dict[str, Any] = field(default_factory=dict)
+    #: The case folder when ``out_dir`` was given (files the scene asked for, summary.json).
+    case_dir: Path | None = None
+
+    @property
+    def status(self) -> str:
+        return self.case.status
+
+    @property
+    def ok(self) -> bool:
+        """True when the result is complete and finite (status ``ok``)."""
+        return self.case.status == "ok"
+
+    @property
+    def reasons(self) -> list[str]:
+        return list(self.case.reasons)
+
+    @property
+    def warnings(self) -> list[str]:
+        return list(self.case.warnings)
+
+    @property
+    def error(self) -> str | None:
+        return self.case.error
+
+    def raise_for_status(self) -> None:
+        """Raise ``preform.CaseFailure`` with the case's error when it has no result."""
+        from preform.pipeline.status import CaseFailure
+
+        if self.case.status not in ("ok", "partial"):
+            raise CaseFailure(f"{self.case.case_id}: {self.case.status}: {self.case.error}")
+
+    def _product(self, name: str) -> Any:
+        if name not in self.products:
+            from preform.pipeline.status import CaseFailure
+
+            raise CaseFailure(
+                f"{self.case.case_id} has no {name} ({self.case.status}: "
+                f"{self.case.error or 'not computed'})"
+            )
+        return self.products[name]
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.case.case_id}: {self.case.status}{self._headline()}>"
+
+    def _headline(self) -> str:
+        return f", {self.error}" if self.error else ""
+
+
+def _execute(
+    fab: FabricBase, scene_: Scene, data: dict[str, Any], out_dir: PathLike | None
+) -> tuple[CaseResult, dict[str, Any], dict[str, Any], Path | None]:
+    """Run one case through the pipeline's ``execute_case``; (result, summary, products, dir)."""
+    from preform.pipeline.rundir import read_json
+    from preform.pipeline.runner import Case, execute_case, folder_name, input_hash
+
+    host = _host()
+    fabric_data = fab.model_dump(mode="json", exclude_none=True)
+    kept: list[CaseContext] = []
+    with tempfile.TemporaryDirectory(prefix="preform-") as scratch:
+        root = Path(out_dir) if out_dir is not None else Path(scratch)
+        case_dir = root / folder_name(scene_.name) / folder_name(fab.name)
+        case = Case(
+            case_id=f"{scene_.name}/{fab.name}",
+            material=fab.name,
+            scene=scene_.name,
+            fabric_data=fabric_data,
+            scene_data=data,
+            scene_base_dir=scene_.base_dir,
+            case_dir=str(case_dir),
+            input_hash=input_hash(fabric_data, scene_, data, host),
+            timeout_s=scene_.limits.case_timeout_s,
+        )
+        result = execute_case(case, host, on_context=kept.append)
+        summary = read_json(case_dir / "summary.json")
+    products = dict(kept[0].products) if kept else {}
+    record = summary if isinstance(summary, dict) else {}
+    return result, record, products, case_dir if out_dir is not None else None
+
+
+@dataclass(repr=False)
+class Drape(CaseRun):
+    """A draped ply (:func:`drape`): its status, summary, cells and pictures."""
+
+    @property
+    def generator_angle_deg(self) -> float:
+        return float(self.summary["generator_angle_deg"])
+
+    @property
+    def total_energy_J(self) -> float:
+        """Total shear strain energy of the draped part [J]."""
+        return float(self.summary["total_energy_J"])
+
+    @property
+    def max_abs_shear_deg(self) -> float:
+        return float(self.summary["max_abs_shear_deg"])
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per cell (``cells.csv``): index (i, j), ``status`` by name (VALID,
+        INCOMPLETE, FOLDED, OUTSIDE_PLY), centroid ``x_mm``/``y_mm``/``z_mm``, ``shear_deg``,
+        ``area_mm2``, ``thinning``, ``energy_J_per_m2``, ``past_locking``/``past_failure``."""
+        from preform.export.tables import cells_table
+
+        draped = self._product("drape")
+        return cells_table(draped.result, draped.energy)
+
+    def plot(self, path: PathLike | None = None) -> Figure:
+        """The fibre pattern (top view with the tows, 3D view coloured by shear [deg]); saved
+        to ``path`` (.png, .svg, .pdf) when given. Returns the matplotlib figure."""
+        from preform.export.fig_drape import fibre_pattern_figure
+
+        draped = self._product("drape")
+        every = max(1, round(5e-3 / draped.result.node_spacing))  # a tow line every ~5 mm
+        return fibre_pattern_figure(
+            draped.result, draped.energy, path, title=self.fabric.name, tow_every=every
+        )
+
+    def to_vtu(self, path: PathLike) -> Path:
+        """Write the net as a VTK .vtu file for ParaView (cell data: shear, fibre directions,
+        energy density, thinning); returns the path."""
+        from preform.export.vtu import write_drape_vtu
+
+        draped = self._product("drape")
+        write_drape_vtu(draped.result, draped.energy, path)
+        return Path(path)
+
+    def _headline(self) -> str:
+        if "total_energy_J" not in self.summary:
+            return super()._headline()
+        return (
+            f", generator angle {self.generator_angle_deg:.1f}°, energy "
+            f"{self.total_energy_J:.4g} J, max |shear| {self.max_abs_shear_deg:.1f}°"
+        )
+
+
+@dataclass(repr=False)
+class LeastEnergy(CaseRun):
+    """The least-energy drape (:func:`least_energy`): the optimum, E(α), and the drape there."""
+
+    @property
+    def optimum_generator_angle_deg(self) -> float:
+        return float(self.summary["optimum_generator_angle_deg"])
+
+    @property
+    def optimum_energy_J(self) -> float:
+        return float(self.summary["optimum_energy_J"])
+
+    @property
+    def energy_vs_angle(self) -> pd.DataFrame:
+        """Every drape of the search: ``generator_angle_deg``, ``energy_J``, ``coverage`` (share
+        of the part covered, 0..1) and ``feasible``, by angle."""
+        import pandas as pd
+
+        self._product("energy_vs_angle")
+        curve = dict((float(a), float(e)) for a, e in self.summary["energy_vs_angle"])
+        cover = dict(self.summary.get("energy_vs_angle_coverage") or [])
+        feasible = dict(self.summary.get("energy_vs_angle_feasible") or [])
+        angles = sorted(curve)
+        return pd.DataFrame(
+            {
+                "generator_angle_deg": angles,
+                "energy_J": [curve[a] for a in angles],
+                "coverage": [cover.get(a) for a in angles],
+                "feasible": [feasible.get(a) for a in angles],
+            }
+        )
+
+    def to_pandas(self) -> pd.DataFrame:
+        """:attr:`energy_vs_angle`; the cells of the optimum drape are ``.drape.to_pandas()``."""
+        return self.energy_vs_angle
+
+    @property
+    def drape(self) -> Drape:
+        """The drape at the optimum (the same case: its status, summary and products)."""
+        return Drape(self.fabric, self.scene, self.case, self.summary, self.products, self.case_dir)
+
+    def plot(self, path: PathLike | None = None) -> Figure:
+        """Total shear strain energy [J] against generator angle [deg], the optimum marked;
+        saved to ``path`` when given. ``.drape.plot()`` draws the pattern at the optimum."""
+        from preform.export.fig_curves import energy_vs_angle_figure
+
+        table = self.energy_vs_angle
+        name = self.fabric.name
+        return energy_vs_angle_figure(
+            {name: list(zip(table["generator_angle_deg"], table["energy_J"], strict=True))},
+            path,
+            optima={name: self.optimum_generator_angle_deg},
+            title=f"{name}: total shear strain energy against generator angle",
+        )
+
+    def to_vtu(self, path: PathLike) -> Path:
+        """The drape at the optimum as a .vtu file (see :meth:`Drape.to_vtu`)."""
+        return self.drape.to_vtu(path)
+
+    def _headline(self) -> str:
+        if "optimum_generator_angle_deg" not in self.summary:
+            return super()._headline()
+        return (
+            f", optimum generator angle {self.optimum_generator_angle_deg:.2f}°, energy "
+            f"{self.optimum_energy_J:.4g} J"
+        )
+
+
+def drape(
+    fabric: Any,
+    scene: Any = DRAPE_SCENE,
+    *,
+    library: Library | None = None,
+    out_dir: PathLike | None = None,
+    **scene_keywords: Any,
+) -> Drape:
+    """Drape ``fabric`` (a name or a fabric) at a fixed generator angle.
+
+    ``scene`` (default: the bundled ``hemisphere``, R = 100 mm) gives the tool, ply and start;
+    keyword arguments change it as :func:`scene` does, in mm and degrees (e.g.
+    ``generator_angle_deg=80``, ``node_spacing_mm=5``, ``tool={"surface": "hemisphere",
+    "radius_mm": 150}``). A ``search`` section of the scene is ignored: the drape is at
+    ``start.generator_angle_deg`` (:func:`least_energy` searches). ``out_dir`` keeps the case
+    folder (``summary.json``) there; by default nothing is written.
+
+    The drape runs as a pipeline case: the returned :class:`Drape` has the pipeline's
+    ``status`` (``ok``, ``partial``, ``failed``), ``reasons``, ``warnings`` and ``summary``.
+    A failed case is returned, not raised: check ``.ok`` or call ``.raise_for_status()``.
+    """
+    fab = _fabric(fabric, library)
+    changes = _changes(scene_keywords)
+    changes[("search",)] = None
+    changes.setdefault(("outputs",), ["drape"])
+    scene_, data = _scene_and_data(scene, changes)
+    result, summary, products, case_dir = _execute(fab, scene_, data, out_dir)
+    return Drape(fab, scene_, result, summary, products, case_dir)
+
+
+def least_energy(
+    fabric: Any,
+    scene: Any = LEAST_ENERGY_SCENE,
+    *,
+    library: Library | None = None,
+    out_dir: PathLike | None = None,
+    **scene_keywords: Any,
+) -> LeastEnergy:
+    """The least-energy drape of ``fabric``: the search over generator angles (the founding
+    paper's study) and the drape at the optimum.
+
+    ``scene`` (default: the bundled ``hemisphere-min-energy``) and the keyword arguments as in
+    :func:`drape`; ``generator_angle_range_deg=(low, high)`` sets the searched range [deg]
+    (default the scene's, else 30–150°), ``fidelity`` the preset. Returns a
+    :class:`LeastEnergy` with the pipeline's status, ``optimum_generator_angle_deg``,
+    ``energy_vs_angle`` and ``.drape`` at the optimum.
+    """
+    fab = _fabric(fabric, library)
+    changes = _changes(scene_keywords)
+    changes.setdefault(("outputs",), ["energy_vs_angle", "optimum", "drape"])
+    base, _ = _scene_and_data(scene, {})
+    if base.search is None and ("search", "generator_angle_deg") not in changes:
+        low, high = DEFAULT_RANGE_DEG
+        changes[("search", "generator_angle_deg")] = {"min": low, "max": high}
+    scene_, data = _scene_and_data(scene, changes)
+    result, summary, products, case_dir = _execute(fab, scene_, data, out_dir)
+    return LeastEnergy(fab, scene_, result, summary, products, case_dir)
+
+
+# -- a run over a library -----------------------------------------------------------------------
+
+
+@dataclass(repr=False)
+class RunResult:
+    """A run of every (material, scene) case (:func:`run`), as ``preform pipeline run``."""
+
+    report: RunReport
+
+    @property
+    def out_dir(self) -> Path:
+        return Path(self.report.out_dir)
+
+    @property
+    def cases(self) -> list[CaseResult]:
+        """This run's cases (``preform.pipeline.runner.CaseResult``), in order."""
+        return list(self.report.results)
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """What ``pipeline run --json`` prints: counts, exit code, every case with its status,
+        covered fraction, reasons, warnings and error."""
+        from preform.pipeline.summary import run_summary
+
+        return run_summary(self.report)
+
+    @property
+    def counts(self) -> dict[str, int]:
+        return self.report.counts()
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per case of this run, as in ``results.csv``: material, scene, status,
+        reasons, warnings, error, timings and scalar results (mm, degrees, J)."""
+        import pandas as pd
+
+        from preform.pipeline.rundir import read_json, table_row
+
+        rows = []
+        for case in self.report.results:
+            folder = self.out_dir / _case_folder(case)
+            record = read_json(folder / "summary.json")
+            rows.append(table_row(record if isinstance(record, dict) else {}))
+        return pd.DataFrame(rows)
+
+    def plot(self, path: PathLike | None = None) -> Figure:
+        """Total energy against generator angle, one curve per fabric with its optimum (cases
+        that searched; the paper's Fig. 10); saved to ``path`` when given."""
+        from preform.export.fig_curves import energy_vs_angle_figure
+
+        table = self.to_pandas()
+        curves, optima = {}, {}
+        for case, row in zip(self.report.results, table.to_dict("records"), strict=True):
+            pairs = case.results.get("energy_vs_angle")
+            if pairs:
+                curves[case.material] = [(float(a), float(e)) for a, e in pairs]
+                best = row.get("optimum_generator_angle_deg")
+                if best is not None:
+                    optima[case.material] = float(best)
+        if not curves:
+            raise ValueError("no case of this run searched generator angles: nothing to plot")
+        return energy_vs_angle_figure(
+            curves, path, optima=optima, title="Total shear strain energy against generator angle"
+        )
+
+    def __repr__(self) -> str:
+        counts = ", ".join(f"{n} {s}" for s, n in sorted(self.counts.items()))
+        return f"<RunResult {self.out_dir}: {counts}>"
+
+
+def _case_folder(case: CaseResult) -> str:
+    from preform.pipeline.runner import folder_name
+
+    return f"{folder_name(case.scene)}/{folder_name(case.material)}"
+
+
+def run(
+    library: Library | PathLike | Sequence[PathLike] | None = None,
+    scenes: Sequence[Any] = (LEAST_ENERGY_SCENE,),
+    *,
+    materials: str | None = None,
+    out_dir: PathLike = "preform-results",
+    fidelity: str | None = None,
+    engine: str = "process",
+    workers: int | None = None,
+    case_timeout_s: float | None = None,
+    force: bool = False,
+    bundled: bool = True,
+) -> RunResult:
+    """Run every (material, scene) case into ``out_dir``, as ``preform pipeline run`` does.
+
+    ``library``: a loaded library, or paths added to the bundled library (``bundled=False``:
+    only them). ``scenes``: names, files, mappings or ``Scene`` objects. ``materials``: a glob
+    of fabric names. ``fidelity`` replaces every scene's preset (recorded, and part of the
+    cases' input hash). ``case_timeout_s`` [s] as ``--case-timeout``. Cases already done with
+    the same inputs are kept unless ``force``. Raises ``preform.pipeline.scene.SceneError`` or
+    ``preform.library.LibraryError`` for invalid input, before anything runs.
+    """
+    from preform.library import Library
+    from preform.pipeline.overrides import with_fidelity
+    from preform.pipeline.runner import (
+        DEFAULT_CASE_TIMEOUT_S,
+        input_files_record,
+        make_cases,
+        run_cases,
+    )
+
+    lib = (
+        library
+        if isinstance(library, Library)
+        else load_library(() if library is None else library, bundled=bundled)
+    )
+    loaded = [_scene_and_data(spec, with_fidelity(fidelity)) for spec in scenes]
+    host = _host()
+    out = Path(out_dir)
+    cases = make_cases(
+        lib, loaded, out, host, materials, timeout_s=case_timeout_s or DEFAULT_CASE_TIMEOUT_S
+    )
+    if not cases:
+        raise ValueError("no (material, scene) case matches; check materials and the scenes")
+    inputs: dict[str, Any] = {"libraries": input_files_record(lib.files), "api": True}
+    if fidelity is not None:
+        inputs["fidelity_override"] = fidelity
+    report = run_cases(cases, out, host, engine=engine, workers=workers, force=force, inputs=inputs)
+    return RunResult(report)
+
+
+__all__ = [
+    "SCENE_KEYWORDS",
+    "CaseRun",
+    "Drape",
+    "LeastEnergy",
+    "RunResult",
+    "drape",
+    "fabric",
+    "least_energy",
+    "load_library",
+    "run",
+    "scene",
+]

@@ -1,0 +1,163 @@
+"""Every example of README.md, CONTRIBUTING.md and docs/ runs, and the notebook in examples/.
+
+A fenced block runs by its language: ``python`` blocks execute in order, one namespace per page;
+``bash`` blocks run each ``preform ...`` command through the command line (exit code 0, ``> FILE``
+honoured) and skip the set-up commands listed in SETUP; ``yaml`` blocks that hold fabric entries
+validate as a library file; ``toml`` blocks parse. A block preceded by
+``<!-- example: fragment -->`` is a part of a file (it only has to parse, its ``...`` lines
+aside); ``<!-- example: excerpt of PATH -->`` must appear verbatim in PATH, a file the suite runs
+or reads. Examples run in a fresh folder holding the files of docs/examples/.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shlex
+import shutil
+import textwrap
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+import yaml
+from click.testing import CliRunner
+
+ROOT = Path(__file__).resolve().parents[2]
+PAGES = [ROOT / "README.md", ROOT / "CONTRIBUTING.md", *sorted((ROOT / "docs").glob("*.md"))]
+#: Commands of bash blocks that set up an environment or run the checks themselves: not run
+#: here (the suite is what `pytest` runs; installing is CI's job).
+SETUP = {"python3", ".", "source", "pip", "pytest", "ruff", "mypy"}
+
+_FENCE = re.compile(
+    r"^(?P<indent>[ \t]*)(?:<!-- example: (?P<mark>[^>]*?) -->\n(?P=indent))?```(?P<lang>\w*)\n"
+    r"(?P<body>.*?)^(?P=indent)```",
+    re.M | re.S,
+)
+
+
+@dataclass
+class Block:
+    page: Path
+    line: int
+    lang: str
+    body: str
+    mark: str | None
+
+    @property
+    def id(self) -> str:
+        return f"{self.page.relative_to(ROOT)}:{self.line}"
+
+
+def blocks(page: Path) -> list[Block]:
+    text = page.read_text(encoding="utf-8")
+    out = []
+    for m in _FENCE.finditer(text):
+        body = textwrap.dedent(m.group("body"))
+        line = text.count("\n", 0, m.start("lang")) + 1
+        out.append(Block(page, line, m.group("lang"), body, m.group("mark")))
+    return out
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch) -> Path:
+    for source in (ROOT / "docs" / "examples").iterdir():
+        shutil.copy(source, tmp_path / source.name)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.delenv("PREFORM_LIBRARY", raising=False)
+    return tmp_path
+
+
+def run_preform(command: str, folder: Path) -> None:
+    from preform.cli import build_cli
+
+    words = shlex.split(command, comments=True)
+    target = None
+    if ">" in words:
+        at = words.index(">")
+        words, target = words[:at], words[at + 1]
+    result = CliRunner().invoke(build_cli(), words[1:], catch_exceptions=False)
+    assert result.exit_code == 0, f"{command}\n{result.stdout}\n{result.stderr}"
+    if target:
+        (folder / target).write_text(result.stdout)
+
+
+def run_bash(block: Block, folder: Path) -> int:
+    ran = 0
+    text = block.body.replace("\\\n", " ")
+    for line in text.splitlines():
+        for part in line.split("&&"):
+            command = shlex.split(part, comments=True)
+            if not command:
+                continue
+            if command[0] == "preform":
+                run_preform(part, folder)
+                ran += 1
+            else:
+                assert command[0] in SETUP, f"{block.id}: {part!r} is neither preform nor set-up"
+    return ran
+
+
+def check_yaml(block: Block, folder: Path) -> None:
+    if block.mark == "fragment":
+        lines = [ln for ln in block.body.splitlines() if ln.strip() != "..."]
+        yaml.safe_load("\n".join(lines))
+        return
+    data = yaml.safe_load(block.body)
+    entries = data if isinstance(data, list) else [data]
+    if all(isinstance(e, dict) and "architecture" in e for e in entries):
+        from preform.library import validate_files
+        from preform.plugin_manager import default_host
+
+        path = folder / "example.yaml"
+        path.write_text(block.body)
+        _, errors, _ = validate_files([path], default_host().registry)
+        assert not errors, f"{block.id}: {errors}"
+
+
+def all_pages() -> list[Path]:
+    return [p for p in PAGES if blocks(p)]
+
+
+@pytest.mark.parametrize("page", all_pages(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_example_of_the_page_runs(page: Path, folder: Path):
+    namespace: dict[str, object] = {"__name__": f"example:{page.name}"}
+    for block in blocks(page):
+        if block.mark and block.mark.startswith("excerpt of "):
+            source = ROOT / block.mark.removeprefix("excerpt of ")
+            assert block.body.strip() in source.read_text(), f"{block.id} not in {source}"
+        elif block.lang == "python":
+            exec(compile(block.body, block.id, "exec"), namespace)
+        elif block.lang == "bash":
+            run_bash(block, folder)
+        elif block.lang == "yaml":
+            check_yaml(block, folder)
+        elif block.lang == "toml":
+            tomllib.loads(block.body)
+
+
+def test_the_readme_tour_runs_commands_and_is_not_skipped():
+    """The runner really runs the README's commands (a regex slip would run none)."""
+    tour = [b for b in blocks(ROOT / "README.md") if b.lang == "bash"]
+    commands = [
+        line for b in tour for line in b.body.splitlines() if line.lstrip().startswith("preform ")
+    ]
+    assert len(commands) >= 10
+    api = [b for b in blocks(ROOT / "docs" / "api.md") if b.lang == "python"]
+    assert len(api) >= 5
+
+
+def test_the_notebook_runs(folder: Path):
+    """examples/api_tour.ipynb: its code cells, in order, in one namespace (no Jupyter)."""
+    notebook = json.loads((ROOT / "examples" / "api_tour.ipynb").read_text())
+    assert notebook["nbformat"] == 4
+    cells = [c for c in notebook["cells"] if c["cell_type"] == "code"]
+    assert cells
+    namespace: dict[str, object] = {"__name__": "api_tour"}
+    for n, cell in enumerate(cells):
+        source = "".join(cell["source"])
+        exec(compile(source, f"api_tour.ipynb[cell {n}]", "exec"), namespace)
+    assert os.path.exists(folder / "api_tour_pattern.png")
