@@ -305,7 +305,7 @@ class Drape(CaseRun):
     def to_pandas(self) -> pd.DataFrame:
         """One row per cell (``cells.csv``): index (i, j), ``status`` by name (VALID,
         INCOMPLETE, FOLDED, OUTSIDE_PLY), centroid ``x_mm``/``y_mm``/``z_mm``, ``shear_deg``,
-        ``area_mm2``, ``thinning``, ``energy_J_per_m2``, ``past_locking``/``past_failure``."""
+        ``area_mm2``, ``thickness_ratio``, ``energy_J_per_m2``, ``past_locking``/``past_failure``."""
         from preform.export.tables import cells_table
 
         draped = self._product("drape")
@@ -324,7 +324,7 @@ class Drape(CaseRun):
 
     def to_vtu(self, path: PathLike) -> Path:
         """Write the net as a VTK .vtu file for ParaView (cell data: shear, fibre directions,
-        energy density, thinning); returns the path."""
+        energy density, thickness ratio; coordinates in mm); returns the path."""
         from preform.export.vtu import write_drape_vtu
 
         draped = self._product("drape")
