@@ -10,8 +10,10 @@ fidelity knobs (degrees, as in every scene; defaults in brackets):
       tolerance_deg: 1            # refinement stops below this step [1]
       max_drapes: 60              # budget of the angle search [60]
       min_coverage: 0.0           # angles covering less of the part are infeasible [0]
-      part_area_mm2: null         # the part's area; default: the best coverage of the scan
-      uncovered_shear_deg: null   # shear charged on bare part area; default: locking, else 60
+      part_area_mm2: null         # the part's area; default: the part's own (a bare
+                                  # hemisphere: 2πR²), else the best coverage of the scan
+      uncovered_shear_deg: null   # price bare part area at W(this shear) [off: no charge];
+                                  # when set, the case is partial
       layout: {vary: [orientation, start_point], max_drapes: 60}   # Nelder–Mead [off]
       curved_generators: {terms: 2, mirror_families: false, max_drapes: 120}      # [off]
       relax: false                # beyond the paper; coarse nets only [off]; or
@@ -263,12 +265,30 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
                 "bracket_deg",
                 "bracket_half_width_deg",
                 "vertex_std_deg",
+                "uncertainty_deg",
+                "residual_rms_rel",
                 "at_boundary",
                 "noise_limited",
             )
         }
     )
     objective = study.objective
+    at_optimum = min(
+        search.points, key=lambda p: abs(p.generator_angle_rad - search.optimum_angle_rad)
+    )
+    uncovered = max(0.0, search.reference_area_m2 - at_optimum.covered_area_m2)
+    ctx.summary["optimum_part_area_m2"] = search.reference_area_m2
+    ctx.summary["optimum_uncovered_part_area_m2"] = uncovered
+    if objective.uncovered_energy_density > 0:
+        # A priced bare area is the user's stated choice: the energy is not the part's alone.
+        assert objective.uncovered_shear_rad is not None
+        ctx.partial(
+            f"the search priced uncovered part area at the shear energy of "
+            f"{math.degrees(objective.uncovered_shear_rad):.4g}° (search.uncovered_shear_deg, "
+            f"{objective.uncovered_energy_density:.4g} J/m²): E(α) is not the part's shear "
+            f"energy alone; at the optimum {uncovered * 1e6:.4g} mm² of the part is bare",
+            min(1.0, at_optimum.coverage),
+        )
     layout = knobs["layout"]
     if layout:
         _run_layout(ctx, objective, search, layout, optimum)

@@ -12,6 +12,7 @@ and said in words. A ply too large for ``limits.max_nodes`` is refused before an
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -20,6 +21,7 @@ import numpy as np
 
 from preform.drape.fields import energy_field, summary
 from preform.drape.net import DrapeError, drape
+from preform.drape.part import HeightCut, Part, PlanPolygon, combine
 from preform.drape.ply import MAX_COUNT, PlyOutline
 from preform.drape.result import DrapeResult, EnergyField
 from preform.drape.verdict import (
@@ -154,6 +156,9 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
         "tolerance": knobs.solver_tolerance,
         "substeps": knobs.generator_substeps,
     }
+    part = scene_part(scene, surface)
+    if part is not None:
+        settings["trim"] = part
     if start.generators == "polyline":
         from preform.drape.generators import PlanPolylines
 
@@ -163,6 +168,35 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
         settings["generators"] = PlanPolylines(first, second)
         settings["orientation_rad"] = None
     return settings
+
+
+def scene_part(scene: Scene, surface: Any) -> Part | None:
+    """The part the scene makes on ``surface`` [m]: its ``part`` section (the intersection of
+    the cuts it gives), else the tool's own part (``surface.part()``, e.g. a bare hemisphere
+    above its rim), else None (every cell the net puts on the tool counts whole)."""
+    section = scene.part
+    parts: list[Part] = []
+    area = None
+    if section is not None:
+        if section.z_min_mm is not None:
+            parts.append(HeightCut(section.z_min_mm * MM))
+        if section.plan_outline_mm is not None:
+            parts.append(PlanPolygon(np.asarray(section.plan_outline_mm, dtype=float) * MM))
+        if section.area_mm2 is not None:
+            area = section.area_mm2 * MM * MM
+    if not parts:
+        own = getattr(surface, "part", None)
+        if own is None:
+            return None
+        tool_part: Part = own()
+        if area is not None:
+            tool_part = dataclasses.replace(tool_part, area_m2=area)
+        return tool_part
+    part = combine(parts)
+    assert part is not None
+    if area is not None:
+        part = dataclasses.replace(part, area_m2=area)
+    return part
 
 
 def start_problem(surface: Any, start_xy_m: tuple[float, float]) -> str | None:
@@ -257,7 +291,10 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
         raise CaseFailure(f"the drape cannot start: {error}") from None
     with np.errstate(all="ignore"):
         energy = energy_field(result, ctx.products["shear_law"])
-    ctx.summary.update(summary(result, energy))
+    part = settings.get("trim")
+    ctx.summary.update(summary(result, energy, part))
+    if part is not None:
+        ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
     judge_drape(ctx, result, energy, surface, settings["start_xy_m"])
     return {"drape": DrapedPly(result, energy)}
