@@ -364,12 +364,50 @@ def _run_curved(
         max_drapes=int(options.get("max_drapes", 120)),
     )
     ctx.summary.update(result.summary())
+    _flag_curved_range(ctx, objective, result)
     if result.relative_saving > 0:
         # The drape step drapes with these when it honours optimum["generators"].
         optimum.update(
             generators=result.generators,
             generator_angle_rad=result.generator_angle_rad,
             energy_J=result.energy_J,
+        )
+
+
+def _flag_curved_range(ctx: CaseContext, objective: DrapeObjective, curved: Any) -> None:
+    """Flag a curved-generator optimum whose drape shears cells of the part beyond the law's
+    data (or packing) range: its saving then rests on the law's continuation (e.g. 72° where a
+    warp-knit law holds its 60° value), not on measurements."""
+    evaluation = objective.evaluate(
+        curved.generator_angle_rad, generators=curved.generators, keep_result=True
+    )
+    result = evaluation.result
+    if result is None:
+        return
+    counted = objective.counted(result)
+    gamma = np.where(counted, result.shear, 0.0)
+    ctx.summary["curved_max_abs_shear_deg"] = float(np.degrees(np.abs(gamma).max()))
+    block = getattr(ctx.fabric, "shear_law", None)
+    if block is None and hasattr(ctx.fabric, "default_shear_law"):
+        block = ctx.fabric.default_shear_law()
+    limits = law_range(objective.law, block)
+    beyond = np.zeros_like(counted)
+    if limits.data_positive is not None:
+        beyond |= counted & (gamma > limits.data_positive)
+    if limits.data_negative is not None:
+        beyond |= counted & (gamma < -limits.data_negative)
+    if limits.packing is not None:
+        beyond |= counted & (np.abs(gamma) > limits.packing)
+    count = int(np.count_nonzero(beyond))
+    ctx.summary["curved_cells_outside_law_data"] = count
+    if count:
+        share = float(result.part_weight[beyond].sum() / max(result.part_weight.sum(), 1e-300))
+        ctx.warn(
+            f"the curved-generator optimum shears {count} cells ({100 * share:.2g} % of the "
+            f"part's fabric) beyond the shear law's data range, up to "
+            f"{ctx.summary['curved_max_abs_shear_deg']:.1f}°: its energy saving of "
+            f"{100 * curved.relative_saving:.3g} % rests on the law's continuation there, "
+            "not on measurements"
         )
 
 
@@ -395,6 +433,8 @@ def _run_relax(
         max_iterations=int(options.get("max_iterations", 1500)),
     )
     ctx.summary.update(relaxed.summary())
+    # The drape step exports the relaxed net when it drapes the same kinematic net.
+    optimum["relaxed_nodes"] = relaxed.nodes
 
 
 def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:

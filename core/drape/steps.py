@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.fields import energy_field, summary
+from preform.drape.fields import cell_fields, energy_field, summary
 from preform.drape.net import DrapeError, drape
 from preform.drape.part import HeightCut, Part, PlanPolygon, combine
 from preform.drape.ply import MAX_COUNT, PlyOutline
@@ -289,15 +289,35 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
         result = drape(surface, generator_angle_rad=alpha_arg, **settings)
     except DrapeError as error:
         raise CaseFailure(f"the drape cannot start: {error}") from None
+    part = settings.get("trim")
+    relaxed = optimum.get("relaxed_nodes") if optimum is not None else None
+    if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
+        with np.errstate(all="ignore"):
+            kinematic = energy_field(result, ctx.products["shear_law"])
+        ctx.summary["kinematic_total_energy_J"] = kinematic.total_energy
+        result = relaxed_result(result, np.asarray(relaxed, dtype=float), part)
+        ctx.summary["result_net"] = "relaxed"
+    elif optimum is not None:
+        ctx.summary["result_net"] = "kinematic"
     with np.errstate(all="ignore"):
         energy = energy_field(result, ctx.products["shear_law"])
-    part = settings.get("trim")
     ctx.summary.update(summary(result, energy, part))
     if part is not None:
         ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
     judge_drape(ctx, result, energy, surface, settings["start_xy_m"])
     return {"drape": DrapedPly(result, energy)}
+
+
+def relaxed_result(kinematic: DrapeResult, relaxed_nodes: Any, part: Part | None) -> DrapeResult:
+    """The drape result of a relaxed net: the relaxed positions where relaxation moved nodes
+    (every corner of a counted cell), the kinematic ones elsewhere, and the cell fields
+    recomputed from them. Cells outside the part that touch it mix relaxed and kinematic
+    corners; they carry no weight in the part's energy and extremes."""
+    nodes = np.where(np.isfinite(relaxed_nodes), relaxed_nodes, kinematic.nodes)
+    fields = cell_fields(nodes, kinematic.status, trim=part)
+    info = {**kinematic.info, "net": "relaxed"}
+    return dataclasses.replace(kinematic, nodes=nodes, info=info, **fields)
 
 
 def _needs_optimum(scene: Scene) -> tuple[str, ...]:

@@ -181,6 +181,18 @@ def test_optional_stages_report_in_the_summary(sandbox, tmp_path):
     assert summary["layout_varied"] == ["orientation"] and summary["layout_drapes"] <= 7
     assert summary["curved_drapes"] <= 9 and "curved_relative_saving" in summary
     assert summary["relaxed_energy_J"] <= summary["relaxed_kinematic_energy_J"] * (1 + 1e-9)
+    assert summary["curved_cells_outside_law_data"] >= 0 and "curved_max_abs_shear_deg" in summary
     assert summary["search_settings"]["tolerance_deg"] == 5
+    # With relaxation asked for, the drape step's result (exported, summed) is the relaxed net,
+    # and the kinematic energy is kept next to it.
+    ctx.products.update(steps["drape"].run(ctx))
+    assert summary["result_net"] == "relaxed"
+    assert ctx.products["drape"].result.info["net"] == "relaxed"
+    # Relaxation holds each cut cell's share at its kinematic value; the drape step recomputes
+    # it from the relaxed nodes, which moved by a fraction of d.
+    assert summary["total_energy_J"] == pytest.approx(summary["relaxed_energy_J"], rel=0.02)
+    assert summary["kinematic_total_energy_J"] == pytest.approx(
+        summary["relaxed_kinematic_energy_J"], rel=1e-6
+    )
     assert 0 < math.degrees(ctx.products["optimum"]["generator_angle_rad"]) < 180
     assert (tmp_path / "energy_vs_angle.png").exists()
