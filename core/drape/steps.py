@@ -306,6 +306,16 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
         ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
     judge_drape(ctx, result, energy, surface, settings["start_xy_m"])
+    area = getattr(part, "area_m2", None)
+    if area is not None:
+        # Part area the net does not cover, and how much of it the missing cells explain (by
+        # cause, in the coverage summary); the rest lies where the ply does not reach.
+        bare = max(0.0, float(area) - float(ctx.summary["part_draped_area_m2"]))
+        explained = sum(
+            float(v) for k, v in ctx.summary.items() if k.startswith("uncovered_area_m2_")
+        )
+        ctx.summary["uncovered_part_area_m2"] = bare
+        ctx.summary["uncovered_part_area_m2_beyond_ply"] = max(0.0, bare - explained)
     return {"drape": DrapedPly(result, energy)}
 
 

@@ -347,6 +347,11 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
     assert "stopped on the tool" in reason
     assert ctx.summary["nodes_missing"] == np.count_nonzero(missing)
     assert ctx.summary["complete"] is False
+    # The uncovered fabric area by cause sums to the missing cells' d² each.
+    by_cause = [v for k, v in ctx.summary.items() if k.startswith("uncovered_area_m2_")]
+    lost_cells = np.count_nonzero((valid | corner) & ~valid)
+    assert sum(by_cause) == pytest.approx(lost_cells * (spacing * 1e-3) ** 2, rel=1e-12)
+    assert ctx.summary["uncovered_area_m2_stopped_on_tool"] > 0
 
 
 def test_the_hat_moulds_reason_names_the_folds(
