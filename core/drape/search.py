@@ -74,6 +74,11 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 CentroidPredicate = Callable[[FloatArray], BoolArray]
 
+#: A layout or curved-generator trial must cover at least this share of what its starting
+#: drape covers of the part [-] [C]: with no price on bare area, a trial that leaves the part
+#: bare would look cheap, so it is infeasible instead (not priced). The slack allows the O(d²)
+#: change of the clipped area as the net moves (1.3e-4 of a hemisphere at d = R/40).
+COVERAGE_SLACK = 1e-3
 #: Defaults of the angle search (documented fidelity knobs) [rad].
 DEFAULT_SCAN_STEP_RAD = math.radians(5.0)
 DEFAULT_TOLERANCE_RAD = math.radians(1.0)
@@ -653,9 +658,10 @@ def search_layout(
     an energy with a small staircase in it. Variables are scaled by their initial steps
     (``angle_step_rad``, ``orientation_step_rad``, ``start_step_m``, default 4·d), which also
     size the starting simplex; it stops when the simplex is smaller than ``tolerance_rad``
-    in scaled angle units or after ``max_drapes`` drapes. The reference area for the
-    uncovered charge is fixed for the whole search (default: the starting layout's coverage),
-    so every layout is judged on the same part.
+    in scaled angle units or after ``max_drapes`` drapes. The reference area (for a priced
+    uncovered area) is fixed for the whole search (default: the starting layout's coverage),
+    so every layout is judged on the same part; a layout that covers less of the part than the
+    starting one (by more than :data:`COVERAGE_SLACK`) is infeasible.
     """
     from scipy.optimize import minimize
 
@@ -692,11 +698,15 @@ def search_layout(
     reference = initial.covered_area_m2 if reference_area_m2 is None else float(reference_area_m2)
     initial_energy = objective.charged(initial, reference)
 
+    must_cover = (1.0 - COVERAGE_SLACK) * min(initial.covered_area_m2, reference)
+
     def energy(z: FloatArray) -> float:
         alpha, theta, xy = unpack(z)
         if not 0.0 < alpha < math.pi:
             return math.inf
         ev = objective.evaluate(alpha, orientation_rad=theta, start_xy_m=xy)
+        if ev.covered_area_m2 < must_cover:
+            return math.inf  # leaves the part barer than the start: infeasible, not priced
         return objective.charged(ev, reference)
 
     z0 = np.array(x0) / steps
@@ -739,6 +749,7 @@ def with_generators(objective: DrapeObjective, generators: Any) -> DrapeObjectiv
 
 
 __all__ = [
+    "COVERAGE_SLACK",
     "AngleSearchResult",
     "DrapeEvaluation",
     "DrapeObjective",
