@@ -356,12 +356,14 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
     ply: DrapedPly = ctx.products["drape"]
     alpha = np.degrees(ply.result.generator_angle)
     every = max(1, round(5e-3 / ply.result.node_spacing))  # a tow line every ~5 mm
+    surface = ctx.products.get("surface")
     fibre_pattern_figure(
         ply.result,
         ply.energy,
         ctx.case_dir / "fibre_pattern.png",
         title=f"{ctx.fabric.name}: generator angle {alpha:.1f}°",
         tow_every=every,
+        part=scene_part(ctx.scene, surface) if surface is not None else None,
     )
     return {"fibre_pattern_png": "fibre_pattern.png"}
 
