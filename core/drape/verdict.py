@@ -477,19 +477,22 @@ def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
     percent = 100.0 * part / total if total > 0 else 0.0
     # Cells sheared to near 90° have almost no area: say how little rather than "0.0 %".
     shown = f"{percent:.1f}" if percent >= 0.1 or percent == 0 else f"{percent:.2g}"
-    return f"{int(np.count_nonzero(mask))} cells ({shown} % of the draped area)"
+    return f"{int(np.count_nonzero(mask))} cells ({shown} % of the part's draped area)"
 
 
 def shear_limit_warnings(
     result: DrapeResult, energy: EnergyField, limits: LawRange
 ) -> tuple[list[str], dict[str, Any]]:
     """Sentences about the counted cells past the law's limits, and their counts for the
-    summary. Counted cells are those the energy sums (``energy_field``)."""
+    summary. Counted cells are those the energy sums (``energy_field``); their shares of area
+    and energy are of the part (a cut cell by its area inside it)."""
     counted = result.valid & result.in_part
     gamma = np.where(counted, np.asarray(result.shear, dtype=float), 0.0)
-    area = np.asarray(result.area, dtype=float)
+    # Shares of the part: a cell cut by its edge counts by its area inside it.
+    weight = np.asarray(result.part_weight, dtype=float)
+    area = np.asarray(result.area, dtype=float) * weight
     density = np.asarray(energy.energy_density, dtype=float)
-    cell_energy = density * result.node_spacing**2
+    cell_energy = density * result.node_spacing**2 * weight
     total = float(cell_energy[counted].sum())
     messages: list[str] = []
     counts: dict[str, Any] = {}
