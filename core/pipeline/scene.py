@@ -167,14 +167,17 @@ class SearchSection(BaseModel):
     part_area_mm2: float | None = Field(
         default=None,
         gt=0,
-        description="Area of the part [mm²]; uncovered part area is charged at the locking "
-        "energy density (default: the largest area any scanned drape covers).",
+        description="Area of the part [mm²] that coverage is judged against (default: the "
+        "part's own area when known, e.g. 2πR² for a bare hemisphere, else the largest area "
+        "any scanned drape covers).",
     )
     uncovered_shear_deg: float | None = Field(
         default=None,
         gt=0,
         lt=90,
-        description="Shear [deg] at which uncovered part area is charged (default: locking).",
+        description="Price uncovered part area at the shear energy of this angle [deg] (the "
+        "larger of the two senses), a stated choice, the same rule for every architecture; the "
+        "case is then partial. Default: no price (the energy is the part's alone).",
     )
     layout: dict[str, Any] | None = Field(
         default=None,
