@@ -40,6 +40,8 @@ from preform.plugins.surfaces.basic import Hemisphere  # noqa: E402
 
 RADIUS = 0.1
 PLY = PlyOutline.rectangle((0.36, 0.36))
+#: The scene's tool: the hemisphere continued R/4 past its rim, clipped to z ≥ 0 (issue 11).
+TOOL = Hemisphere(RADIUS, run_off_m=RADIUS / 4)
 
 
 class ScaledNegative:
@@ -61,7 +63,13 @@ class ScaledNegative:
 
 def objective(law: Any, spacing: float, **kwargs: Any) -> DrapeObjective:
     return DrapeObjective(
-        Hemisphere(RADIUS), law, node_spacing_m=spacing, ply=PLY, start_xy_m=(0.0, 0.0), **kwargs
+        TOOL,
+        law,
+        node_spacing_m=spacing,
+        ply=PLY,
+        start_xy_m=(0.0, 0.0),
+        trim=TOOL.part(),
+        **kwargs,
     )
 
 
@@ -69,7 +77,7 @@ def angle_study(law: Any, label: str, repeat: int) -> None:
     print(f"\nAngle search, {label}, d = 2.5 mm (145 x 145 nodes), one core, best of {repeat}")
     print(
         f"{'scan':>6}{'tol':>6}{'drapes':>8}{'wall s':>8}{'ms/drape':>10}{'optimum':>10}"
-        f"{'bracket':>9}{'std':>7}{'E_opt J':>10}"
+        f"{'bracket':>9}{'std':>7}{'unc':>7}{'E_opt J':>10}"
     )
     for step, tol in ((5.0, 1.0), (5.0, 0.25), (10.0, 1.0), (2.5, 1.0)):
         best, result = math.inf, None
@@ -86,11 +94,12 @@ def angle_study(law: Any, label: str, repeat: int) -> None:
             f"{step:>6.1f}{tol:>6.2f}{result.drapes:>8d}{best:>8.2f}"
             f"{1e3 * best / result.drapes:>10.1f}{result.optimum_angle_deg:>10.2f}"
             f"{'±':>3}{math.degrees(result.bracket_half_width_rad):<6.2f}"
-            f"{math.degrees(std) if std is not None else math.nan:>7.2f}"
+            f"{math.degrees(std) if std is not None else math.nan:>7.3f}"
+            f"{result.summary()['uncertainty_deg'] or math.nan:>7.3f}"
             f"{result.optimum_energy_J:>10.4f}"
         )
     clock = time.perf_counter()
-    drape(Hemisphere(RADIUS), node_spacing_m=2.5e-3, ply=PLY, start_xy_m=(0.0, 0.0))
+    drape(TOOL, node_spacing_m=2.5e-3, ply=PLY, start_xy_m=(0.0, 0.0), trim=TOOL.part())
     print(f"(one drape alone: {1e3 * (time.perf_counter() - clock):.0f} ms)")
 
 

@@ -176,7 +176,7 @@ class TradeoffRow:
     wall_s: float
     peak_mb: float
     optimum_angle_deg: float
-    #: The optimum's comparable energy (drape energy + uncovered charge) [J].
+    #: The optimum's energy of the part [J] (plus priced uncovered area if the scene asks).
     energy_J: float
     max_abs_shear_deg: float
     noise_limited: bool

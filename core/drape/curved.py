@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 
 from preform.drape.generators import GeneratorNodes
 from preform.drape.result import NodeStatus
-from preform.drape.search import DrapeObjective, SearchError, with_generators
+from preform.drape.search import COVERAGE_SLACK, DrapeObjective, SearchError, with_generators
 from preform.drape.surface import Surface
 
 FloatArray = NDArray[np.float64]
@@ -286,7 +286,9 @@ def optimise_curved_generators(
     Variables are scaled by ``coefficient_step`` and ``angle_step_rad`` (they size the first
     simplex: a wide one, so the staircase in the energy does not stall it); the search stops when the simplex is smaller than ``tolerance`` scaled units or
     after ``max_drapes`` drapes. ``reference_area_m2`` [m²] fixes the part's reference area for
-    the uncovered charge (default: what the straight generators cover).
+    a priced uncovered area (default: what the straight generators cover). A trial covering
+    less of the part than the straight generators (by more than ``COVERAGE_SLACK``) is
+    infeasible.
     """
     from scipy.optimize import minimize
 
@@ -299,6 +301,7 @@ def optimise_curved_generators(
         raise SearchError("the straight generators do not drape at the starting angle")
     reference = first.covered_area_m2 if reference_area_m2 is None else float(reference_area_m2)
     straight_energy = base.charged(first, reference)
+    must_cover = (1.0 - COVERAGE_SLACK) * min(first.covered_area_m2, reference)
     drapes = base.drapes
     n_coef = terms if mirror_families else 2 * terms
     steps = np.r_[[angle_step_rad] if vary_angle else [], [coefficient_step] * n_coef]
@@ -320,7 +323,12 @@ def optimise_curved_generators(
         if not 0.0 < alpha < math.pi:
             return math.inf
         trial = with_generators(objective, gens)
-        return trial.charged(trial.evaluate(alpha), reference)
+        evaluation = trial.evaluate(alpha)
+        if evaluation.covered_area_m2 < must_cover:
+            # Bare part area is not priced, so a net that leaves more of the part bare than
+            # the straight generators is infeasible rather than cheap.
+            return math.inf
+        return trial.charged(evaluation, reference)
 
     z0 = np.r_[[generator_angle_rad / angle_step_rad] if vary_angle else [], np.zeros(n_coef)]
     simplex = np.vstack([z0, z0 + np.eye(len(z0))])

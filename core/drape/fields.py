@@ -20,6 +20,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.drape.part import Part, cell_part_share
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.shear.law import ShearLaw
 
@@ -89,12 +90,18 @@ def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
 
 
 def cell_fields(
-    nodes: FloatArray, status: NDArray[np.int8], *, trim: CentroidPredicate | None = None
+    nodes: FloatArray,
+    status: NDArray[np.int8],
+    *,
+    trim: Part | CentroidPredicate | None = None,
 ) -> dict[str, NDArray[np.generic]]:
     """The cell arrays of a :class:`DrapeResult` from node positions (ni, nj, 3) [m] and
     statuses (ni, nj): ``cell_status``, ``shear`` [rad], ``centroid`` [m], ``area`` [m²],
-    ``fibre_u``, ``fibre_v`` (unit) and ``in_part`` (valid cells whose centroid passes
-    ``trim``, all valid cells without it). Zero (NaN for centroids) where not VALID."""
+    ``fibre_u``, ``fibre_v`` (unit), ``in_part`` and ``part_share``. ``trim`` is a
+    :class:`~preform.drape.part.Part` (cells cut by its edge count by their undeformed area
+    inside it: ``part_share``; ``in_part`` is every valid cell with some area inside) or a
+    predicate on centroids (a cell is in or out whole). Without it every valid cell counts
+    whole. Zero (NaN for centroids) where not VALID."""
     c_status = cell_status(status)
     valid = c_status == CellStatus.VALID
     shape = valid.shape
@@ -143,9 +150,19 @@ def cell_fields(
             fibre_u[r0:r1] = _stack_unit(_add(u_low, u_high), ok)
             fibre_v[r0:r1] = _stack_unit(_add(v_left, v_right), ok)
     in_part = valid.copy()
-    if trim is not None and valid.any():
+    share = valid.astype(float)
+    if isinstance(trim, Part):
+        # Cut cells count by their undeformed area inside the part (preform.drape.part).
+        with np.errstate(invalid="ignore"):
+            phi = np.asarray(trim.level(nodes), dtype=float)
+            cut = cell_part_share(phi[:-1, :-1], phi[1:, :-1], phi[:-1, 1:], phi[1:, 1:])
+        share = np.where(valid, np.nan_to_num(cut, nan=0.0), 0.0)
+        in_part &= share > 0.0
+    elif trim is not None and valid.any():
         in_part[valid] &= np.asarray(trim(centroid[valid]), dtype=bool)
+        share = in_part.astype(float)
     return {
+        "part_share": share,
         "cell_status": c_status,
         "shear": shear,
         "centroid": centroid,
@@ -167,7 +184,8 @@ def energy_field(
     W(γ) [J/m²] per cell from the signed shear (so an asymmetric law takes the branch the
     convention in ``preform.drape.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
     locking angle (|γ| > locking) and past stitch failure (γ > failure, the parallel sense),
-    and the total Σ W·d² [J] over the counted cells (A0 = d², the undeformed cell).
+    and the total Σ W·s·d² [J] over the counted cells (d² the undeformed cell, s its share
+    inside the part, ``result.part_weight``: 1 for a cell wholly inside).
 
     Counted cells: valid cells in the part (``result.in_part``), further restricted by
     ``region`` (a boolean mask (ni−1, nj−1) or a predicate on centroids (n, 3) [m]). The
@@ -193,7 +211,8 @@ def energy_field(
         counted & (np.abs(gamma) > locking) if locking is not None else np.zeros_like(counted)
     )
     past_failure = counted & (gamma > failure) if failure is not None else np.zeros_like(counted)
-    total = float(density.sum() * result.node_spacing**2)
+    weight = np.where(counted, result.part_weight, 0.0)
+    total = float((density * weight).sum() * result.node_spacing**2)
     return EnergyField(
         energy_density=density,
         thickness_ratio=thickness_ratio,
@@ -203,18 +222,87 @@ def energy_field(
     )
 
 
-def summary(result: DrapeResult, energy: EnergyField | None = None) -> dict[str, object]:
-    """A JSON-ready summary of a drape (angles in degrees, energy in J)."""
+def node_shear(result: DrapeResult) -> FloatArray:
+    """Signed shear γ at every node (ni, nj) [rad], NaN where it cannot be formed.
+
+    At node (i, j) the fibre edges to (i±1, j) and (i, j±1) form up to four corners (the +u
+    or −u edge with the +v or −v edge, each taken in its + sense); γ is the mean of their
+    angles ω minus 90°, as for a cell (so it is centred on the node: second-order accurate
+    where all four exist). Unlike the cell value, which is the shear at a cell centre, the
+    node value reaches the part's edge itself: nodes are where the extremes are read."""
+    p = np.asarray(result.nodes, dtype=float)
+    placed = result.status == NodeStatus.PLACED
+    ni, nj = placed.shape
+    nan = np.full((ni, nj, 3), np.nan)
+    u_fwd, u_bwd, v_fwd, v_bwd = nan.copy(), nan.copy(), nan.copy(), nan.copy()
+    u_fwd[:-1] = p[1:] - p[:-1]
+    u_bwd[1:] = p[1:] - p[:-1]
+    v_fwd[:, :-1] = p[:, 1:] - p[:, :-1]
+    v_bwd[:, 1:] = p[:, 1:] - p[:, :-1]
+    total = np.zeros((ni, nj))
+    count = np.zeros((ni, nj))
+    with np.errstate(invalid="ignore"):
+        for u in (u_fwd, u_bwd):
+            for v in (v_fwd, v_bwd):
+                uu: Vec = (u[..., 0], u[..., 1], u[..., 2])
+                vv: Vec = (v[..., 0], v[..., 1], v[..., 2])
+                omega = _angle(uu, vv)
+                ok = np.isfinite(omega)
+                total += np.where(ok, omega, 0.0)
+                count += ok
+        gamma = np.where(placed & (count > 0), total / np.maximum(count, 1) - 0.5 * np.pi, np.nan)
+    return np.asarray(gamma)
+
+
+def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
+    """Largest |γ| in the part [deg], read two ways (named so they are not confused):
+
+    - ``max_abs_shear_cells_deg``: over the cells counted in the part (any share inside), the
+      shear at each cell's centre;
+    - ``max_abs_shear_nodes_deg``: over the placed nodes inside ``part`` (every placed node
+      when None), the shear at the node (:func:`node_shear`), which reaches the part's edge.
+    """
+    counted = result.valid & result.in_part
+    cells = np.abs(result.shear[counted])
+    gamma = node_shear(result)
+    inside = np.isfinite(gamma)
+    if part is not None:
+        inside &= part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0))
+    nodes = np.abs(gamma[inside])
+    return {
+        "max_abs_shear_cells_deg": float(np.degrees(cells.max())) if cells.size else 0.0,
+        "max_abs_shear_nodes_deg": float(np.degrees(nodes.max())) if nodes.size else 0.0,
+    }
+
+
+def summary(
+    result: DrapeResult, energy: EnergyField | None = None, part: Part | None = None
+) -> dict[str, object]:
+    """A JSON-ready summary of a drape (angles in degrees, energy in J, areas in m²).
+
+    ``max_abs_shear_deg`` is the cell value ``max_abs_shear_cells_deg`` (kept under its old
+    name); ``max_abs_shear_nodes_deg`` is read at the nodes inside ``part``
+    (:func:`extremes`). ``mean_abs_shear_deg`` weighs each cell by its area in the part."""
     counted = result.valid & result.in_part
     shear = np.abs(result.shear[counted])
+    weight = result.part_weight[counted]
+    peaks = extremes(result, part)
     out: dict[str, object] = {
         "nodes_total": result.nodes_total,
         "nodes_placed": result.nodes_placed,
         "complete": result.complete,
         "cells_valid": int(np.count_nonzero(result.valid)),
         "cells_in_part": int(np.count_nonzero(counted)),
-        "max_abs_shear_deg": float(np.degrees(shear.max())) if shear.size else 0.0,
-        "mean_abs_shear_deg": float(np.degrees(shear.mean())) if shear.size else 0.0,
+        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (result.part_weight < 1.0))),
+        "part_fabric_area_m2": float(weight.sum() * result.node_spacing**2),
+        "part_draped_area_m2": float((result.area[counted] * weight).sum()),
+        "max_abs_shear_deg": peaks["max_abs_shear_cells_deg"],
+        **peaks,
+        "mean_abs_shear_deg": (
+            float(np.degrees(np.average(shear, weights=weight)))
+            if shear.size and weight.sum() > 0
+            else 0.0
+        ),
         "generator_angle_deg": float(np.degrees(result.generator_angle)),
         "orientation_deg": float(np.degrees(result.orientation)),
         "node_spacing_m": result.node_spacing,
@@ -228,5 +316,9 @@ def summary(result: DrapeResult, energy: EnergyField | None = None) -> dict[str,
     if energy is not None:
         out["total_energy_J"] = energy.total_energy
         out["cells_past_locking"] = int(np.count_nonzero(energy.past_locking))
+        # Counted by the fabric area they put inside the part (undeformed, d² per whole cell).
+        out["part_area_past_locking_m2"] = float(
+            (result.part_weight * energy.past_locking).sum() * result.node_spacing**2
+        )
         out["cells_past_failure"] = int(np.count_nonzero(energy.past_failure))
     return out

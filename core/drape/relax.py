@@ -10,10 +10,11 @@ generators?", not "what does the paper predict?".
 Problem, over the nodes x of the counted cells (the part's valid cells of the starting drape;
 the start node stays pinned):
 
-    minimise  Σ_cells W(γ_c)·d²   subject to  |x_a − x_b| = d on every edge,  x on the tool,
+    minimise  Σ_cells W(γ_c)·s_c·d²   subject to  |x_a − x_b| = d on every edge,  x on the tool,
 
 with γ_c the mean of the four edge-pair angles minus 90° exactly as
-:func:`preform.drape.fields.cell_fields` defines it. The edges go into an augmented
+:func:`preform.drape.fields.cell_fields` defines it and s_c the cell's share of area inside the
+part (``DrapeResult.part_weight``, held at the kinematic drape's). The edges go into an augmented
 Lagrangian on the strains r_e = |e|/d − 1, the tool into a penalty on the scaled (unsigned)
 distance r_s = dist(x)/d, which also holds nodes back at a trimmed edge such as a dome's rim.
 Each outer round minimises it with L-BFGS (written out here) using the analytic gradient
@@ -63,7 +64,7 @@ class RelaxResult:
     shear: FloatArray
     #: The cells relaxed and counted (ni−1, nj−1).
     counted: BoolArray
-    #: Σ W·d² over the counted cells, relaxed and kinematic [J].
+    #: Σ W·s·d² over the counted cells (s: share inside the part), relaxed and kinematic [J].
     energy_J: float
     kinematic_energy_J: float
     #: Largest |edge length − d| [m] and largest distance to the tool [m] after relaxing.
@@ -253,7 +254,12 @@ def relax_net(
 
     start = np.where(active[..., None], result.nodes, 0.0)
     gamma0 = result.shear[cells]
-    e_kin = float(np.asarray(law.energy(gamma0), dtype=float).sum() * d * d)
+    # Each cell counts by its share of area inside the part (issue 11), held at the kinematic
+    # drape's: the relaxed nodes move by a fraction of d, which changes a cut cell's share by
+    # as little, and a fixed weight keeps the objective smooth.
+    weight_all = np.where(cells, result.part_weight, 0.0)
+    weight = weight_all[cells]
+    e_kin = float((np.asarray(law.energy(gamma0), dtype=float) * weight).sum() * d * d)
     scale = max(e_kin, 1e-300)
     n_free = int(np.count_nonzero(free))
     mu = PENALTY_PER_CELL * float(np.count_nonzero(cells))
@@ -284,9 +290,9 @@ def relax_net(
         with np.errstate(invalid="ignore", divide="ignore"):
             gamma, corner_grads = cell_shear_and_gradient(x)
         g_cells = gamma[cells]
-        f = float(np.asarray(table.energy(g_cells), dtype=float).sum()) * d * d / scale
+        f = float((np.asarray(table.energy(g_cells), dtype=float) * weight).sum()) * d * d / scale
         torque = np.zeros(cells.shape)
-        torque[cells] = np.asarray(table.torque(g_cells), dtype=float)
+        torque[cells] = np.asarray(table.torque(g_cells), dtype=float) * weight
         coef = (torque * d * d / scale)[..., None]
         grad = np.zeros_like(x)
         g00, g10, g01, g11 = (np.where(cells[..., None], g, 0.0) for g in corner_grads)
@@ -342,7 +348,7 @@ def relax_net(
     with np.errstate(invalid="ignore", divide="ignore"):
         gamma, _ = cell_shear_and_gradient(x)
     gamma = np.where(cells, gamma, 0.0)
-    energy = float(np.asarray(law.energy(gamma[cells]), dtype=float).sum() * d * d)
+    energy = float((np.asarray(law.energy(gamma[cells]), dtype=float) * weight).sum() * d * d)
     _, _, lu, lv, _, _, _ = residuals(x)
     edge_error = float(max(np.abs(lu[u_edges] - d).max(), np.abs(lv[v_edges] - d).max()))
     surface_distance = float(surface.closest_point(x[active])[1].max())

@@ -86,10 +86,15 @@ class DrapeResult:
     #: Unit fibre directions of the u and v families per cell (ni−1, nj−1, 3).
     fibre_u: FloatArray
     fibre_v: FloatArray
-    #: Cells inside the part (trim region); by default every valid cell.
+    #: Cells with some of their area inside the part (trim region); by default every valid
+    #: cell.
     in_part: BoolArray
     #: Free-form diagnostics (iteration counts, tolerances used, ...).
     info: dict[str, object] = field(default_factory=dict)
+    #: Share (0..1) of each cell's undeformed area d² inside the part (ni−1, nj−1) [-]: 1 for
+    #: a cell wholly inside, between for a cell cut by the part's edge
+    #: (``preform.drape.part``). None: every cell of ``in_part`` counts whole.
+    part_share: FloatArray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -106,6 +111,15 @@ class DrapeResult:
     @property
     def valid(self) -> BoolArray:
         return np.asarray(self.cell_status == CellStatus.VALID)
+
+    @property
+    def part_weight(self) -> FloatArray:
+        """Share (0..1) of each cell's undeformed area counted in the part (ni−1, nj−1) [-]:
+        ``part_share`` on valid cells in the part, 0 elsewhere."""
+        counted = self.valid & self.in_part
+        if self.part_share is None:
+            return counted.astype(float)
+        return np.where(counted, np.asarray(self.part_share, dtype=float), 0.0)
 
     @property
     def complete(self) -> bool:

@@ -6,30 +6,30 @@ the choice is the generator angle α (:func:`search_generator_angle`: a scan, th
 refinement), optionally also the generator orientation and the start point
 (:func:`search_layout`: Nelder–Mead).
 
-Comparable energies across α [C]
---------------------------------
-A net at an extreme α may not cover the part: the ply runs out in the quadrants that open up,
-or the net folds or loses its intersection and stops. Counting only the cells that exist would
-make such a drape look cheap. So every drape is judged on the same part:
+The energy of the part [D]
+--------------------------
+Every drape is judged on the same part (PHYSICS §6 "The energy of a part"): the net is draped
+over the tool as far as the ply reaches and clipped to the part (the drape's ``trim``, a
+:class:`~preform.drape.part.Part`, further restricted by an optional ``region``); each cell
+counts W(γ) times its undeformed area inside the part, s·d² (``DrapeResult.part_weight``), so a
+cell cut by the part's edge counts by its share, and
 
-- the energy is summed over the valid cells inside the part only: the drape's ``trim`` region
-  (default: the tool surface itself), further restricted by an optional ``region``;
-- the part's reference area A_ref is the scene's part area when given, otherwise the largest
-  draped (tool-side) area any drape of the scan covers: a generic tool has no area of its own,
-  and this also leaves the band of incomplete cells at the tool's edge (about one cell wide,
-  vanishing as d → 0) out of the deficit;
-- coverage(α) = covered area / A_ref is reported for every α, and the deficit
-  max(0, A_ref − covered) is **charged** at the energy density of locked fabric,
-  W_miss = max(W(+γ_m), W(−γ_m)) per unit area, γ_m the law's locking angle (60° when the law
-  has none; both overridable). Rationale: where a kinematic net cannot put fabric, the fabric
-  would have to shear at least to locking, or wrinkle, to get there, so a bare part never looks
-  cheaper than a covered one. A side effect that matters in practice: a cell that drops out at
-  the rim as α changes takes its energy W(γ)·d² with it but adds W_miss·d²·cos γ of charge,
-  which largely cancels the staircase the rim would otherwise put into E(α);
-- with ``min_coverage`` > 0, an α whose coverage falls below it is also marked infeasible and
-  never chosen as the optimum (its energy is still reported).
+    E(α) = Σ_cells W(γ)·s·d² [J].
 
-The objective is E(α) = Σ_part W(γ)·d² + W_miss·max(0, A_ref − A_covered) [J].
+No energy is charged for part area the net does not reach. Such a charge has no physical basis
+on a part the ply covers, and it biased the optimum: before parts existed, cells straddling a
+hemisphere's rim were dropped and cells above it went unreached behind nodes that dipped below
+it, for numerical reasons only, and a charge at locked energy on that "bare" area moved
+E-BX-318's optimum from about 66.5° to 73.3° (issue 11). Part area the net genuinely cannot
+cover (the ply runs out, the net folds or loses its intersection) is reported, as
+``coverage(α)`` = covered area / A_ref and as the uncovered area, A_ref being the part's own
+area when known (a bare hemisphere: 2πR²; ``part_area_m2``), else the largest area any drape of
+the scan covers.
+
+Pricing it is a stated user choice (``uncovered_shear_rad``: the bare area is charged at
+W_miss = max(W(+γ_m), W(−γ_m)) per unit area, the same rule for every architecture; the
+pipeline then reports the case ``partial``). ``min_coverage`` > 0 marks an α whose coverage
+falls below it infeasible instead: never chosen as the optimum (its energy is still reported).
 
 Refinement and symmetry
 -----------------------
@@ -38,9 +38,20 @@ mirror-symmetric set-up (symmetric law, start at a hemisphere's pole) gives E(α
 on the grid. The refinement then fits least-squares parabolas over windows centred on the
 current estimate, adding the points estimate ± δ (and the estimate itself) with δ halving each
 level: every sample set stays symmetric about a symmetric optimum, so the estimate stays at
-90° to rounding. A least-squares fit, not interpolation, because the discrete E(α) carries a
-small staircase (rim cells appear and disappear) that an interpolating method would chase; when
-a window's fit is no longer convex the refinement stops there and says it is noise-limited.
+90° to rounding. A least-squares fit, not interpolation, so that what remains of the discrete
+E(α)'s roughness (clipped cells are smooth in α, but folds or the ply's end still add or drop
+whole cells) is averaged rather than chased; when a window's fit is no longer convex the
+refinement stops there and says it is noise-limited.
+
+Uncertainty of the optimum [D]
+------------------------------
+Reported from E(α) near the minimum, not from window sizes: the samples within one scan step
+of α* are fitted by least squares with a parabola and with a cubic. The uncertainty combines
+the parabola vertex's standard error (the scatter of E about a smooth curve: what is left of
+the rim staircase, folds, the ply's end) and the distance between the two fits' minima (what
+the parabola's shape assumption costs over that window):
+u = √(σ_vertex² + (α*_parabola − α*_cubic)²). The relative rms residual of the cubic fit is
+reported too (``residual_rms_rel``), a direct measure of E(α)'s roughness.
 """
 
 from __future__ import annotations
@@ -63,8 +74,11 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 CentroidPredicate = Callable[[FloatArray], BoolArray]
 
-#: Shear angle charged for uncovered part area when the law has no locking angle [rad] [C].
-DEFAULT_UNCOVERED_SHEAR_RAD = math.radians(60.0)
+#: A layout or curved-generator trial must cover at least this share of what its starting
+#: drape covers of the part [-] [C]: with no price on bare area, a trial that leaves the part
+#: bare would look cheap, so it is infeasible instead (not priced). The slack allows the O(d²)
+#: change of the clipped area as the net moves (1.3e-4 of a hemisphere at d = R/40).
+COVERAGE_SLACK = 1e-3
 #: Defaults of the angle search (documented fidelity knobs) [rad].
 DEFAULT_SCAN_STEP_RAD = math.radians(5.0)
 DEFAULT_TOLERANCE_RAD = math.radians(1.0)
@@ -85,9 +99,9 @@ class DrapeEvaluation:
     generator_angle_rad: float
     orientation_rad: float
     start_xy_m: tuple[float, float]
-    #: Σ W(γ)·d² over the valid cells in the part [J].
+    #: Σ W(γ)·s·d² over the valid cells in the part, s the share inside it [J].
     drape_energy_J: float
-    #: Draped (tool-side) area of those cells [m²].
+    #: Draped (tool-side) area of those cells inside the part, Σ s·area [m²].
     covered_area_m2: float
     #: Number of cells counted.
     cells_counted: int
@@ -107,8 +121,8 @@ class DrapeObjective:
     ``generators``, ``trim``, ``tolerance``, ...); :meth:`evaluate` overrides the generator
     angle and, optionally, the orientation, the start point and the generators.
     ``region`` (a predicate on cell centroids (n, 3) [m]) restricts the part further.
-    ``uncovered_shear_rad`` [rad] sets W_miss = max W(±γ_m) [J/m²] (default: the law's
-    locking angle, else 60°).
+    ``uncovered_shear_rad`` [rad]: price uncovered part area at W_miss = max W(±γ_m) [J/m²]
+    (module docstring; default None: no charge).
     """
 
     def __init__(
@@ -128,15 +142,19 @@ class DrapeObjective:
         self.law = law
         self.region = region
         self.drape_kwargs = drape_kwargs
-        shear_m = uncovered_shear_rad
-        if shear_m is None:
-            shear_m = law.locking_angle if law.locking_angle is not None else None
-        if shear_m is None:
-            shear_m = DEFAULT_UNCOVERED_SHEAR_RAD
-        self.uncovered_shear_rad = float(shear_m)
-        both = np.asarray(law.energy(np.array([shear_m, -shear_m])), dtype=float)
-        #: Energy density charged on uncovered part area [J/m²].
-        self.uncovered_energy_density = float(np.max(both))
+        #: The shear at which uncovered part area is priced [rad], None: not priced.
+        self.uncovered_shear_rad = (
+            None if uncovered_shear_rad is None else float(uncovered_shear_rad)
+        )
+        #: Energy density charged on uncovered part area [J/m²] (0: not priced).
+        self.uncovered_energy_density = 0.0
+        if self.uncovered_shear_rad is not None:
+            g = self.uncovered_shear_rad
+            both = np.asarray(law.energy(np.array([g, -g])), dtype=float)
+            self.uncovered_energy_density = float(np.max(both))
+        trim = drape_kwargs.get("trim")
+        #: The part's own area [m²] when it knows it (a bare hemisphere: 2πR²), else None.
+        self.part_area_m2: float | None = getattr(trim, "area_m2", None)
         #: Number of drapes run so far.
         self.drapes = 0
         self._table = (
@@ -211,21 +229,23 @@ class DrapeObjective:
         """
         mask = self.counted(result)
         gamma = result.shear[mask]
+        share = result.part_weight[mask]
         density = self.energy_density(gamma)
-        energy = float(density.sum() * result.node_spacing**2)
+        energy = float((density * share).sum() * result.node_spacing**2)
         return DrapeEvaluation(
             generator_angle_rad=float(result.generator_angle),
             orientation_rad=float(result.orientation),
             start_xy_m=start_xy_m,
             drape_energy_J=energy,
-            covered_area_m2=float(result.area[mask].sum()),
+            covered_area_m2=float((result.area[mask] * share).sum()),
             cells_counted=int(np.count_nonzero(mask)),
             max_abs_shear_rad=float(np.abs(gamma).max()) if gamma.size else 0.0,
             result=result if keep_result else None,
         )
 
     def charged(self, evaluation: DrapeEvaluation, reference_area_m2: float) -> float:
-        """The comparable energy [J]: drape energy plus W_miss × uncovered part area."""
+        """The comparable energy [J]: the drape energy, plus W_miss × uncovered part area when
+        the user priced it (module docstring)."""
         if not evaluation.draped:
             return math.inf
         missing = max(0.0, reference_area_m2 - evaluation.covered_area_m2)
@@ -277,9 +297,14 @@ class AngleSearchResult:
     at_boundary: bool
     #: The refinement stopped because the energy's staircase noise hid the curvature.
     noise_limited: bool
-    #: The part's reference area [m²] and the energy density charged where it is bare [J/m²].
+    #: The part's reference area [m²] and the energy density charged where it is bare [J/m²]
+    #: (0 unless the user priced it).
     reference_area_m2: float
     uncovered_energy_density_J_per_m2: float
+    #: Uncertainty of α* from E(α) near the minimum [rad] (module docstring), None when too
+    #: few samples lie near it; and the relative rms residual of E about the local cubic.
+    uncertainty_rad: float | None = None
+    residual_rms_rel: float | None = None
     #: The knobs the search ran with (degrees, for the record).
     settings: dict[str, Any] = field(default_factory=dict)
 
@@ -305,6 +330,10 @@ class AngleSearchResult:
             "vertex_std_deg": (
                 None if self.vertex_std_rad is None else math.degrees(self.vertex_std_rad)
             ),
+            "uncertainty_deg": (
+                None if self.uncertainty_rad is None else math.degrees(self.uncertainty_rad)
+            ),
+            "residual_rms_rel": self.residual_rms_rel,
             "at_boundary": self.at_boundary,
             "noise_limited": self.noise_limited,
             "drapes": self.drapes,
@@ -395,6 +424,38 @@ def _parabola(x: FloatArray, y: FloatArray, centre: float) -> _Fit | None:
     return _Fit(centre + vertex_s * scale, 2.0 * a / scale**2, std)
 
 
+def optimum_uncertainty(
+    angles_rad: FloatArray, energies_J: FloatArray, optimum_rad: float, window_rad: float
+) -> tuple[float | None, float | None]:
+    """Uncertainty [rad] of a least-energy angle and E's relative rms roughness [-] from the
+    samples (α [rad], E [J]) within ``window_rad`` of ``optimum_rad`` (module docstring).
+    (None, None) with fewer than 5 samples there or no convex parabola."""
+    x = np.asarray(angles_rad, dtype=float)
+    y = np.asarray(energies_J, dtype=float)
+    near = (np.abs(x - optimum_rad) <= window_rad * (1 + 1e-9)) & np.isfinite(y)
+    x, y = x[near], y[near]
+    if len(x) < 5:
+        return None, None
+    fit = _parabola(x, y, optimum_rad)
+    if fit is None or not fit.curvature > 0 or fit.std is None:
+        return None, None
+    scale = float(np.max(np.abs(x - optimum_rad))) or 1.0
+    t = (x - optimum_rad) / scale
+    coef = np.polyfit(t, y, 3)
+    residual = y - np.polyval(coef, t)
+    rms = float(np.sqrt(np.mean(residual**2)) / max(float(np.mean(np.abs(y))), 1e-300))
+    # The cubic's minimum nearest the parabola's vertex.
+    roots = np.roots(np.polyder(coef))
+    real = roots[np.abs(roots.imag) < 1e-12].real
+    minima = [r for r in real if np.polyval(np.polyder(coef, 2), r) > 0]
+    vertex_t = (fit.vertex - optimum_rad) / scale
+    if not minima:
+        return None, rms
+    cubic = float(min(minima, key=lambda r: abs(r - vertex_t)))
+    shape = (cubic - vertex_t) * scale
+    return math.sqrt(fit.std**2 + shape**2), rms
+
+
 def search_generator_angle(
     objective: DrapeObjective,
     *,
@@ -411,7 +472,7 @@ def search_generator_angle(
     refinement around the best scan point with steps δ = step/2, step/4, ... down to
     ``tolerance_rad`` [rad] (module docstring), at most ``max_drapes`` drapes in all; finally a
     drape at the optimum itself. ``part_area_m2`` [m²] fixes the reference area (default: the
-    largest area covered in the scan); ``min_coverage`` [-] marks angles below it infeasible.
+    part's own area when it knows it, else the largest area covered in the scan); ``min_coverage`` [-] marks angles below it infeasible.
     """
     lo, hi = (float(a) for a in angle_range_rad)
     if not (0.0 < lo < hi < math.pi):
@@ -435,6 +496,8 @@ def search_generator_angle(
         evaluated[float(alpha)] = (objective.evaluate(float(alpha)), "scan")
     if part_area_m2 is not None:
         reference = float(part_area_m2)
+    elif objective.part_area_m2 is not None:
+        reference = float(objective.part_area_m2)
     else:
         reference = max(ev.covered_area_m2 for ev, _ in evaluated.values())
     if not reference > 0:
@@ -516,6 +579,13 @@ def search_generator_angle(
     if not final.feasible:
         raise SearchError("the refined optimum is not feasible; raise min_coverage's margin")
     points = tuple(point(a) for a in sorted(evaluated))
+    ok = [p for p in points if p.feasible and math.isfinite(p.energy_J)]
+    uncertainty, roughness = optimum_uncertainty(
+        np.array([p.generator_angle_rad for p in ok]),
+        np.array([p.energy_J for p in ok]),
+        estimate,
+        scan_step_rad,
+    )
     return AngleSearchResult(
         optimum_angle_rad=estimate,
         optimum_energy_J=final.energy_J,
@@ -527,13 +597,19 @@ def search_generator_angle(
         noise_limited=noise_limited,
         reference_area_m2=reference,
         uncovered_energy_density_J_per_m2=objective.uncovered_energy_density,
+        uncertainty_rad=uncertainty,
+        residual_rms_rel=roughness,
         settings={
             "range_deg": [math.degrees(lo), math.degrees(hi)],
             "scan_step_deg": math.degrees(scan_step_rad),
             "tolerance_deg": math.degrees(tolerance_rad),
             "max_drapes": max_drapes,
             "min_coverage_required": min_coverage,
-            "uncovered_shear_deg": math.degrees(objective.uncovered_shear_rad),
+            "uncovered_shear_deg": (
+                None
+                if objective.uncovered_shear_rad is None
+                else math.degrees(objective.uncovered_shear_rad)
+            ),
         },
     )
 
@@ -582,9 +658,10 @@ def search_layout(
     an energy with a small staircase in it. Variables are scaled by their initial steps
     (``angle_step_rad``, ``orientation_step_rad``, ``start_step_m``, default 4·d), which also
     size the starting simplex; it stops when the simplex is smaller than ``tolerance_rad``
-    in scaled angle units or after ``max_drapes`` drapes. The reference area for the
-    uncovered charge is fixed for the whole search (default: the starting layout's coverage),
-    so every layout is judged on the same part.
+    in scaled angle units or after ``max_drapes`` drapes. The reference area (for a priced
+    uncovered area) is fixed for the whole search (default: the starting layout's coverage),
+    so every layout is judged on the same part; a layout that covers less of the part than the
+    starting one (by more than :data:`COVERAGE_SLACK`) is infeasible.
     """
     from scipy.optimize import minimize
 
@@ -621,11 +698,15 @@ def search_layout(
     reference = initial.covered_area_m2 if reference_area_m2 is None else float(reference_area_m2)
     initial_energy = objective.charged(initial, reference)
 
+    must_cover = (1.0 - COVERAGE_SLACK) * min(initial.covered_area_m2, reference)
+
     def energy(z: FloatArray) -> float:
         alpha, theta, xy = unpack(z)
         if not 0.0 < alpha < math.pi:
             return math.inf
         ev = objective.evaluate(alpha, orientation_rad=theta, start_xy_m=xy)
+        if ev.covered_area_m2 < must_cover:
+            return math.inf  # leaves the part barer than the start: infeasible, not priced
         return objective.charged(ev, reference)
 
     z0 = np.array(x0) / steps
@@ -668,6 +749,7 @@ def with_generators(objective: DrapeObjective, generators: Any) -> DrapeObjectiv
 
 
 __all__ = [
+    "COVERAGE_SLACK",
     "AngleSearchResult",
     "DrapeEvaluation",
     "DrapeObjective",

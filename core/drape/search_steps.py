@@ -10,8 +10,10 @@ fidelity knobs (degrees, as in every scene; defaults in brackets):
       tolerance_deg: 1            # refinement stops below this step [1]
       max_drapes: 60              # budget of the angle search [60]
       min_coverage: 0.0           # angles covering less of the part are infeasible [0]
-      part_area_mm2: null         # the part's area; default: the best coverage of the scan
-      uncovered_shear_deg: null   # shear charged on bare part area; default: locking, else 60
+      part_area_mm2: null         # the part's area; default: the part's own (a bare
+                                  # hemisphere: 2πR²), else the best coverage of the scan
+      uncovered_shear_deg: null   # price bare part area at W(this shear) [off: no charge];
+                                  # when set, the case is partial
       layout: {vary: [orientation, start_point], max_drapes: 60}   # Nelder–Mead [off]
       curved_generators: {terms: 2, mirror_families: false, max_drapes: 120}      # [off]
       relax: false                # beyond the paper; coarse nets only [off]; or
@@ -263,12 +265,30 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
                 "bracket_deg",
                 "bracket_half_width_deg",
                 "vertex_std_deg",
+                "uncertainty_deg",
+                "residual_rms_rel",
                 "at_boundary",
                 "noise_limited",
             )
         }
     )
     objective = study.objective
+    at_optimum = min(
+        search.points, key=lambda p: abs(p.generator_angle_rad - search.optimum_angle_rad)
+    )
+    uncovered = max(0.0, search.reference_area_m2 - at_optimum.covered_area_m2)
+    ctx.summary["optimum_part_area_m2"] = search.reference_area_m2
+    ctx.summary["optimum_uncovered_part_area_m2"] = uncovered
+    if objective.uncovered_energy_density > 0:
+        # A priced bare area is the user's stated choice: the energy is not the part's alone.
+        assert objective.uncovered_shear_rad is not None
+        ctx.partial(
+            f"the search priced uncovered part area at the shear energy of "
+            f"{math.degrees(objective.uncovered_shear_rad):.4g}° (search.uncovered_shear_deg, "
+            f"{objective.uncovered_energy_density:.4g} J/m²): E(α) is not the part's shear "
+            f"energy alone; at the optimum {uncovered * 1e6:.4g} mm² of the part is bare",
+            min(1.0, at_optimum.coverage),
+        )
     layout = knobs["layout"]
     if layout:
         _run_layout(ctx, objective, search, layout, optimum)
@@ -344,12 +364,50 @@ def _run_curved(
         max_drapes=int(options.get("max_drapes", 120)),
     )
     ctx.summary.update(result.summary())
+    _flag_curved_range(ctx, objective, result)
     if result.relative_saving > 0:
         # The drape step drapes with these when it honours optimum["generators"].
         optimum.update(
             generators=result.generators,
             generator_angle_rad=result.generator_angle_rad,
             energy_J=result.energy_J,
+        )
+
+
+def _flag_curved_range(ctx: CaseContext, objective: DrapeObjective, curved: Any) -> None:
+    """Flag a curved-generator optimum whose drape shears cells of the part beyond the law's
+    data (or packing) range: its saving then rests on the law's continuation (e.g. 72° where a
+    warp-knit law holds its 60° value), not on measurements."""
+    evaluation = objective.evaluate(
+        curved.generator_angle_rad, generators=curved.generators, keep_result=True
+    )
+    result = evaluation.result
+    if result is None:
+        return
+    counted = objective.counted(result)
+    gamma = np.where(counted, result.shear, 0.0)
+    ctx.summary["curved_max_abs_shear_deg"] = float(np.degrees(np.abs(gamma).max()))
+    block = getattr(ctx.fabric, "shear_law", None)
+    if block is None and hasattr(ctx.fabric, "default_shear_law"):
+        block = ctx.fabric.default_shear_law()
+    limits = law_range(objective.law, block)
+    beyond = np.zeros_like(counted)
+    if limits.data_positive is not None:
+        beyond |= counted & (gamma > limits.data_positive)
+    if limits.data_negative is not None:
+        beyond |= counted & (gamma < -limits.data_negative)
+    if limits.packing is not None:
+        beyond |= counted & (np.abs(gamma) > limits.packing)
+    count = int(np.count_nonzero(beyond))
+    ctx.summary["curved_cells_outside_law_data"] = count
+    if count:
+        share = float(result.part_weight[beyond].sum() / max(result.part_weight.sum(), 1e-300))
+        ctx.warn(
+            f"the curved-generator optimum shears {count} cells ({100 * share:.2g} % of the "
+            f"part's fabric) beyond the shear law's data range, up to "
+            f"{ctx.summary['curved_max_abs_shear_deg']:.1f}°: its energy saving of "
+            f"{100 * curved.relative_saving:.3g} % rests on the law's continuation there, "
+            "not on measurements"
         )
 
 
@@ -375,6 +433,8 @@ def _run_relax(
         max_iterations=int(options.get("max_iterations", 1500)),
     )
     ctx.summary.update(relaxed.summary())
+    # The drape step exports the relaxed net when it drapes the same kinematic net.
+    optimum["relaxed_nodes"] = relaxed.nodes
 
 
 def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:

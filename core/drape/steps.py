@@ -12,14 +12,16 @@ and said in words. A ply too large for ``limits.max_nodes`` is refused before an
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.fields import energy_field, summary
+from preform.drape.fields import cell_fields, energy_field, summary
 from preform.drape.net import DrapeError, drape
+from preform.drape.part import HeightCut, Part, PlanPolygon, combine
 from preform.drape.ply import MAX_COUNT, PlyOutline
 from preform.drape.result import DrapeResult, EnergyField
 from preform.drape.verdict import (
@@ -154,6 +156,9 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
         "tolerance": knobs.solver_tolerance,
         "substeps": knobs.generator_substeps,
     }
+    part = scene_part(scene, surface)
+    if part is not None:
+        settings["trim"] = part
     if start.generators == "polyline":
         from preform.drape.generators import PlanPolylines
 
@@ -163,6 +168,35 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
         settings["generators"] = PlanPolylines(first, second)
         settings["orientation_rad"] = None
     return settings
+
+
+def scene_part(scene: Scene, surface: Any) -> Part | None:
+    """The part the scene makes on ``surface`` [m]: its ``part`` section (the intersection of
+    the cuts it gives), else the tool's own part (``surface.part()``, e.g. a bare hemisphere
+    above its rim), else None (every cell the net puts on the tool counts whole)."""
+    section = scene.part
+    parts: list[Part] = []
+    area = None
+    if section is not None:
+        if section.z_min_mm is not None:
+            parts.append(HeightCut(section.z_min_mm * MM))
+        if section.plan_outline_mm is not None:
+            parts.append(PlanPolygon(np.asarray(section.plan_outline_mm, dtype=float) * MM))
+        if section.area_mm2 is not None:
+            area = section.area_mm2 * MM * MM
+    if not parts:
+        own = getattr(surface, "part", None)
+        if own is None:
+            return None
+        tool_part: Part = own()
+        if area is not None:
+            tool_part = dataclasses.replace(tool_part, area_m2=area)
+        return tool_part
+    part = combine(parts)
+    assert part is not None
+    if area is not None:
+        part = dataclasses.replace(part, area_m2=area)
+    return part
 
 
 def start_problem(surface: Any, start_xy_m: tuple[float, float]) -> str | None:
@@ -255,12 +289,45 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
         result = drape(surface, generator_angle_rad=alpha_arg, **settings)
     except DrapeError as error:
         raise CaseFailure(f"the drape cannot start: {error}") from None
+    part = settings.get("trim")
+    relaxed = optimum.get("relaxed_nodes") if optimum is not None else None
+    if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
+        with np.errstate(all="ignore"):
+            kinematic = energy_field(result, ctx.products["shear_law"])
+        ctx.summary["kinematic_total_energy_J"] = kinematic.total_energy
+        result = relaxed_result(result, np.asarray(relaxed, dtype=float), part)
+        ctx.summary["result_net"] = "relaxed"
+    elif optimum is not None:
+        ctx.summary["result_net"] = "kinematic"
     with np.errstate(all="ignore"):
         energy = energy_field(result, ctx.products["shear_law"])
-    ctx.summary.update(summary(result, energy))
+    ctx.summary.update(summary(result, energy, part))
+    if part is not None:
+        ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
     judge_drape(ctx, result, energy, surface, settings["start_xy_m"])
+    area = getattr(part, "area_m2", None)
+    if area is not None:
+        # Part area the net does not cover, and how much of it the missing cells explain (by
+        # cause, in the coverage summary); the rest lies where the ply does not reach.
+        bare = max(0.0, float(area) - float(ctx.summary["part_draped_area_m2"]))
+        explained = sum(
+            float(v) for k, v in ctx.summary.items() if k.startswith("uncovered_area_m2_")
+        )
+        ctx.summary["uncovered_part_area_m2"] = bare
+        ctx.summary["uncovered_part_area_m2_beyond_ply"] = max(0.0, bare - explained)
     return {"drape": DrapedPly(result, energy)}
+
+
+def relaxed_result(kinematic: DrapeResult, relaxed_nodes: Any, part: Part | None) -> DrapeResult:
+    """The drape result of a relaxed net: the relaxed positions where relaxation moved nodes
+    (every corner of a counted cell), the kinematic ones elsewhere, and the cell fields
+    recomputed from them. Cells outside the part that touch it mix relaxed and kinematic
+    corners; they carry no weight in the part's energy and extremes."""
+    nodes = np.where(np.isfinite(relaxed_nodes), relaxed_nodes, kinematic.nodes)
+    fields = cell_fields(nodes, kinematic.status, trim=part)
+    info = {**kinematic.info, "net": "relaxed"}
+    return dataclasses.replace(kinematic, nodes=nodes, info=info, **fields)
 
 
 def _needs_optimum(scene: Scene) -> tuple[str, ...]:
@@ -288,12 +355,14 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
 
     ply: DrapedPly = ctx.products["drape"]
     every = max(1, round(5e-3 / ply.result.node_spacing))  # a tow line every ~5 mm
+    surface = ctx.products.get("surface")
     fibre_pattern_figure(
         ply.result,
         ply.energy,
         ctx.case_dir / "fibre_pattern.png",
         title=ctx.fabric.name,  # the figure adds the angle, nodes and energy
         tow_every=every,
+        part=scene_part(ctx.scene, surface) if surface is not None else None,
     )
     return {"fibre_pattern_png": "fibre_pattern.png"}
 

@@ -7,8 +7,8 @@ result that is complete and finite. This module turns a :class:`DrapeResult` and
 
 What the scene asks of a drape [C]
 ----------------------------------
-Until parts (trim regions) land, the scene asks for *the ply, draped wherever it lies over the
-tool*. A ply larger than the tool hangs over its edge, and a kinematic net cannot build a node
+The scene asks for *the ply, draped wherever it lies over the tool* (the part, which the
+energies and extremes are of, clips the draped net: ``preform.drape.part``). A ply larger than the tool hangs over its edge, and a kinematic net cannot build a node
 whose construction passes through a node off the tool: those nodes are the ply's overhang, not
 missing coverage. Node (i, j) is built from the generators through its whole *dependency
 rectangle*, the nodes between it and the start node (i0, j0) in both indices, so a node missing
@@ -43,6 +43,7 @@ A drape is complete (fraction 1) exactly when no cell asked for is missing.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -182,6 +183,10 @@ class Coverage:
     nodes_missing: int = 0
     first_missing_xy_m: tuple[float, float] | None = None
     node_spacing_m: float = 0.0
+    #: Fabric area [m²] (undeformed, d² a cell) of the cells asked for and not covered, by the
+    #: first cause among their corners: folded, no_intersection, stopped_on_tool,
+    #: behind_failure, behind_outline.
+    uncovered_area_m2: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     @property
     def covered_fraction(self) -> float:
@@ -252,6 +257,8 @@ class Coverage:
         }
         for key, value in self.missing_nodes.items():
             out[f"nodes_missing_{key}"] = value
+        for key, area in self.uncovered_area_m2.items():
+            out[f"uncovered_area_m2_{key}"] = area
         return out
 
 
@@ -302,6 +309,26 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     missing_corner = missing[:-1, :-1] | missing[1:, :-1] | missing[:-1, 1:] | missing[1:, 1:]
     asked = valid | (cell_in_ply & ~edge_corner & missing_corner)
 
+    # Uncovered fabric area by cause: each missing cell (asked, not valid) is d² of undeformed
+    # fabric, given to the first cause among its corners in this order.
+    lost_cells = asked & ~valid
+    causes = (
+        ("folded", lost & (status == NodeStatus.FOLDED)),
+        ("no_intersection", lost & (status == NodeStatus.NO_INTERSECTION)),
+        ("stopped_on_tool", lost & stopped),
+        ("behind_failure", missing & behind_failure),
+        ("behind_outline", missing & behind_outline),
+    )
+    uncovered: dict[str, float] = {}
+    left = lost_cells.copy()
+    for name, node_mask in causes:
+        corner = node_mask[:-1, :-1] | node_mask[1:, :-1] | node_mask[:-1, 1:] | node_mask[1:, 1:]
+        mine = left & corner
+        uncovered[name] = float(np.count_nonzero(mine)) * result.node_spacing**2
+        left &= ~mine
+    if left.any():
+        uncovered["other"] = float(np.count_nonzero(left)) * result.node_spacing**2
+
     first: tuple[float, float] | None = None
     if missing.any():
         i0, j0 = start
@@ -316,6 +343,7 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         nodes_missing=int(np.count_nonzero(missing)),
         first_missing_xy_m=first,
         node_spacing_m=result.node_spacing,
+        uncovered_area_m2=uncovered,
     )
 
 
@@ -449,19 +477,22 @@ def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
     percent = 100.0 * part / total if total > 0 else 0.0
     # Cells sheared to near 90° have almost no area: say how little rather than "0.0 %".
     shown = f"{percent:.1f}" if percent >= 0.1 or percent == 0 else f"{percent:.2g}"
-    return f"{int(np.count_nonzero(mask))} cells ({shown} % of the draped area)"
+    return f"{int(np.count_nonzero(mask))} cells ({shown} % of the part's draped area)"
 
 
 def shear_limit_warnings(
     result: DrapeResult, energy: EnergyField, limits: LawRange
 ) -> tuple[list[str], dict[str, Any]]:
     """Sentences about the counted cells past the law's limits, and their counts for the
-    summary. Counted cells are those the energy sums (``energy_field``)."""
+    summary. Counted cells are those the energy sums (``energy_field``); their shares of area
+    and energy are of the part (a cut cell by its area inside it)."""
     counted = result.valid & result.in_part
     gamma = np.where(counted, np.asarray(result.shear, dtype=float), 0.0)
-    area = np.asarray(result.area, dtype=float)
+    # Shares of the part: a cell cut by its edge counts by its area inside it.
+    weight = np.asarray(result.part_weight, dtype=float)
+    area = np.asarray(result.area, dtype=float) * weight
     density = np.asarray(energy.energy_density, dtype=float)
-    cell_energy = density * result.node_spacing**2
+    cell_energy = density * result.node_spacing**2 * weight
     total = float(cell_energy[counted].sum())
     messages: list[str] = []
     counts: dict[str, Any] = {}

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from preform.drape.part import Part
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.export.figures import new_figure, save_figure
 
@@ -32,10 +33,52 @@ def fibre_lines(result: DrapeResult, family: str, every: int = 1) -> list[int]:
     return [k for k in range(count) if (k - through) % every == 0]
 
 
+def _part_nodes(result: DrapeResult) -> np.ndarray:
+    """Nodes (ni, nj) drawn: placed, and (when the result was clipped to a part) a corner of a
+    cell with some area in the part, so fabric draped past the part's edge (a hemisphere's
+    run-off below its rim) is not drawn over the part in the top view."""
+    placed = np.asarray(result.status == NodeStatus.PLACED)
+    if result.part_share is None:
+        return placed
+    weight = np.asarray(result.part_weight) > 0
+    near = np.zeros_like(placed)
+    near[:-1, :-1] |= weight
+    near[1:, :-1] |= weight
+    near[:-1, 1:] |= weight
+    near[1:, 1:] |= weight
+    return placed & near
+
+
+def part_edge_segments(result: DrapeResult, part: Part) -> np.ndarray:
+    """Segments (k, 2, 3) [mm] of the part's edge across the cells it cuts: on each cut cell's
+    sides φ is interpolated linearly to its zero (the rule of the cell's share, so the line is
+    the one the energy was clipped along)."""
+    nodes = np.asarray(result.nodes, dtype=float)
+    with np.errstate(invalid="ignore"):
+        phi = np.asarray(part.level(np.where(np.isfinite(nodes), nodes, 0.0)), dtype=float)
+    valid = np.asarray(result.cell_status == CellStatus.VALID)
+    corners = ((0, 0), (1, 0), (1, 1), (0, 1))
+    segments = []
+    for ci, cj in zip(*np.nonzero(valid), strict=True):
+        values = [phi[ci + a, cj + b] for a, b in corners]
+        if min(values) >= 0 or max(values) < 0:
+            continue
+        points = []
+        for k in range(4):
+            (a0, b0), (a1, b1) = corners[k], corners[(k + 1) % 4]
+            f0, f1 = values[k], values[(k + 1) % 4]
+            if (f0 >= 0) != (f1 >= 0):
+                t = f0 / (f0 - f1)
+                points.append((1 - t) * nodes[ci + a0, cj + b0] + t * nodes[ci + a1, cj + b1])
+        if len(points) >= 2:
+            segments.append(points[:2])
+    return 1e3 * np.asarray(segments, dtype=float).reshape(-1, 2, 3)
+
+
 def _polyline_xy(result: DrapeResult, family: str, lines: list[int]) -> np.ndarray:
     """Top-view (x, y) [mm] of the chosen fibre lines, one array with NaN rows between lines and
-    at every unplaced node, so matplotlib breaks the line there."""
-    placed = np.asarray(result.status == NodeStatus.PLACED)
+    at every node not drawn (unplaced, or past the part), so matplotlib breaks the line there."""
+    placed = _part_nodes(result)
     xy = np.where(placed[..., None], 1e3 * np.asarray(result.nodes, dtype=float)[..., :2], np.nan)
     gap = np.full((1, 2), np.nan)
     parts: list[np.ndarray] = []
@@ -45,8 +88,12 @@ def _polyline_xy(result: DrapeResult, family: str, lines: list[int]) -> np.ndarr
     return np.concatenate(parts) if parts else np.empty((0, 2))
 
 
-def _top_view(ax: Axes, result: DrapeResult, tow_every: int) -> None:
+def _top_view(ax: Axes, result: DrapeResult, tow_every: int, edge: np.ndarray | None) -> None:
     i0, j0 = result.start_index
+    if edge is not None and len(edge):
+        xy = np.concatenate([edge[:, :, :2], np.full((len(edge), 1, 2), np.nan)], axis=1)
+        flat = xy.reshape(-1, 2)
+        ax.plot(flat[:, 0], flat[:, 1], color="0.35", lw=1.2, ls="--", label="part edge")
     for family, colour, generator in (("u", U_COLOUR, j0), ("v", V_COLOUR, i0)):
         xy = _polyline_xy(result, family, fibre_lines(result, family, tow_every))
         ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=0.7, label=f"{family} fibres")
@@ -69,6 +116,9 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     valid = np.asarray(result.cell_status == CellStatus.VALID)
+    if result.part_share is not None:
+        # Only the part: the net draped past its edge would hide it.
+        valid &= np.asarray(result.part_weight) > 0
     ci, cj = np.nonzero(valid)
     nodes_mm = 1e3 * np.asarray(result.nodes, dtype=float)
     quads = np.stack(
@@ -122,6 +172,7 @@ def fibre_pattern_figure(
     title: str | None = None,
     tow_every: int = 1,
     size_px: tuple[int, int] = (1600, 800),
+    part: Part | None = None,
 ) -> Figure:
     """Draw a draped net and save it to ``path``: left, the fibres from above; right, the net
     in 3D with cells coloured by signed shear.
@@ -131,10 +182,13 @@ def fibre_pattern_figure(
     placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
     colour bar in degrees; with ``energy``, cells past locking are outlined and the total energy
     [J] goes into the title. Axes in mm. ``size_px`` is the saved (width, height) [pixels].
+    A net clipped to a part is drawn over the part only (cells with area in it, and their
+    nodes); with ``part`` its edge is drawn dashed in the top view.
     Returns the figure (already saved).
     """
     fig = new_figure(size_px)
-    _top_view(fig.add_subplot(1, 2, 1), result, tow_every)
+    edge = part_edge_segments(result, part) if part is not None else None
+    _top_view(fig.add_subplot(1, 2, 1), result, tow_every, edge)
     _shear_view(fig, cast("Axes3D", fig.add_subplot(1, 2, 2, projection="3d")), result, energy)
     summary = (
         f"generator angle {np.degrees(result.generator_angle):.1f}°, "

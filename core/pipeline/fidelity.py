@@ -18,27 +18,25 @@ Knobs (units in the names):
 - ``scan_step_deg``, ``tolerance_deg``, ``max_drapes``: the generator-angle search's global
   scan step, refinement tolerance and drape budget.
 
-Presets, as measured (``python benchmarks/bench_tradeoff.py``, 2026-11-23, one core of a
-shared 2-core machine; bundled ``hemisphere-min-energy``, R = 100 mm, fabric E-BX-318; L is
-``Surface.size``, here R; errors against a reference with every knob at its finest, d = R/320,
-which lies 1.4 % in energy, 0.01° in angle and 0.13° in max |shear| from one step less fine,
-so smaller errors are not resolved):
+Presets, as measured (``python benchmarks/bench_tradeoff.py``, 2026-12-01, after issue 11,
+one core of a shared 2-core machine; bundled ``hemisphere-min-energy``, R = 100 mm, the part
+z ≥ 0 clipped from a net draped past the rim, fabric E-BX-318; L is ``Surface.size``, here R;
+errors against a reference with every knob at its finest, d = R/320, which lies 7e-6 in energy,
+0.00° in angle and 0.11° in max |shear| from one step less fine):
 
-- ``draft`` (d = L/20, scan 10°): 0.23 s per case (0.3 × standard), 1.9 MB; energy −11 %,
-  optimum angle 0.8° off, max |shear| 1.8° off. At this spacing the energy's rim staircase
-  moves the optimum by ~1–2° and the energy by ~5 % between neighbouring scan grids: a first
-  look, not a number to quote.
-- ``standard`` (d = L/40, scan 5°): 0.7 s (1×), 6.4 MB; energy −4.4 %, angle 0.3° off (other
-  scan grids at this d land 1–1.4° off: the refinement is noise-limited), max |shear| 1.6° off.
-  The knee: halving d again costs 3× for energy −2.7 % and no better angle.
-- ``fine`` (d = L/160, scan 5°, exact law): 7.9 s (11×), 76 MB; energy −1.4 %, angle 0.01°
-  off, max |shear| 0.13° off: the reference to within its own resolution, at a seventh of
-  its cost. A finer scan (2.5°) cost 1.5× at this d for no measured gain, so it is not used.
+- ``draft`` (d = L/20, scan 10°): 0.2 s per case (0.27 × standard), 2.1 MB; energy −6e-4,
+  optimum angle 0.01° off, max |shear| 1° off.
+- ``standard`` (d = L/40, scan 5°): 0.75 s (1×), 7.5 MB; energy −1.5e-4, angle within 0.005°,
+  max |shear| 0.1° off.
+- ``fine`` (d = L/160, scan 5°, exact law): 9 s (12×), 117 MB; energy −7e-6, angle exact, max
+  |shear| 0.11° off: the reference to within its own resolution.
 
-What was measured to matter on this scene is the node spacing (energy, max |shear|) and, at
-d ≥ L/40, the scan grid (angle). The energy table had no effect for this polynomial law, and
-the refinement tolerance and drape budget none at d ≥ L/40, where the refinement stops
-noise-limited before reaching either.
+Before issue 11 the same study gave −11 %, −4.4 % and −1.4 % in energy and 0.8°, 0.3° (1–1.4°
+on other scan grids) and 0.01° in angle: whole rim cells were dropped and the bare rim band
+charged, so the energy converged at first order and E(α) carried a staircase that left the
+refinement noise-limited. With clipped cells what matters on this scene is the node spacing,
+and then mostly for max |shear|; the energy table, solver tolerance and sub-steps had no effect,
+and the scan step and refinement tolerance cost time for no measured gain in angle.
 
 A second study on a tool without closed forms (bundled ``paraboloid-min-energy``: every node
 by the general Newton solve, generators marched; mechanistic ``plain-weave-600`` law;

@@ -102,6 +102,38 @@ class StartSection(BaseModel):
     )
 
 
+class PartSection(BaseModel):
+    """The part: the region of the tool that is made (``preform.drape.part``). The net is
+    draped over the tool as far as the ply reaches and clipped to the part; energies and
+    extremes are of the part. Several fields together mean their intersection. Without this
+    section the part is the tool's own (a bare hemisphere: z ≥ 0; other tools: every cell the
+    net puts on them). Mesh face groups wait for the real-tools issue."""
+
+    model_config = _STRICT
+    z_min_mm: float | None = Field(
+        default=None, description="Height cut: the part is the tool at z ≥ z_min_mm [mm]."
+    )
+    plan_outline_mm: list[tuple[float, float]] | None = Field(
+        default=None,
+        max_length=MAX_POLYGON_VERTICES,
+        description="Plan outline (x, y) [mm] of the part seen from above, a closed polygon; "
+        "a closed curve on a tool whose plan view is one-to-one is its projected points.",
+    )
+    area_mm2: float | None = Field(
+        default=None,
+        gt=0,
+        description="The part's area on the tool [mm²], when known (reported against the "
+        "covered area; a bare hemisphere's own part knows its area).",
+    )
+
+    @field_validator("plan_outline_mm")
+    @classmethod
+    def _polygon(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
+        if v is not None and len(v) < 3:
+            raise ValueError("a part outline needs at least 3 vertices")
+        return v
+
+
 class RangeDeg(BaseModel):
     """A closed range of angles [deg] to search."""
 
@@ -136,14 +168,17 @@ class SearchSection(BaseModel):
     part_area_mm2: float | None = Field(
         default=None,
         gt=0,
-        description="Area of the part [mm²]; uncovered part area is charged at the locking "
-        "energy density (default: the largest area any scanned drape covers).",
+        description="Area of the part [mm²] that coverage is judged against (default: the "
+        "part's own area when known, e.g. 2πR² for a bare hemisphere, else the largest area "
+        "any scanned drape covers).",
     )
     uncovered_shear_deg: float | None = Field(
         default=None,
         gt=0,
         lt=90,
-        description="Shear [deg] at which uncovered part area is charged (default: locking).",
+        description="Price uncovered part area at the shear energy of this angle [deg] (the "
+        "larger of the two senses), a stated choice, the same rule for every architecture; the "
+        "case is then partial. Default: no price (the energy is the part's alone).",
     )
     layout: dict[str, Any] | None = Field(
         default=None,
@@ -220,6 +255,9 @@ class Scene(BaseModel):
         default=None, description="Tool surface: {surface: NAME, ...dimensions in mm}."
     )
     ply: PlySection | None = None
+    part: PartSection | None = Field(
+        default=None, description="The part made on the tool (default: the tool's own)."
+    )
     start: StartSection | None = None
     search: SearchSection | None = None
     shear: ShearSection | None = None

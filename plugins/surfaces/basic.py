@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.drape.part import HeightCut
 from preform.drape.result import NodeStatus
 
 FloatArray = NDArray[np.float64]
@@ -236,18 +237,45 @@ class Sphere:
 
 class Hemisphere(Sphere):
     """The upper half (z ≥ centre z) of a sphere of radius ``radius_m`` [m] centred at
-    ``centre_m`` [m]: the classic drape test tool. Nodes below the rim are OFF_TOOL."""
+    ``centre_m`` [m]: the classic drape test tool.
 
-    def __init__(self, radius_m: float, *, centre_m: ArrayLike = (0.0, 0.0, 0.0)) -> None:
+    ``run_off_m`` [m]: how far below the rim the tool continues for draping, as the same
+    sphere (its analytic continuation). The fabric does not stop at a part's edge: it runs on
+    over it and is trimmed, so a drape of the hemisphere drapes the sphere down to
+    z = centre z − run_off and is clipped to the part z ≥ centre z (:meth:`part`). None (the
+    default of the class) ends the tool at the rim: nodes below it are OFF_TOOL."""
+
+    def __init__(
+        self,
+        radius_m: float,
+        *,
+        centre_m: ArrayLike = (0.0, 0.0, 0.0),
+        run_off_m: float | None = None,
+    ) -> None:
         super().__init__(radius_m, centre_m=centre_m)
+        if run_off_m is not None and not 0.0 < float(run_off_m) <= self.radius:
+            raise ValueError(
+                f"the run-off below the rim must lie in (0, radius] m, got {run_off_m!r} m"
+            )
+        self.run_off = 0.0 if run_off_m is None else float(run_off_m)
         (x0, y0, _), (x1, y1, z1) = self.bounds
-        self.bounds = ((x0, y0, float(self.centre[2])), (x1, y1, z1))
+        self.bounds = ((x0, y0, float(self.centre[2]) - self.run_off), (x1, y1, z1))
+
+    def __repr__(self) -> str:
+        extra = f", run_off_m={self.run_off}" if self.run_off else ""
+        return f"Hemisphere(radius_m={self.radius}, centre_m={tuple(self.centre)}{extra})"
+
+    def part(self) -> HeightCut:
+        """The part this tool makes: the hemisphere above its rim, z ≥ centre z (area 2πR²)."""
+        return HeightCut(float(self.centre[2]), area_m2=2.0 * np.pi * self.radius**2)
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the hemisphere [m] (on the rim for points below it) and distances."""
+        """Closest points on the tool [m] (on its lower edge for points below it) and
+        distances."""
         p = np.asarray(points, dtype=float)
         radial = self._radial(p)
-        below = radial[:, 2] < 0
+        floor = -self.run_off / self.radius
+        below = radial[:, 2] < floor
         if np.any(below):
             flat = radial[below].copy()
             flat[:, 2] = 0.0
@@ -257,13 +285,16 @@ class Hemisphere(Sphere):
                 flat / np.where(length > 0, length, 1.0)[:, None],
                 np.array([1.0, 0.0, 0.0]),
             )
-            radial[below] = flat
+            # The edge circle at height floor·R: radial = (cos·flat, sin) with sin = floor.
+            radial[below] = np.sqrt(1.0 - floor * floor) * flat
+            radial[below, 2] = floor
         q = self.centre + self.radius * radial
         return q, np.sqrt(_dot(p - q, p - q))
 
     def _on_tool(self, p: FloatArray, spacing: float) -> BoolArray:
+        floor = self.centre[2] - self.run_off
         with np.errstate(invalid="ignore"):
-            return np.asarray(p[..., 2] >= self.centre[2] - _EDGE_TOLERANCE * spacing)
+            return np.asarray(p[..., 2] >= floor - _EDGE_TOLERANCE * spacing)
 
 
 class Cylinder:

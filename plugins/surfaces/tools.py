@@ -33,6 +33,11 @@ from preform.plugins.surfaces.mesh import (
 )
 
 MM = 1e-3
+#: Run-off of a bare hemisphere below its rim, as a fraction of its radius [-] [C]. Measured
+#: (R = 100 mm, d = 2.5 mm, ply 360 mm): R/4 covers the hemisphere for every generator angle
+#: in [30°, 150°] exactly as the whole sphere does; R/20 loses 1.5 % of it at 60°, because
+#: nodes that dip below the rim are parents of nodes that come back above it.
+DEFAULT_RUN_OFF = 0.25
 _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 #: A problem found before running: (path inside the tool block, message).
@@ -81,9 +86,24 @@ class HemisphereTool(_Analytic):
         description="Radius of the concave fillet between hemisphere and flange [mm] (needs a "
         "flange).",
     )
+    run_off_mm: float | None = Field(
+        default=None,
+        gt=0,
+        description="Bare hemisphere only: how far below the rim the tool continues as the same "
+        "sphere for draping [mm], so the fabric runs on over the rim and is trimmed there "
+        "(the part is z ≥ 0). Default R/4 (measured: covers the hemisphere for every "
+        "generator angle the ply reaches, as the whole sphere does).",
+    )
 
     @model_validator(mode="after")
     def _flange(self) -> HemisphereTool:
+        if self.run_off_mm is not None and self.flange_half_width_mm is not None:
+            raise ValueError("run_off_mm is for the bare hemisphere (a flange is its run-off)")
+        if self.run_off_mm is not None and self.run_off_mm > self.radius_mm:
+            raise ValueError(
+                f"run_off_mm = {self.run_off_mm:g} mm must not exceed radius_mm = "
+                f"{self.radius_mm:g} mm"
+            )
         if self.fillet_radius_mm > 0 and self.flange_half_width_mm is None:
             raise ValueError(
                 "fillet_radius_mm needs flange_half_width_mm (a fillet joins the "
@@ -182,7 +202,8 @@ def build_plane(p: PlaneTool, base_dir: str) -> Plane:
 
 def build_hemisphere(p: HemisphereTool, base_dir: str) -> Hemisphere | FlangedHemisphere:
     if p.flange_half_width_mm is None:
-        return Hemisphere(p.radius_mm * MM)
+        run_off = p.run_off_mm if p.run_off_mm is not None else DEFAULT_RUN_OFF * p.radius_mm
+        return Hemisphere(p.radius_mm * MM, run_off_m=run_off * MM)
     return FlangedHemisphere(p.radius_mm * MM, p.fillet_radius_mm * MM, p.flange_half_width_mm * MM)
 
 

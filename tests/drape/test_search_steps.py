@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import yaml
 from pydantic import ValidationError
@@ -181,6 +182,43 @@ def test_optional_stages_report_in_the_summary(sandbox, tmp_path):
     assert summary["layout_varied"] == ["orientation"] and summary["layout_drapes"] <= 7
     assert summary["curved_drapes"] <= 9 and "curved_relative_saving" in summary
     assert summary["relaxed_energy_J"] <= summary["relaxed_kinematic_energy_J"] * (1 + 1e-9)
+    assert summary["curved_cells_outside_law_data"] >= 0 and "curved_max_abs_shear_deg" in summary
     assert summary["search_settings"]["tolerance_deg"] == 5
+    # With relaxation asked for, the drape step's result (exported, summed) is the relaxed net,
+    # and the kinematic energy is kept next to it.
+    ctx.products.update(steps["drape"].run(ctx))
+    assert summary["result_net"] == "relaxed"
+    assert ctx.products["drape"].result.info["net"] == "relaxed"
+    # Relaxation holds each cut cell's share at its kinematic value; the drape step recomputes
+    # it from the relaxed nodes, which moved by a fraction of d.
+    assert summary["total_energy_J"] == pytest.approx(summary["relaxed_energy_J"], rel=0.02)
+    assert summary["kinematic_total_energy_J"] == pytest.approx(
+        summary["relaxed_kinematic_energy_J"], rel=1e-6
+    )
     assert 0 < math.degrees(ctx.products["optimum"]["generator_angle_rad"]) < 180
     assert (tmp_path / "energy_vs_angle.png").exists()
+
+
+def test_a_priced_bare_area_is_a_stated_choice_and_makes_the_case_partial(sandbox, tmp_path):
+    lib = sandbox.library(bundled=True)
+    results = {}
+    for price in (None, 40.0):
+        extra = {} if price is None else {"uncovered_shear_deg": price}
+        scene, _ = load_scene(coarse_scene(tmp_path, **extra), sandbox.registry)
+        ctx = CaseContext(
+            fabric=lib.fabric("E-BX-318"), scene=scene, registry=sandbox.registry, case_dir=tmp_path
+        )
+        steps = {s.name: s for s in sandbox.registry.all_steps()}
+        for name in ("surface", "shear_law", "energy_vs_angle", "optimum"):
+            ctx.products.update(steps[name].run(ctx))
+        results[price] = ctx
+    free, priced = results[None], results[40.0]
+    # No price by default: nothing charged, and the case is not partial for it.
+    assert free.summary["search_uncovered_energy_density_J_per_m2"] == 0.0
+    assert not free.partial_reasons
+    # Priced: the density is the law's larger W at ±40°, and the case says so.
+    law = priced.products["shear_law"]
+    want = float(max(law.energy(np.radians(40.0)), law.energy(-np.radians(40.0))))
+    assert priced.summary["search_uncovered_energy_density_J_per_m2"] == pytest.approx(want)
+    (reason,) = priced.partial_reasons
+    assert "priced uncovered part area" in reason and "40°" in reason
