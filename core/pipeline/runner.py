@@ -548,7 +548,11 @@ def run_cases(
         ordered = [results[c.case_id] for c in cases]
         report = RunReport(out_dir, ordered, interrupted)
         if not interrupted:
-            run["aggregates"] = _run_aggregates(cases, rundir, host)
+            try:
+                run["aggregates"] = _run_aggregates(cases, rundir, host)
+            except KeyboardInterrupt:  # every case is recorded; only run-level figures are lost
+                interrupted = True
+                report.interrupted = True
         run["finished"] = now_utc()
         run["status"] = "interrupted" if interrupted else "finished"
         run["counts"] = report.counts()

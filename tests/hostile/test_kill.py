@@ -99,12 +99,11 @@ def kill_trial(tmp_path: Path, sig: signal.Signals, delay_s: float, *extra: str)
         proc.kill()
         proc.communicate()
         pytest.fail(f"the run did not stop within 30 s of {sig.name}")
-    # 130: preform stopped on the interrupt; -SIGINT: it came while the interpreter was still
-    # importing, before preform's own code ran (nothing can have been written then)
+    # 130: preform stopped on the interrupt; 0: the run had finished; -SIGINT: the signal came
+    # while the interpreter was still importing or already shutting down, outside preform's
+    # code (the checks below hold either way)
     if sig == signal.SIGINT and proc.returncode not in (0, 130, -signal.SIGINT):
         pytest.fail(f"exit code {proc.returncode} after SIGINT")
-    if proc.returncode == -signal.SIGINT:
-        assert not out.exists()
     deadline = time.monotonic() + 15
     while any(_alive(p) for p in below) and time.monotonic() < deadline:
         time.sleep(0.1)
