@@ -90,9 +90,14 @@ def test_drape_results_are_in_mm_and_degrees(tmp_path):
     valid = cells[cells["status"] == "VALID"]
     assert valid["z_mm"].max() <= 50.0 + 1e-6 and valid["z_mm"].max() > 40.0
     assert d.generator_angle_deg == pytest.approx(70.0)
-    # the summary's energy is the cells' energy densities times the undeformed cell area d²
-    assert d.total_energy_J == pytest.approx(valid["energy_J_per_m2"].sum() * (4e-3) ** 2, rel=1e-9)
-    assert d.max_abs_shear_deg == pytest.approx(valid["shear_deg"].abs().max())
+    # the summary's energy is the cells' energy densities times their undeformed area inside
+    # the part (share × d²): the net runs on past the rim and is clipped to z ≥ 0
+    weighted = (valid["energy_J_per_m2"] * valid["part_share"]).sum() * (4e-3) ** 2
+    assert d.total_energy_J == pytest.approx(weighted, rel=1e-9)
+    counted = valid[valid["in_part"]]
+    assert (counted["part_share"] > 0).all() and counted["part_share"].max() == 1.0
+    assert (valid[~valid["in_part"]]["part_share"] == 0).all()
+    assert d.max_abs_shear_deg == pytest.approx(counted["shear_deg"].abs().max())
     import meshio
 
     mesh = meshio.read(d.to_vtu(tmp_path / "d.vtu"))

@@ -188,6 +188,9 @@ def test_hemisphere_scene_writes_what_issue_5_lists(tmp_path):
     whole = counted[counted["z_mm"] >= 2.5]["energy_J_per_m2"].sum() * 0.0025**2
     every = counted["energy_J_per_m2"].sum() * 0.0025**2
     assert whole < summary["total_energy_J"] < every
+    # and exactly, with the share the table carries
+    weighted = (counted["energy_J_per_m2"] * counted["part_share"]).sum() * 0.0025**2
+    assert summary["total_energy_J"] == pytest.approx(weighted, rel=1e-9)
     assert (valid["z_mm"] < 0).any() and (counted["z_mm"] < 0).any()
     assert summary["max_abs_shear_deg"] == pytest.approx(counted["shear_deg"].abs().max())
     mesh = meshio.read(case / "drape.vtu")

@@ -26,6 +26,7 @@ CELL_COLUMNS: tuple[str, ...] = (
     "j",
     "status",
     "in_part",
+    "part_share",
     "x_mm",
     "y_mm",
     "z_mm",
@@ -45,7 +46,9 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
     "INCOMPLETE"), ``in_part`` (bool), ``x_mm``, ``y_mm``, ``z_mm`` (centroid [mm]),
     ``shear_deg`` (signed shear [deg]), ``area_mm2`` (draped area [mm²]),
     ``thickness_ratio`` (t/t0 [-], 1/cos γ: a thickening; formerly ``thinning``), ``energy_J_per_m2`` (strain energy density [J/m²]),
-    ``past_locking`` and ``past_failure`` (nullable bool). Values of cells that are not VALID
+    ``past_locking`` and ``past_failure`` (nullable bool), ``part_share`` (the share 0..1 of the
+    cell's undeformed area inside the part, 0 outside it: the total energy is
+    Σ energy_J_per_m2 · part_share · d²). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
     the thickness ratio then follows from the shear.
     """
@@ -82,6 +85,7 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
             "j": jj.ravel(),
             "status": pd.array(status, dtype="string"),
             "in_part": np.asarray(result.in_part, dtype=bool).ravel(),
+            "part_share": np.asarray(result.part_weight, dtype=float).ravel(),
             "x_mm": centroid_mm[:, 0],
             "y_mm": centroid_mm[:, 1],
             "z_mm": centroid_mm[:, 2],
