@@ -9,7 +9,7 @@ cutting pattern. Outputs a scene can ask for:
 | ``abaqus_include`` | ``drape_abaqus.inc`` | ``export.mesh`` |
 | ``lsdyna_include`` | ``drape_lsdyna.k`` | ``export.mesh`` |
 | ``ansys_macro`` | ``drape_ansys.mac`` (APDL: LOCAL + EMODIF ESYS per element) | ``export.mesh`` |
-| ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm) | the drape |
+| ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm; darts, cuts) | the drape |
 
 Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
 elements covered is the covered fraction) and are listed in every file; elements above the
@@ -156,17 +156,30 @@ def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
     )
 
     ply = ctx.products["drape"]
+    options = export_options(ctx)
     pattern = cut_pattern(
         ply.result,
-        seam_allowance_mm=export_options(ctx).seam_allowance_mm,
+        seam_allowance_mm=options.seam_allowance_mm,
         ply_name=f"{ctx.fabric.name} ({ctx.scene.name})",
+        darts_mm=[(d.apex_mm, d.mouth_mm) for d in options.darts],
+        cuts_mm=[(c.from_mm, c.to_mm) for c in options.cuts],
     )
+    # where a dart or cut lands is known only after the drape: one that misses the
+    # pattern is the scene's mistake, said, not silently dropped
+    for problem in pattern.problems:
+        ctx.warn(f"cutting pattern: {problem}")
     files = ["cut_pattern.dxf", "cut_pattern.svg", "cut_pattern.csv"]
     write_cut_pattern_dxf(pattern, ctx.case_dir / files[0])
     write_cut_pattern_svg(pattern, ctx.case_dir / files[1])
     write_cut_pattern_csv(pattern, ctx.case_dir / files[2])
     ctx.summary["cut_pattern_area_mm2"] = pattern.area_mm2
     ctx.summary["cut_pattern_perimeter_mm"] = pattern.perimeter_mm
+    if pattern.darts:
+        ctx.summary["cut_pattern_darts_removed_area_mm2"] = sum(
+            d.removed_area_mm2 for d in pattern.darts
+        )
+    if pattern.cuts:
+        ctx.summary["cut_pattern_pieces"] = len(pattern.outline.geoms)
     if pattern.allowance_area_mm2 is not None:
         ctx.summary["cut_pattern_allowance_area_mm2"] = pattern.allowance_area_mm2
     return {"cut_pattern": files}

@@ -192,7 +192,12 @@ def export_command(
                 "thickness_model",
             )
         }
-    for key in ("cut_pattern_area_mm2", "cut_pattern_allowance_area_mm2"):
+    for key in (
+        "cut_pattern_area_mm2",
+        "cut_pattern_allowance_area_mm2",
+        "cut_pattern_darts_removed_area_mm2",
+        "cut_pattern_pieces",
+    ):
         if key in ctx.summary:
             report[key] = ctx.summary[key]
     if as_json:

@@ -148,3 +148,45 @@ def test_scene_outputs_run_in_the_pipeline_and_mark_the_case_partial(tmp_path) -
         "cut_pattern.csv",
     ):
         assert (case / name).is_file(), name
+
+
+def test_scene_darts_and_cuts_reach_the_cutting_pattern(tmp_path) -> None:
+    """A dart into the flat pattern's edge at y = 50 mm (the 100 mm ply, start in its middle)
+    and a cut far off it: the dart is on the DARTS layer and removes fabric, the cut is
+    reported as missing the pattern."""
+    import ezdxf
+
+    scene = tmp_path / "darted.yaml"
+    scene.write_text(
+        "name: darted\n"
+        "tool: {surface: plane, size_mm: [400, 400]}\n"
+        "ply: {node_spacing_mm: 10, size_mm: [100, 100]}\n"
+        "start: {point_mm: [0, 0], orientation_deg: 0, generator_angle_deg: 90}\n"
+        "export:\n"
+        "  darts: [{apex_mm: [0, 20], mouth_mm: [[-10, 60], [10, 60]]}]\n"
+        "  cuts: [{from_mm: [500, 0], to_mm: [600, 0]}]\n"
+        "outputs: [drape, cut_pattern]\n"
+    )
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "export",
+            "plain-weave-600",
+            "flat-pattern",
+            "--scene",
+            str(scene),
+            "--out",
+            str(out),
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    # the dart's triangle up to the edge y = 50: similar to the whole one, ½ · 15 · 30; the
+    # smoothed outline's side is straight away from the corners to ~1e-5 mm
+    assert abs(report["cut_pattern_darts_removed_area_mm2"] - 225.0) < 1e-3
+    assert any("cut 0 misses the pattern" in w for w in report["warnings"])
+    msp = ezdxf.readfile(out / "cut_pattern.dxf").modelspace()
+    assert len([e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "DARTS"]) == 1
+    assert len([e for e in msp.query("LINE") if e.dxf.layer == "CUTS"]) == 1
