@@ -7,8 +7,8 @@ cutting pattern. Outputs a scene can ask for:
 | ``element_table`` | ``elements.csv`` (one row per element, mm, deg) | ``export.mesh`` |
 | ``element_vtu`` | ``elements.vtu`` (the user's mesh with the same fields, mm) | ``export.mesh`` |
 | ``abaqus_include`` | ``drape_abaqus.inc`` | ``export.mesh`` |
-| ``lsdyna_include`` | ``drape_lsdyna.k`` | ``export.mesh`` |
-| ``ansys_macro`` | ``drape_ansys.mac`` (APDL: LOCAL + EMODIF ESYS per element) | ``export.mesh`` |
+| ``lsdyna_include`` | ``drape_lsdyna.k`` (``export.lsdyna_form``: beta or composite) | ``export.mesh`` |
+| ``ansys_macro`` | ``drape_ansys.mac`` (LOCAL + ESYS, two-layer section per element) | ``export.mesh`` |
 | ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm; darts, cuts) | the drape |
 
 Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
@@ -125,24 +125,40 @@ def write_abaqus_step(ctx: CaseContext) -> dict[str, Any]:
 
 
 def write_lsdyna_step(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.lsdyna import write_lsdyna_include
+    from preform.export.lsdyna import write_lsdyna_composite, write_lsdyna_include
 
-    write_lsdyna_include(
-        ctx.products["mesh_mapping"],
-        ctx.case_dir / "drape_lsdyna.k",
-        part_id=export_options(ctx).part_id,
-        title=f"{ctx.fabric.name}, scene {ctx.scene.name}",
-    )
+    options = export_options(ctx)
+    title = f"{ctx.fabric.name}, scene {ctx.scene.name}"
+    path = ctx.case_dir / "drape_lsdyna.k"
+    if options.lsdyna_form == "composite":
+        try:
+            write_lsdyna_composite(
+                ctx.products["mesh_mapping"],
+                path,
+                part_id=options.part_id,
+                materials=options.layer_materials,
+                u_fraction=options.u_layer_fraction,
+                title=title,
+            )
+        except ValueError as error:
+            raise CaseFailure(f"export.lsdyna_form: {error}") from None
+    else:
+        write_lsdyna_include(
+            ctx.products["mesh_mapping"], path, part_id=options.part_id, title=title
+        )
     return {"lsdyna_include": "drape_lsdyna.k"}
 
 
 def write_ansys_step(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.ansys import write_ansys_macro
 
+    options = export_options(ctx)
     write_ansys_macro(
         ctx.products["mesh_mapping"],
         ctx.case_dir / "drape_ansys.mac",
-        prefix=export_options(ctx).prefix,
+        prefix=options.prefix,
+        materials=options.layer_materials,
+        u_fraction=options.u_layer_fraction,
     )
     return {"ansys_macro": "drape_ansys.mac"}
 
@@ -231,7 +247,8 @@ EXPORTERS = [
         ("mesh_mapping",),
         "1",
         write_lsdyna_step,
-        "drape_lsdyna.k: *ELEMENT_SHELL_BETA per covered element, uncovered set",
+        "drape_lsdyna.k: *ELEMENT_SHELL_BETA (or _COMPOSITE, both families) per covered "
+        "element, uncovered set",
         writes_files=True,
     ),
     Step(
@@ -240,7 +257,8 @@ EXPORTERS = [
         ("mesh_mapping",),
         "1",
         write_ansys_step,
-        "drape_ansys.mac: APDL element coordinate systems (u fibres), components",
+        "drape_ansys.mac: APDL element systems (u fibres), two-layer sections (thickness, "
+        "v fibres), components",
         writes_files=True,
     ),
     Step(

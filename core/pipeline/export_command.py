@@ -72,6 +72,12 @@ def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, fl
 )
 @click.option("--seam-allowance-mm", type=float, default=None, help="Seam allowance [mm].")
 @click.option(
+    "--lsdyna-form",
+    type=click.Choice(["beta", "composite"]),
+    default=None,
+    help="lsdyna: *ELEMENT_SHELL_BETA (u fibres) or _COMPOSITE (both families; needs t0).",
+)
+@click.option(
     "--out",
     "out_dir",
     type=click.Path(file_okay=False),
@@ -92,6 +98,7 @@ def export_command(
     thickness_mm: float | None,
     thickness_cap: float | None,
     seam_allowance_mm: float | None,
+    lsdyna_form: str | None,
     out_dir: str,
     libraries: tuple[str, ...],
     no_bundled: bool,
@@ -135,6 +142,7 @@ def export_command(
         ("nominal_thickness_mm", thickness_mm),
         ("thickness_cap_ratio", thickness_cap),
         ("seam_allowance_mm", seam_allowance_mm),
+        ("lsdyna_form", lsdyna_form),
     ):
         if value is not None:
             section[key] = list(value) if isinstance(value, tuple) else value

@@ -3,6 +3,8 @@ reference direction, thickness, seam allowance). Lengths in mm, as everywhere in
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 
@@ -82,12 +84,35 @@ class ExportSection(BaseModel):
     cuts: tuple[CutSpec, ...] = Field(
         default=(), description="Straight cuts (slits) in the cutting pattern, in the flat [mm]."
     )
+    layer_materials: tuple[int, int] = Field(
+        default=(1, 1),
+        description="Material numbers of the u and v fibre layers (ANSYS MAT, LS-DYNA MID of "
+        "the composite form); each a unidirectional material along its own x axis.",
+    )
+    u_layer_fraction: float = Field(
+        default=0.5,
+        gt=0,
+        lt=1,
+        description="Share of the ply thickness in the u layer (0.5: a balanced fabric).",
+    )
+    lsdyna_form: Literal["beta", "composite"] = Field(
+        default="beta",
+        description="LS-DYNA include: beta (*ELEMENT_SHELL_BETA, u fibres and thickness) or "
+        "composite (*ELEMENT_SHELL_COMPOSITE, both families as two layers; needs t0).",
+    )
     prefix: str = Field(
         default="PREFORM", description="Name prefix of Abaqus sets, distributions, orientations."
     )
     part_id: int = Field(
         default=1, ge=1, description="LS-DYNA PID of elements whose mesh gives none."
     )
+
+    @field_validator("layer_materials")
+    @classmethod
+    def _material_numbers(cls, v: tuple[int, int]) -> tuple[int, int]:
+        if min(v) < 1:
+            raise ValueError("material numbers start at 1")
+        return v
 
     @field_validator("reference_direction")
     @classmethod

@@ -190,3 +190,36 @@ def test_scene_darts_and_cuts_reach_the_cutting_pattern(tmp_path) -> None:
     msp = ezdxf.readfile(out / "cut_pattern.dxf").modelspace()
     assert len([e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "DARTS"]) == 1
     assert len([e for e in msp.query("LINE") if e.dxf.layer == "CUTS"]) == 1
+
+
+def test_export_command_writes_both_families_for_lsdyna_and_ansys(tmp_path) -> None:
+    scene = write_scene(tmp_path)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "export",
+            "plain-weave-600",
+            "lsdyna",
+            "ansys",
+            "--scene",
+            str(scene),
+            "--lsdyna-form",
+            "composite",
+            "--thickness-mm",
+            "0.3",
+            "--out",
+            str(out),
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    covered = report["mesh"]["elements_covered"]
+    k = (out / "drape_lsdyna.k").read_text().splitlines()
+    at = k.index("*ELEMENT_SHELL_COMPOSITE")
+    cards = [line for line in k[at + 1 : k.index("*SET_SHELL_LIST")] if not line.startswith("$")]
+    assert len(cards) == 2 * covered
+    mac = (out / "drape_ansys.mac").read_text().splitlines()
+    assert sum(line.startswith("SECTYPE,") for line in mac) == covered
+    assert sum(line.startswith("SECDATA,") for line in mac) == 2 * covered
