@@ -133,6 +133,12 @@ def export_command(
     data = dict(data)
     section = dict(data.get("export") or {})
     if mesh is not None:
+        from preform.export.shell_mesh import mesh_file_problem
+
+        # refused before the drape runs, as a scene's export.mesh is at validation
+        problem = mesh_file_problem(mesh)
+        if problem is not None:
+            fail([f"error: --mesh: {problem}"])
         section["mesh"] = str(Path(mesh).resolve())
     elif "mesh" in section:
         section["mesh"] = str((scene_path.parent / section["mesh"]).resolve())

@@ -107,9 +107,9 @@ def test_export_command_refusals(tmp_path) -> None:
             "--json",
         ],
     )
-    assert missing.exit_code == 1
-    assert "export.mesh" in json.loads(missing.stdout)["error"]
-    assert "failed: export.mesh" in missing.stderr
+    # refused before anything is draped, as bad input
+    assert missing.exit_code == 2 and missing.stdout == ""
+    assert "--mesh" in missing.stderr and "absent.inp: no such file" in missing.stderr
 
 
 def test_scene_outputs_run_in_the_pipeline_and_mark_the_case_partial(tmp_path) -> None:
