@@ -39,7 +39,10 @@ where the drape would fold or shear past locking, a slit to split a ply into pie
 
 Both are drawn on their own layer (DARTS: the open polyline mouth₁–apex–mouth₂; CUTS: the
 line), in the SVG and the CSV. A dart or cut that misses the pattern is reported in
-``problems``, not silently dropped.
+``problems``, not silently dropped. To show where a dart is wanted, the net cells sheared past
+the law's locking angle are drawn in the flat too (layer PAST_LOCKING: the exact union of
+those cells, ``past_locking`` given), so the designer places darts on a drawing of the
+problem rather than guessing.
 """
 
 from __future__ import annotations
@@ -64,7 +67,7 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 MM_PER_M = 1e3
 #: DXF layers, in drawing order.
-LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS", "DARTS", "CUTS")
+LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS", "DARTS", "CUTS", "PAST_LOCKING")
 #: A point in the flat [mm].
 Point2 = tuple[float, float]
 
@@ -129,6 +132,8 @@ class CutPattern:
     outline_from: str
     darts: tuple[Dart, ...] = ()
     cuts: tuple[Cut, ...] = ()
+    #: Net cells of the pattern sheared past locking, in the flat (None: not known).
+    past_locking: MultiPolygon | None = None
     #: Darts or cuts that miss the pattern, said in words.
     problems: tuple[str, ...] = ()
 
@@ -160,6 +165,9 @@ class CutPattern:
             "cuts": len(self.cuts),
             "cuts_splitting": sum(c.splits for c in self.cuts),
             "problems": list(self.problems),
+            "past_locking_area_mm2": (
+                None if self.past_locking is None else float(self.past_locking.area)
+            ),
             "length_unit": "mm",
         }
 
@@ -362,6 +370,7 @@ def cut_pattern(
     mark_spacing_mm: float | None = None,
     darts_mm: Sequence[tuple[Point2, tuple[Point2, Point2]]] = (),
     cuts_mm: Sequence[tuple[Point2, Point2]] = (),
+    past_locking: NDArray[np.bool_] | None = None,
 ) -> CutPattern:
     """The cutting pattern of a drape (module docstring). ``seam_allowance_mm`` ≥ 0;
     ``smoothing``: 0 the exact staircase of the cells, 1 the polygon through the middles of
@@ -369,7 +378,8 @@ def cut_pattern(
     ``part_outline_m`` (k, 3) [m] a closed curve on the tool to use as the outline;
     ``mark_spacing_mm`` the grid of fibre marks (default: about a fifth of the pattern);
     ``darts_mm`` (apex, (mouth₁, mouth₂)) and ``cuts_mm`` (start, end) in the flat [mm]
-    (module docstring)."""
+    (module docstring); ``past_locking`` a cell mask (the net's cell shape) of cells sheared
+    past locking, drawn in the flat where they lie in the pattern's region."""
     shapely = _require_shapely()
     from shapely.geometry import Polygon
 
@@ -390,6 +400,9 @@ def cut_pattern(
     allowance = None
     if seam_allowance_mm > 0 and not outline.is_empty:
         allowance = _as_multi(outline.buffer(seam_allowance_mm, quad_segs=16))
+    locking = None
+    if past_locking is not None:
+        locking = _cells_in_flat(result, np.asarray(past_locking, dtype=bool), d_mm)
     outline, allowance, darts, cuts, problems = _apply_darts_and_cuts(
         outline, allowance, darts_mm, cuts_mm, seam_allowance_mm + d_mm
     )
@@ -424,7 +437,25 @@ def cut_pattern(
         darts=tuple(darts),
         cuts=tuple(cuts),
         problems=tuple(problems),
+        past_locking=locking,
     )
+
+
+def _cells_in_flat(result: DrapeResult, mask: NDArray[np.bool_], d_mm: float) -> MultiPolygon:
+    """The exact union of the masked cells of the pattern's region, in the flat [mm]: cell
+    (i, j) is the square from ((i − i0)·d, (j − j0)·d) to one d further in x and y."""
+    from shapely.geometry import box
+    from shapely.ops import unary_union
+
+    region = np.asarray(result.valid & result.in_part, dtype=bool)
+    if mask.shape != region.shape:
+        raise ValueError(f"past_locking must have the net's cell shape {region.shape}")
+    i0, j0 = result.start_index
+    squares = [
+        box((i - i0) * d_mm, (j - j0) * d_mm, (i - i0 + 1) * d_mm, (j - j0 + 1) * d_mm)
+        for i, j in zip(*np.nonzero(mask & region), strict=True)
+    ]
+    return _as_multi(unary_union(squares)) if squares else _as_multi(box(0, 0, 0, 0))
 
 
 def _rings(geom: MultiPolygon | None) -> list[tuple[int, int, FloatArray]]:
@@ -439,13 +470,17 @@ def _rings(geom: MultiPolygon | None) -> list[tuple[int, int, FloatArray]]:
 
 
 def write_cut_pattern_csv(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
-    """CSV: ``layer`` (outline / allowance / dart / cut), ``piece`` (for darts and cuts: their
+    """CSV: ``layer`` (outline / allowance / past_locking / dart / cut), ``piece`` (for darts and cuts: their
     number), ``ring`` (0 outer, ≥ 1 holes; 0 for darts and cuts), ``vertex``, ``x_mm``,
     ``y_mm``; one row per vertex (a dart: mouth₁, apex, mouth₂; a cut: its two ends)."""
     with atomic_open(path, "w", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(["layer", "piece", "ring", "vertex", "x_mm", "y_mm"])
-        for layer, geom in (("outline", pattern.outline), ("allowance", pattern.allowance)):
+        for layer, geom in (
+            ("outline", pattern.outline),
+            ("allowance", pattern.allowance),
+            ("past_locking", pattern.past_locking),
+        ):
             for piece, ring, pts in _rings(geom):
                 for v, (x, y) in enumerate(pts.tolist()):
                     writer.writerow([layer, piece, ring, v, f"{x:.6f}", f"{y:.6f}"])
@@ -463,8 +498,8 @@ def _dart_polyline(dart: Dart) -> list[Point2]:
 
 
 def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
-    """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS, LABELS, DARTS and
-    CUTS: closed LWPOLYLINEs for every ring, LINEs for the fibre marks, TEXT for the label, an
+    """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS, LABELS, DARTS,
+    CUTS and PAST_LOCKING: closed LWPOLYLINEs for every ring, LINEs for the fibre marks, TEXT for the label, an
     open LWPOLYLINE (mouth₁, apex, mouth₂) per dart and a LINE per cut."""
     try:
         import ezdxf
@@ -474,10 +509,14 @@ def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> 
     doc = ezdxf.new("R2010")
     doc.units = units.MM
     doc.header["$MEASUREMENT"] = 1  # metric
-    for name, colour in zip(LAYERS, (7, 1, 5, 3, 6, 4), strict=True):
+    for name, colour in zip(LAYERS, (7, 1, 5, 3, 6, 4, 2), strict=True):
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
-    for layer, geom in (("OUTLINE", pattern.outline), ("ALLOWANCE", pattern.allowance)):
+    for layer, geom in (
+        ("OUTLINE", pattern.outline),
+        ("ALLOWANCE", pattern.allowance),
+        ("PAST_LOCKING", pattern.past_locking),
+    ):
         for _, _, pts in _rings(geom):
             msp.add_lwpolyline(pts.tolist(), close=True, dxfattribs={"layer": layer})
     for mark in pattern.marks:
@@ -496,7 +535,8 @@ def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> 
 
 def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
     """SVG at 1:1 (mm; y negated so it looks as the DXF): the outline filled, the allowance
-    dashed, fibre marks in blue (u) and red (v), darts (class ``dart``, a polyline) and cuts
+    dashed, cells past locking shaded red (``id="past-locking"``), fibre marks in blue (u)
+    and red (v), darts (class ``dart``, a polyline) and cuts
     (class ``cut``, a line) in magenta, the label as text."""
     from shapely.geometry import MultiPoint
 
@@ -536,6 +576,11 @@ def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> 
         f'  <path id="outline" d="{path_d(pattern.outline)}" fill="#d9e6f2" '
         f'fill-rule="evenodd" stroke="#1f3b57" stroke-width="{stroke:.4f}"/>'
     )
+    if pattern.past_locking is not None and not pattern.past_locking.is_empty:
+        lines.append(
+            f'  <path id="past-locking" d="{path_d(pattern.past_locking)}" fill="#f2b8b0" '
+            f'fill-rule="evenodd" stroke="#c0392b" stroke-width="{stroke:.4f}"/>'
+        )
     for mark in pattern.marks:
         colour = "#1f3b73" if mark.family == "u" else "#9a2a1f"
         (ax, ay), (bx, by) = mark.start, mark.end

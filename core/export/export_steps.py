@@ -179,6 +179,7 @@ def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
         ply_name=f"{ctx.fabric.name} ({ctx.scene.name})",
         darts_mm=[(d.apex_mm, d.mouth_mm) for d in options.darts],
         cuts_mm=[(c.from_mm, c.to_mm) for c in options.cuts],
+        past_locking=None if ply.energy is None else ply.energy.past_locking,
     )
     # where a dart or cut lands is known only after the drape: one that misses the
     # pattern is the scene's mistake, said, not silently dropped
@@ -194,6 +195,8 @@ def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
         ctx.summary["cut_pattern_darts_removed_area_mm2"] = sum(
             d.removed_area_mm2 for d in pattern.darts
         )
+    if pattern.past_locking is not None:
+        ctx.summary["cut_pattern_past_locking_area_mm2"] = float(pattern.past_locking.area)
     if pattern.cuts:
         ctx.summary["cut_pattern_pieces"] = len(pattern.outline.geoms)
     if pattern.allowance_area_mm2 is not None:

@@ -211,6 +211,7 @@ def export_command(
         "cut_pattern_allowance_area_mm2",
         "cut_pattern_darts_removed_area_mm2",
         "cut_pattern_pieces",
+        "cut_pattern_past_locking_area_mm2",
     ):
         if key in ctx.summary:
             report[key] = ctx.summary[key]

@@ -266,3 +266,45 @@ def test_darts_and_cuts_read_back(tmp_path) -> None:
     ns = {"s": "http://www.w3.org/2000/svg"}
     assert len(root.findall("s:polyline[@class='dart']", ns)) == 1
     assert len(root.findall("s:line[@class='cut']", ns)) == 1
+
+
+def test_cells_past_locking_are_drawn_where_they_lie_in_the_flat(tmp_path) -> None:
+    """Cell (i, j) of the net is the square from ((i − i0)·d, (j − j0)·d) in the flat: marking
+    two neighbouring cells and one far away draws exactly those squares (area 3·d²)."""
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.2, 0.1)),
+    )
+    i0, j0 = result.start_index
+    region = result.valid & result.in_part
+    mask = np.zeros_like(region)
+    for di, dj in ((2, -1), (3, -1), (-5, 2)):
+        assert region[i0 + di, j0 + dj]
+        mask[i0 + di, j0 + dj] = True
+    pattern = cut_pattern(result, smoothing=0, past_locking=mask)
+    assert pattern.past_locking.area == pytest.approx(300.0, rel=1e-12)
+    assert len(pattern.past_locking.geoms) == 2
+    assert pattern.past_locking.buffer(1e-9).contains(Point(25.0, -5.0))
+    assert pattern.past_locking.buffer(1e-9).contains(Point(-45.0, 25.0))
+    assert pattern.past_locking.bounds == pytest.approx((-50.0, -10.0, 40.0, 30.0))
+    write_cut_pattern_dxf(pattern, tmp_path / "p.dxf")
+    msp = ezdxf.readfile(tmp_path / "p.dxf").modelspace()
+    drawn = [e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "PAST_LOCKING"]
+    assert len(drawn) == 2 and all(e.closed for e in drawn)
+    write_cut_pattern_csv(pattern, tmp_path / "p.csv")
+    assert "past_locking" in set(pd.read_csv(tmp_path / "p.csv").layer)
+    with pytest.raises(ValueError, match="cell shape"):
+        cut_pattern(result, past_locking=mask[:-1])
+
+
+def test_marked_cells_outside_the_pattern_region_are_not_drawn(make_net) -> None:
+    """A 10 × 12 node net (9 × 11 cells, d = 5 mm) with one cell out of the part and one
+    folded: every cell marked, the drawing covers the 97 cells of the region, 97 · 25 mm²."""
+    net = make_net(10, 12, outside_part=[(4, 7)], folded=[(2, 2)])
+    pattern = cut_pattern(net, past_locking=np.ones(net.valid.shape, dtype=bool))
+    assert pattern.past_locking.area == pytest.approx(97 * 25.0, rel=1e-12)
+    i0, j0 = net.start_index
+    hole = Point((4 - i0 + 0.5) * 5.0, (7 - j0 + 0.5) * 5.0)
+    assert not pattern.past_locking.contains(hole)

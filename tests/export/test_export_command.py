@@ -76,6 +76,9 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
     assert report["units"] == {"length": "mm", "angle": "deg"}
     assert any("compaction cap" in w for w in report["warnings"])
     assert report["cut_pattern_allowance_area_mm2"] > report["cut_pattern_area_mm2"]
+    # whole net cells (d = 5 mm) past the fabric's locking angle, drawn in the flat
+    cells = report["cut_pattern_past_locking_area_mm2"] / 25.0
+    assert abs(cells - round(cells)) < 1e-9
 
 
 def test_export_command_refusals(tmp_path) -> None:
