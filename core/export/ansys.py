@@ -9,10 +9,19 @@ plane (ANSYS's ESYS rule); x already lies in it, so the element's x axis is the 
 direction. Uncovered elements get no system and are grouped in the component
 ``<P>_UNCOVERED`` (``CM``), covered ones in ``<P>_COVERED``.
 
-Not in the file: the v family (one element system carries one direction; both are in the
-per-element table) and the thickness (ANSYS gives shells their thickness per section, so a
-per-element thickness needs a section per value or a ``SECFUNCTION`` table: left to the
-user, with ``thickness_mm`` from the table). Lengths in mm, angles in degrees.
+Thickness and the v family, when the nominal thickness t0 is known: ANSYS gives a shell its
+thickness and layers through its section, so each covered element gets a section of its own
+(``SECTYPE, s, SHELL``, numbered from ``first_section``) with two layers (``SECDATA, TK, MAT,
+THETA, NUMPT``): the u family (thickness f·t, material ``materials[0]``, THETA 0: along the
+element x axis, which is the u fibres) and the v family ((1 − f)·t, ``materials[1]``, THETA
+the angle from the u to the v fibres about the element normal, i.e. 90° minus the shear),
+t the mapped thickness t0 · t/t0 and f ``u_fraction`` (½ for a balanced fabric); then
+``EMODIF, elem, SECNUM, s``. A two-layer section is how ANSYS models a biaxial fabric as two
+unidirectional layers, the usual smeared model of an NCF; each layer's material is a
+unidirectional one with its fibres along its own x. The material numbers are APDL
+parameters at the top of the file (``<P>_MAT_U``, ``<P>_MAT_V``), to be pointed at the
+model's materials. Without t0 no section is written (the element keeps its own) and the v
+family is only in the per-element table. Lengths in mm, angles in degrees.
 """
 
 from __future__ import annotations
@@ -48,12 +57,33 @@ def local_angles_deg(frames: FloatArray) -> FloatArray:
     return np.degrees(np.column_stack([a, b, c]))
 
 
+def layer_angle_v_deg(mapping: MeshMapping) -> FloatArray:
+    """THETA of the v layer [deg]: the angle from the u to the v fibres about the element
+    normal (right-hand rule), in (−180, 180]; NaN where not covered."""
+    u, v, n = mapping.fibre_u, mapping.fibre_v, mapping.normal
+    sin = np.einsum("ij,ij->i", np.cross(u, v), n)
+    cos = np.einsum("ij,ij->i", u, v)
+    return np.asarray(np.degrees(np.arctan2(sin, cos)))
+
+
 def ansys_macro_text(
-    mapping: MeshMapping, *, prefix: str = "PREFORM", first_system: int = 1001
+    mapping: MeshMapping,
+    *,
+    prefix: str = "PREFORM",
+    first_system: int = 1001,
+    first_section: int = 1001,
+    materials: tuple[int, int] = (1, 1),
+    u_fraction: float = 0.5,
 ) -> str:
-    """The APDL input (module docstring); systems are numbered from ``first_system`` (> 10)."""
+    """The APDL input (module docstring); systems are numbered from ``first_system`` (> 10),
+    sections from ``first_section``; ``materials`` the MAT numbers of the u and v layers,
+    ``u_fraction`` the share of the thickness [mm] in the u layer."""
     if first_system <= 10:
         raise ValueError("ANSYS local coordinate system numbers must be greater than 10")
+    if first_section < 1 or min(materials) < 1:
+        raise ValueError("ANSYS section and material numbers start at 1")
+    if not 0.0 < u_fraction < 1.0:
+        raise ValueError(f"u_fraction must lie strictly between 0 and 1, got {u_fraction!r}")
     name = prefix.upper()
     mesh = mapping.mesh
     cov = mapping.covered
@@ -62,14 +92,29 @@ def ansys_macro_text(
     y = np.cross(z, x)
     frames = np.stack([x, y, z], axis=-1)
     summary = mapping.summary()
+    sections = mapping.nominal_thickness_mm is not None
+    theta_v = layer_angle_v_deg(mapping)
     lines = [
         f"! preform drape mapped onto {mesh.source or 'a shell mesh'}",
         "! Units: lengths in mm, angles in degrees. Element x axis = u fibre direction.",
         f"! Covered elements: {summary['elements_covered']} of {summary['elements']}; "
         f"uncovered: {summary['elements_uncovered']} (component {name}_UNCOVERED, no system).",
-        "! Thickness is not set here (see the per-element table, thickness_mm).",
+        (
+            f"! Thickness and both fibre families: a two-layer shell section per element, "
+            f"u layer {u_fraction:g} of t at THETA 0, v layer {1 - u_fraction:g} of t at THETA "
+            f"= angle u->v (thickness model: {mapping.thickness_model}; t0 = "
+            f"{mapping.nominal_thickness_mm:g} mm)."
+            if sections
+            else "! Thickness is not set here: t0 unknown (see the per-element table)."
+        ),
         "/PREP7",
     ]
+    if sections:
+        lines += [
+            "! Materials of the u and v layers (unidirectional, fibres along the layer x):",
+            f"{name}_MAT_U = {int(materials[0])}",
+            f"{name}_MAT_V = {int(materials[1])}",
+        ]
     ids = mesh.element_ids
     system = first_system
     for k in np.nonzero(cov)[0].tolist():
@@ -78,6 +123,15 @@ def ansys_macro_text(
         lines.append(f"LOCAL,{system},0,{cx:.9g},{cy:.9g},{cz:.9g},{a:.9g},{b:.9g},{c:.9g}")
         lines.append(f"EMODIF,{int(ids[k])},ESYS,{system}")
         system += 1
+        if sections:
+            section = first_section + system - first_system - 1
+            t = float(mapping.thickness_mm[k])
+            lines += [
+                f"SECTYPE,{section},SHELL",
+                f"SECDATA,{u_fraction * t:.9g},{name}_MAT_U,0,3",
+                f"SECDATA,{(1 - u_fraction) * t:.9g},{name}_MAT_V,{theta_v[k]:.9g},3",
+                f"EMODIF,{int(ids[k])},SECNUM,{section}",
+            ]
     lines.append("CSYS,0")
     for label, members in (("COVERED", ids[cov]), ("UNCOVERED", ids[~cov])):
         if members.size == 0:
@@ -96,8 +150,18 @@ def write_ansys_macro(
     *,
     prefix: str = "PREFORM",
     first_system: int = 1001,
+    first_section: int = 1001,
+    materials: tuple[int, int] = (1, 1),
+    u_fraction: float = 0.5,
 ) -> None:
     """Write :func:`ansys_macro_text` to ``path`` (atomically, ASCII)."""
-    text = ansys_macro_text(mapping, prefix=prefix, first_system=first_system)
+    text = ansys_macro_text(
+        mapping,
+        prefix=prefix,
+        first_system=first_system,
+        first_section=first_section,
+        materials=materials,
+        u_fraction=u_fraction,
+    )
     with atomic_open(path, "w", encoding="ascii") as handle:
         handle.write(text.encode("ascii", "replace").decode("ascii"))

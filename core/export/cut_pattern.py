@@ -22,13 +22,34 @@ The outline is one of:
 The seam allowance is the outline offset outwards by ``seam_allowance_mm`` with round joins
 (area grows by a·perimeter + O(a²)). Fibre marks are short u (along x) and v (along y) lines
 on a grid inside the outline; the label names the ply and how it is laid on the tool.
-Darts and cuts are not drawn yet (scenes cannot ask for them).
+
+Darts and cuts are where the scene puts them (``export.darts``, ``export.cuts``), in the flat
+coordinates above, because where a ply must be opened is the designer's decision (a dart
+where the drape would fold or shear past locking, a slit to split a ply into pieces):
+
+- **a dart** is the triangle (apex, mouth₁, mouth₂) removed from the outline: the fabric
+  inside it is cut away, its two legs butt together when draped. The mouth ends lie on or
+  beyond the edge, so the removed area is the triangle's part inside the outline. The seam
+  allowance is cut by the same wedge carried on past the mouth (its legs lengthened by the
+  allowance and one node spacing): the legs are butt joins and get no allowance;
+- **a cut** is a straight slit from one point to the other. Where it crosses the outline
+  from edge to edge, the outline is split into pieces along it (shapely); a slit that ends
+  inside the fabric leaves the outline whole and is only drawn. A through-cut splits the
+  allowance too (the cut line carried across it): its edges are butt joins as well.
+
+Both are drawn on their own layer (DARTS: the open polyline mouth₁–apex–mouth₂; CUTS: the
+line), in the SVG and the CSV. A dart or cut that misses the pattern is reported in
+``problems``, not silently dropped. To show where a dart is wanted, the net cells sheared past
+the law's locking angle are drawn in the flat too (layer PAST_LOCKING: the exact union of
+those cells, ``past_locking`` given), so the designer places darts on a drawing of the
+problem rather than guessing.
 """
 
 from __future__ import annotations
 
 import csv
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape
@@ -46,7 +67,9 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 MM_PER_M = 1e3
 #: DXF layers, in drawing order.
-LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS")
+LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS", "DARTS", "CUTS", "PAST_LOCKING")
+#: A point in the flat [mm].
+Point2 = tuple[float, float]
 
 
 def _require_shapely() -> Any:
@@ -64,6 +87,28 @@ class FibreMark:
     family: str
     start: tuple[float, float]
     end: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Dart:
+    """A dart removed from the pattern [mm]: the triangle apex, mouth[0], mouth[1]."""
+
+    apex: Point2
+    mouth: tuple[Point2, Point2]
+    #: Fabric area the dart removed from the outline [mm²].
+    removed_area_mm2: float
+
+
+@dataclass(frozen=True)
+class Cut:
+    """A straight cut in the flat [mm]."""
+
+    start: Point2
+    end: Point2
+    #: The cut crosses the outline from edge to edge and splits a piece in two (or more).
+    splits: bool
+    #: Length of the cut inside the outline [mm].
+    length_in_fabric_mm: float
 
 
 @dataclass(frozen=True)
@@ -85,6 +130,12 @@ class CutPattern:
     cells_area_mm2: float
     #: "part outline" or "covered net region".
     outline_from: str
+    darts: tuple[Dart, ...] = ()
+    cuts: tuple[Cut, ...] = ()
+    #: Net cells of the pattern sheared past locking, in the flat (None: not known).
+    past_locking: MultiPolygon | None = None
+    #: Darts or cuts that miss the pattern, said in words.
+    problems: tuple[str, ...] = ()
 
     @property
     def area_mm2(self) -> float:
@@ -109,6 +160,14 @@ class CutPattern:
             "allowance_area_mm2": self.allowance_area_mm2,
             "fibre_marks": len(self.marks),
             "label": self.label,
+            "darts": len(self.darts),
+            "darts_removed_area_mm2": sum(d.removed_area_mm2 for d in self.darts),
+            "cuts": len(self.cuts),
+            "cuts_splitting": sum(c.splits for c in self.cuts),
+            "problems": list(self.problems),
+            "past_locking_area_mm2": (
+                None if self.past_locking is None else float(self.past_locking.area)
+            ),
             "length_unit": "mm",
         }
 
@@ -218,9 +277,87 @@ def _marks(outline: Any, spacing: float, length: float) -> list[FibreMark]:
         for y in ys.tolist():
             for family, (dx, dy) in (("u", (half, 0.0)), ("v", (0.0, half))):
                 seg = ((x - dx, y - dy), (x + dx, y + dy))
-                if outline.contains(LineString(seg)):
+                if any(piece.contains(LineString(seg)) for piece in outline.geoms):
                     marks.append(FibreMark(family, seg[0], seg[1]))
     return marks
+
+
+def _wedge(apex: Point2, mouth: tuple[Point2, Point2], extra_mm: float) -> Any:
+    """The dart triangle with both legs lengthened by ``extra_mm`` past the mouth."""
+    from shapely.geometry import Polygon
+
+    a = np.asarray(apex, dtype=float)
+    ends = []
+    for m in mouth:
+        leg = np.asarray(m, dtype=float) - a
+        ends.append(a + leg * (1.0 + extra_mm / float(np.linalg.norm(leg))))
+    return Polygon([tuple(a), tuple(ends[0]), tuple(ends[1])])
+
+
+def _extended(start: Point2, end: Point2, extra_mm: float) -> Any:
+    from shapely.geometry import LineString
+
+    p, q = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    e = (q - p) / float(np.linalg.norm(q - p))
+    return LineString([tuple(p - extra_mm * e), tuple(q + extra_mm * e)])
+
+
+def _split(geom: MultiPolygon, line: Any) -> MultiPolygon:
+    from shapely.geometry import MultiPolygon
+    from shapely.ops import split
+
+    pieces = []
+    for piece in geom.geoms:
+        pieces += list(_as_multi(split(piece, line)).geoms)
+    # the pieces share the cut line: a MultiPolygon of them (not unioned back into one) is
+    # what a cutter needs, even though GEOS calls pieces that touch along a line invalid
+    return MultiPolygon(pieces)
+
+
+def _apply_darts_and_cuts(
+    outline: MultiPolygon,
+    allowance: MultiPolygon | None,
+    darts_mm: Any,
+    cuts_mm: Any,
+    extra_mm: float,
+) -> tuple[MultiPolygon, MultiPolygon | None, list[Dart], list[Cut], list[str]]:
+    from shapely.geometry import LineString, Point
+
+    darts: list[Dart] = []
+    cuts: list[Cut] = []
+    problems: list[str] = []
+    for k, (apex, mouth) in enumerate(darts_mm):
+        apex = (float(apex[0]), float(apex[1]))
+        mouth = tuple((float(m[0]), float(m[1])) for m in mouth)
+        triangle = _wedge(apex, mouth, 0.0)
+        if triangle.area <= 0.0:
+            raise ValueError(f"dart {k}: apex and mouth lie on one line")
+        before = outline.area
+        outline = _as_multi(outline.difference(triangle))
+        removed = float(before - outline.area)
+        if removed <= 0.0:
+            problems.append(f"dart {k} (apex at {apex[0]:g}, {apex[1]:g} mm) misses the pattern")
+        elif not Point(apex).within(outline.buffer(1e-9)):
+            problems.append(f"dart {k}: its apex {apex[0]:g}, {apex[1]:g} mm is not in the fabric")
+        if allowance is not None:
+            allowance = _as_multi(allowance.difference(_wedge(apex, mouth, extra_mm)))
+        darts.append(Dart(apex, mouth, removed))
+    for k, (start, end) in enumerate(cuts_mm):
+        start = (float(start[0]), float(start[1]))
+        end = (float(end[0]), float(end[1]))
+        if start == end:
+            raise ValueError(f"cut {k}: its two ends are the same point")
+        line = LineString([start, end])
+        inside = float(line.intersection(outline).length)
+        count = len(outline.geoms)
+        outline = _split(outline, line)
+        splits = len(outline.geoms) > count
+        if inside <= 0.0:
+            problems.append(f"cut {k} misses the pattern")
+        if splits and allowance is not None:
+            allowance = _split(allowance, _extended(start, end, extra_mm))
+        cuts.append(Cut(start, end, splits, inside))
+    return outline, allowance, darts, cuts, problems
 
 
 def cut_pattern(
@@ -231,12 +368,18 @@ def cut_pattern(
     smoothing: int = 3,
     part_outline_m: FloatArray | None = None,
     mark_spacing_mm: float | None = None,
+    darts_mm: Sequence[tuple[Point2, tuple[Point2, Point2]]] = (),
+    cuts_mm: Sequence[tuple[Point2, Point2]] = (),
+    past_locking: NDArray[np.bool_] | None = None,
 ) -> CutPattern:
     """The cutting pattern of a drape (module docstring). ``seam_allowance_mm`` ≥ 0;
     ``smoothing``: 0 the exact staircase of the cells, 1 the polygon through the middles of
     its sides, n > 1 that polygon smoothed over (n − 1)·d/2 (default 3: σ = d);
     ``part_outline_m`` (k, 3) [m] a closed curve on the tool to use as the outline;
-    ``mark_spacing_mm`` the grid of fibre marks (default: about a fifth of the pattern)."""
+    ``mark_spacing_mm`` the grid of fibre marks (default: about a fifth of the pattern);
+    ``darts_mm`` (apex, (mouth₁, mouth₂)) and ``cuts_mm`` (start, end) in the flat [mm]
+    (module docstring); ``past_locking`` a cell mask (the net's cell shape) of cells sheared
+    past locking, drawn in the flat where they lie in the pattern's region."""
     shapely = _require_shapely()
     from shapely.geometry import Polygon
 
@@ -257,6 +400,12 @@ def cut_pattern(
     allowance = None
     if seam_allowance_mm > 0 and not outline.is_empty:
         allowance = _as_multi(outline.buffer(seam_allowance_mm, quad_segs=16))
+    locking = None
+    if past_locking is not None:
+        locking = _cells_in_flat(result, np.asarray(past_locking, dtype=bool), d_mm)
+    outline, allowance, darts, cuts, problems = _apply_darts_and_cuts(
+        outline, allowance, darts_mm, cuts_mm, seam_allowance_mm + d_mm
+    )
     if outline.is_empty:
         size = d_mm
         label_at = (0.0, 0.0)
@@ -285,7 +434,28 @@ def cut_pattern(
         cell_count=cell_count,
         cells_area_mm2=cell_count * d_mm * d_mm,
         outline_from=source,
+        darts=tuple(darts),
+        cuts=tuple(cuts),
+        problems=tuple(problems),
+        past_locking=locking,
     )
+
+
+def _cells_in_flat(result: DrapeResult, mask: NDArray[np.bool_], d_mm: float) -> MultiPolygon:
+    """The exact union of the masked cells of the pattern's region, in the flat [mm]: cell
+    (i, j) is the square from ((i − i0)·d, (j − j0)·d) to one d further in x and y."""
+    from shapely.geometry import box
+    from shapely.ops import unary_union
+
+    region = np.asarray(result.valid & result.in_part, dtype=bool)
+    if mask.shape != region.shape:
+        raise ValueError(f"past_locking must have the net's cell shape {region.shape}")
+    i0, j0 = result.start_index
+    squares = [
+        box((i - i0) * d_mm, (j - j0) * d_mm, (i - i0 + 1) * d_mm, (j - j0 + 1) * d_mm)
+        for i, j in zip(*np.nonzero(mask & region), strict=True)
+    ]
+    return _as_multi(unary_union(squares)) if squares else _as_multi(box(0, 0, 0, 0))
 
 
 def _rings(geom: MultiPolygon | None) -> list[tuple[int, int, FloatArray]]:
@@ -300,20 +470,37 @@ def _rings(geom: MultiPolygon | None) -> list[tuple[int, int, FloatArray]]:
 
 
 def write_cut_pattern_csv(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
-    """CSV: ``layer`` (outline / allowance), ``piece``, ``ring`` (0 outer, ≥ 1 holes),
-    ``vertex``, ``x_mm``, ``y_mm``; one row per vertex."""
+    """CSV: ``layer`` (outline / allowance / past_locking / dart / cut), ``piece`` (for darts and cuts: their
+    number), ``ring`` (0 outer, ≥ 1 holes; 0 for darts and cuts), ``vertex``, ``x_mm``,
+    ``y_mm``; one row per vertex (a dart: mouth₁, apex, mouth₂; a cut: its two ends)."""
     with atomic_open(path, "w", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(["layer", "piece", "ring", "vertex", "x_mm", "y_mm"])
-        for layer, geom in (("outline", pattern.outline), ("allowance", pattern.allowance)):
+        for layer, geom in (
+            ("outline", pattern.outline),
+            ("allowance", pattern.allowance),
+            ("past_locking", pattern.past_locking),
+        ):
             for piece, ring, pts in _rings(geom):
                 for v, (x, y) in enumerate(pts.tolist()):
                     writer.writerow([layer, piece, ring, v, f"{x:.6f}", f"{y:.6f}"])
+        for k, dart in enumerate(pattern.darts):
+            for v, (x, y) in enumerate(_dart_polyline(dart)):
+                writer.writerow(["dart", k, 0, v, f"{x:.6f}", f"{y:.6f}"])
+        for k, cut in enumerate(pattern.cuts):
+            for v, (x, y) in enumerate((cut.start, cut.end)):
+                writer.writerow(["cut", k, 0, v, f"{x:.6f}", f"{y:.6f}"])
+
+
+def _dart_polyline(dart: Dart) -> list[Point2]:
+    """The dart as the cutter follows it: one mouth end, the apex, the other mouth end."""
+    return [dart.mouth[0], dart.apex, dart.mouth[1]]
 
 
 def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
-    """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS and LABELS: closed
-    LWPOLYLINEs for every ring, LINEs for the fibre marks, TEXT for the label."""
+    """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS, LABELS, DARTS,
+    CUTS and PAST_LOCKING: closed LWPOLYLINEs for every ring, LINEs for the fibre marks, TEXT for the label, an
+    open LWPOLYLINE (mouth₁, apex, mouth₂) per dart and a LINE per cut."""
     try:
         import ezdxf
         from ezdxf import units
@@ -322,14 +509,22 @@ def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> 
     doc = ezdxf.new("R2010")
     doc.units = units.MM
     doc.header["$MEASUREMENT"] = 1  # metric
-    for name, colour in zip(LAYERS, (7, 1, 5, 3), strict=True):
+    for name, colour in zip(LAYERS, (7, 1, 5, 3, 6, 4, 2), strict=True):
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
-    for layer, geom in (("OUTLINE", pattern.outline), ("ALLOWANCE", pattern.allowance)):
+    for layer, geom in (
+        ("OUTLINE", pattern.outline),
+        ("ALLOWANCE", pattern.allowance),
+        ("PAST_LOCKING", pattern.past_locking),
+    ):
         for _, _, pts in _rings(geom):
             msp.add_lwpolyline(pts.tolist(), close=True, dxfattribs={"layer": layer})
     for mark in pattern.marks:
         msp.add_line(mark.start, mark.end, dxfattribs={"layer": "FIBRE_MARKS"})
+    for dart in pattern.darts:
+        msp.add_lwpolyline(_dart_polyline(dart), close=False, dxfattribs={"layer": "DARTS"})
+    for cut in pattern.cuts:
+        msp.add_line(cut.start, cut.end, dxfattribs={"layer": "CUTS"})
     text = msp.add_text(
         pattern.label, height=pattern.text_height_mm, dxfattribs={"layer": "LABELS"}
     )
@@ -340,8 +535,16 @@ def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> 
 
 def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
     """SVG at 1:1 (mm; y negated so it looks as the DXF): the outline filled, the allowance
-    dashed, fibre marks in blue (u) and red (v), the label as text."""
-    geoms = [g for g in (pattern.allowance, pattern.outline) if g is not None and not g.is_empty]
+    dashed, cells past locking shaded red (``id="past-locking"``), fibre marks in blue (u)
+    and red (v), darts (class ``dart``, a polyline) and cuts
+    (class ``cut``, a line) in magenta, the label as text."""
+    from shapely.geometry import MultiPoint
+
+    geoms: list[Any] = [
+        g for g in (pattern.allowance, pattern.outline) if g is not None and not g.is_empty
+    ]
+    geoms += [MultiPoint(_dart_polyline(d)) for d in pattern.darts]
+    geoms += [MultiPoint([c.start, c.end]) for c in pattern.cuts]
     margin = 5.0
     if geoms:
         bounds = np.array([g.bounds for g in geoms])
@@ -373,12 +576,29 @@ def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> 
         f'  <path id="outline" d="{path_d(pattern.outline)}" fill="#d9e6f2" '
         f'fill-rule="evenodd" stroke="#1f3b57" stroke-width="{stroke:.4f}"/>'
     )
+    if pattern.past_locking is not None and not pattern.past_locking.is_empty:
+        lines.append(
+            f'  <path id="past-locking" d="{path_d(pattern.past_locking)}" fill="#f2b8b0" '
+            f'fill-rule="evenodd" stroke="#c0392b" stroke-width="{stroke:.4f}"/>'
+        )
     for mark in pattern.marks:
         colour = "#1f3b73" if mark.family == "u" else "#9a2a1f"
         (ax, ay), (bx, by) = mark.start, mark.end
         lines.append(
             f'  <line class="fibre-{mark.family}" x1="{ax:.4f}" y1="{-ay:.4f}" x2="{bx:.4f}" '
             f'y2="{-by:.4f}" stroke="{colour}" stroke-width="{stroke:.4f}"/>'
+        )
+    for dart in pattern.darts:
+        pts = " ".join(f"{x:.4f},{-y:.4f}" for x, y in _dart_polyline(dart))
+        lines.append(
+            f'  <polyline class="dart" points="{pts}" fill="none" stroke="#b0179a" '
+            f'stroke-width="{2 * stroke:.4f}"/>'
+        )
+    for cut in pattern.cuts:
+        (ax, ay), (bx, by) = cut.start, cut.end
+        lines.append(
+            f'  <line class="cut" x1="{ax:.4f}" y1="{-ay:.4f}" x2="{bx:.4f}" y2="{-by:.4f}" '
+            f'stroke="#b0179a" stroke-width="{2 * stroke:.4f}"/>'
         )
     lx, ly = pattern.label_at
     lines.append(

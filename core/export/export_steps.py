@@ -7,9 +7,9 @@ cutting pattern. Outputs a scene can ask for:
 | ``element_table`` | ``elements.csv`` (one row per element, mm, deg) | ``export.mesh`` |
 | ``element_vtu`` | ``elements.vtu`` (the user's mesh with the same fields, mm) | ``export.mesh`` |
 | ``abaqus_include`` | ``drape_abaqus.inc`` | ``export.mesh`` |
-| ``lsdyna_include`` | ``drape_lsdyna.k`` | ``export.mesh`` |
-| ``ansys_macro`` | ``drape_ansys.mac`` (APDL: LOCAL + EMODIF ESYS per element) | ``export.mesh`` |
-| ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm) | the drape |
+| ``lsdyna_include`` | ``drape_lsdyna.k`` (``export.lsdyna_form``: beta or composite) | ``export.mesh`` |
+| ``ansys_macro`` | ``drape_ansys.mac`` (LOCAL + ESYS, two-layer section per element) | ``export.mesh`` |
+| ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm; darts, cuts) | the drape |
 
 Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
 elements covered is the covered fraction) and are listed in every file; elements above the
@@ -125,24 +125,40 @@ def write_abaqus_step(ctx: CaseContext) -> dict[str, Any]:
 
 
 def write_lsdyna_step(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.lsdyna import write_lsdyna_include
+    from preform.export.lsdyna import write_lsdyna_composite, write_lsdyna_include
 
-    write_lsdyna_include(
-        ctx.products["mesh_mapping"],
-        ctx.case_dir / "drape_lsdyna.k",
-        part_id=export_options(ctx).part_id,
-        title=f"{ctx.fabric.name}, scene {ctx.scene.name}",
-    )
+    options = export_options(ctx)
+    title = f"{ctx.fabric.name}, scene {ctx.scene.name}"
+    path = ctx.case_dir / "drape_lsdyna.k"
+    if options.lsdyna_form == "composite":
+        try:
+            write_lsdyna_composite(
+                ctx.products["mesh_mapping"],
+                path,
+                part_id=options.part_id,
+                materials=options.layer_materials,
+                u_fraction=options.u_layer_fraction,
+                title=title,
+            )
+        except ValueError as error:
+            raise CaseFailure(f"export.lsdyna_form: {error}") from None
+    else:
+        write_lsdyna_include(
+            ctx.products["mesh_mapping"], path, part_id=options.part_id, title=title
+        )
     return {"lsdyna_include": "drape_lsdyna.k"}
 
 
 def write_ansys_step(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.ansys import write_ansys_macro
 
+    options = export_options(ctx)
     write_ansys_macro(
         ctx.products["mesh_mapping"],
         ctx.case_dir / "drape_ansys.mac",
-        prefix=export_options(ctx).prefix,
+        prefix=options.prefix,
+        materials=options.layer_materials,
+        u_fraction=options.u_layer_fraction,
     )
     return {"ansys_macro": "drape_ansys.mac"}
 
@@ -156,17 +172,33 @@ def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
     )
 
     ply = ctx.products["drape"]
+    options = export_options(ctx)
     pattern = cut_pattern(
         ply.result,
-        seam_allowance_mm=export_options(ctx).seam_allowance_mm,
+        seam_allowance_mm=options.seam_allowance_mm,
         ply_name=f"{ctx.fabric.name} ({ctx.scene.name})",
+        darts_mm=[(d.apex_mm, d.mouth_mm) for d in options.darts],
+        cuts_mm=[(c.from_mm, c.to_mm) for c in options.cuts],
+        past_locking=None if ply.energy is None else ply.energy.past_locking,
     )
+    # where a dart or cut lands is known only after the drape: one that misses the
+    # pattern is the scene's mistake, said, not silently dropped
+    for problem in pattern.problems:
+        ctx.warn(f"cutting pattern: {problem}")
     files = ["cut_pattern.dxf", "cut_pattern.svg", "cut_pattern.csv"]
     write_cut_pattern_dxf(pattern, ctx.case_dir / files[0])
     write_cut_pattern_svg(pattern, ctx.case_dir / files[1])
     write_cut_pattern_csv(pattern, ctx.case_dir / files[2])
     ctx.summary["cut_pattern_area_mm2"] = pattern.area_mm2
     ctx.summary["cut_pattern_perimeter_mm"] = pattern.perimeter_mm
+    if pattern.darts:
+        ctx.summary["cut_pattern_darts_removed_area_mm2"] = sum(
+            d.removed_area_mm2 for d in pattern.darts
+        )
+    if pattern.past_locking is not None:
+        ctx.summary["cut_pattern_past_locking_area_mm2"] = float(pattern.past_locking.area)
+    if pattern.cuts:
+        ctx.summary["cut_pattern_pieces"] = len(pattern.outline.geoms)
     if pattern.allowance_area_mm2 is not None:
         ctx.summary["cut_pattern_allowance_area_mm2"] = pattern.allowance_area_mm2
     return {"cut_pattern": files}
@@ -218,7 +250,8 @@ EXPORTERS = [
         ("mesh_mapping",),
         "1",
         write_lsdyna_step,
-        "drape_lsdyna.k: *ELEMENT_SHELL_BETA per covered element, uncovered set",
+        "drape_lsdyna.k: *ELEMENT_SHELL_BETA (or _COMPOSITE, both families) per covered "
+        "element, uncovered set",
         writes_files=True,
     ),
     Step(
@@ -227,7 +260,8 @@ EXPORTERS = [
         ("mesh_mapping",),
         "1",
         write_ansys_step,
-        "drape_ansys.mac: APDL element coordinate systems (u fibres), components",
+        "drape_ansys.mac: APDL element systems (u fibres), two-layer sections (thickness, "
+        "v fibres), components",
         writes_files=True,
     ),
     Step(

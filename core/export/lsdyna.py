@@ -12,9 +12,18 @@ Triangles repeat N3 as N4, as LS-DYNA expects.
 These cards *define* the elements, so they replace the user's own ``*ELEMENT_SHELL`` cards of
 the same elements (LS-DYNA stops on a duplicate element id rather than silently taking one).
 Uncovered elements are not written; they are listed in ``*SET_SHELL_LIST`` (SID
-``uncovered_set_id``) so the model can give them what it decides. The v family is not in the
-file: ``*ELEMENT_SHELL_BETA`` carries one angle; the per-element table has both. Lengths in mm
+``uncovered_set_id``) so the model can give them what it decides. The v family is not in this
+form: ``*ELEMENT_SHELL_BETA`` carries one angle; the per-element table has both. Lengths in mm
 (the user's model must use mm), angles in degrees.
+
+Both families: the ``composite`` form (``lsdyna_composite_text``) writes each covered element
+as ``*ELEMENT_SHELL_COMPOSITE`` instead (card 1 as above; card 2 in 10-character fields MID1,
+THICK1, B1, blank, MID2, THICK2, B2, blank): two through-thickness integration points, the u
+family (material ``materials[0]``, thickness f·t, angle B1 = BETA of the u fibres) and the v
+family (``materials[1]``, (1 − f)·t, B2 from the same N1→N2 edge to the v fibres), t the
+mapped thickness and f ``u_fraction`` (½ for a balanced fabric): a biaxial fabric as two
+unidirectional layers, each material's fibres along its a-axis (AOPT = 0). It needs t0 (a
+layer thickness cannot be "the section's").
 """
 
 from __future__ import annotations
@@ -31,16 +40,16 @@ MAX_ID = 99_999_999
 
 
 def _angle_from_first_edge_deg(mapping: MeshMapping) -> np.ndarray:
-    n = mapping.normal
-    edge = mapping.mesh.first_edges()
-    # a warped quad's first edge leaves its mean plane: project it back
-    edge = edge - np.einsum("ij,ij->i", edge, n)[:, None] * n
-    with np.errstate(invalid="ignore", divide="ignore"):
-        edge /= np.linalg.norm(edge, axis=1, keepdims=True)
-    f = mapping.fibre_u
-    sin = np.einsum("ij,ij->i", np.cross(edge, f), n)
-    cos = np.einsum("ij,ij->i", edge, f)
-    return np.asarray(np.degrees(np.arctan2(sin, cos)))
+    return _angle_from_first_edge_to(mapping, mapping.fibre_u)
+
+
+def _f10(x: float) -> str:
+    """A real in a 10-character field, as many digits as fit."""
+    for digits in range(8, 0, -1):
+        text = f"{x:10.{digits}g}"
+        if len(text) <= 10:
+            return text
+    raise ValueError(f"{x!r} does not fit a 10-character LS-DYNA field")
 
 
 def _f16(x: float) -> str:
@@ -114,6 +123,110 @@ def write_lsdyna_include(
     """Write :func:`lsdyna_include_text` to ``path`` (atomically, ASCII)."""
     text = lsdyna_include_text(
         mapping, part_id=part_id, uncovered_set_id=uncovered_set_id, title=title
+    )
+    text = text.replace("γ", "gamma").encode("ascii", "replace").decode("ascii")
+    with atomic_open(path, "w", encoding="ascii") as handle:
+        handle.write(text)
+
+
+def _angle_from_first_edge_to(mapping: MeshMapping, fibre: np.ndarray) -> np.ndarray:
+    """Angle [deg] from each element's N1→N2 edge to ``fibre``, about the element normal."""
+    n = mapping.normal
+    # a warped quad's first edge leaves its mean plane: project it back
+    edge = mapping.mesh.first_edges()
+    edge = edge - np.einsum("ij,ij->i", edge, n)[:, None] * n
+    with np.errstate(invalid="ignore", divide="ignore"):
+        edge /= np.linalg.norm(edge, axis=1, keepdims=True)
+    sin = np.einsum("ij,ij->i", np.cross(edge, fibre), n)
+    cos = np.einsum("ij,ij->i", edge, fibre)
+    return np.asarray(np.degrees(np.arctan2(sin, cos)))
+
+
+def lsdyna_composite_text(
+    mapping: MeshMapping,
+    *,
+    part_id: int = 1,
+    uncovered_set_id: int = 1,
+    materials: tuple[int, int] = (1, 1),
+    u_fraction: float = 0.5,
+    title: str | None = None,
+) -> str:
+    """The include in the ``*ELEMENT_SHELL_COMPOSITE`` form (module docstring): both fibre
+    families as two integration points; thicknesses [mm], angles [deg]."""
+    mesh = mapping.mesh
+    cov = mapping.covered
+    if mapping.nominal_thickness_mm is None:
+        raise ValueError(
+            "the composite form needs the ply thickness t0 (export.nominal_thickness_mm)"
+        )
+    if not 0.0 < u_fraction < 1.0:
+        raise ValueError(f"u_fraction must lie strictly between 0 and 1, got {u_fraction!r}")
+    if min(materials) < 1:
+        raise ValueError("LS-DYNA material ids start at 1")
+    if mesh.element_ids.max(initial=0) > MAX_ID or mesh.node_ids.max(initial=0) > MAX_ID:
+        raise ValueError(
+            "element or node ids above 99,999,999 do not fit LS-DYNA's 8-character fields"
+        )
+    pids = np.where(mesh.property_ids > 0, mesh.property_ids, part_id)
+    beta_u = _angle_from_first_edge_to(mapping, mapping.fibre_u)
+    beta_v = _angle_from_first_edge_to(mapping, mapping.fibre_v)
+    corners = np.where(mesh.corners < 0, mesh.corners[:, [2]], mesh.corners)
+    node_labels = mesh.node_ids[corners]
+    summary = mapping.summary()
+    lines = [
+        "*KEYWORD",
+        "$ preform drape mapped onto "
+        + (mesh.source or "a shell mesh")
+        + (f": {title}" if title else ""),
+        "$ Units: lengths in mm, angles in degrees. B1/B2 from the N1->N2 edge to the u/v fibres.",
+        f"$ Two layers: u (MID {materials[0]}, {u_fraction:g} of t), "
+        f"v (MID {materials[1]}, {1 - u_fraction:g} of t).",
+        f"$ Covered elements: {summary['elements_covered']} of {summary['elements']}; "
+        f"uncovered: {summary['elements_uncovered']} (*SET_SHELL_LIST {uncovered_set_id}).",
+        f"$ Thickness model: {mapping.thickness_model}; t0 = {mapping.nominal_thickness_mm:g} mm",
+        "$ These cards replace your *ELEMENT_SHELL cards of the same elements.",
+        "*ELEMENT_SHELL_COMPOSITE",
+        "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
+        "$#    mid1    thick1        b1              mid2    thick2        b2",
+    ]
+    for k in np.nonzero(cov)[0].tolist():
+        n1, n2, n3, n4 = (int(v) for v in node_labels[k])
+        lines.append(
+            f"{int(mesh.element_ids[k]):8d}{int(pids[k]):8d}{n1:8d}{n2:8d}{n3:8d}{n4:8d}"
+            + f"{0:8d}" * 4
+        )
+        t = float(mapping.thickness_mm[k])
+        lines.append(
+            f"{int(materials[0]):10d}{_f10(u_fraction * t)}{_f10(float(beta_u[k]))}{'':10}"
+            f"{int(materials[1]):10d}{_f10((1 - u_fraction) * t)}{_f10(float(beta_v[k]))}"
+        )
+    lines += ["*SET_SHELL_LIST", "$#     sid"]
+    lines.append(f"{uncovered_set_id:10d}")
+    uncovered = mesh.element_ids[~cov].tolist()
+    for k in range(0, len(uncovered), 8):
+        lines.append("".join(f"{int(e):10d}" for e in uncovered[k : k + 8]))
+    lines.append("*END")
+    return "\n".join(lines) + "\n"
+
+
+def write_lsdyna_composite(
+    mapping: MeshMapping,
+    path: str | os.PathLike[str],
+    *,
+    part_id: int = 1,
+    uncovered_set_id: int = 1,
+    materials: tuple[int, int] = (1, 1),
+    u_fraction: float = 0.5,
+    title: str | None = None,
+) -> None:
+    """Write :func:`lsdyna_composite_text` to ``path`` (atomically, ASCII)."""
+    text = lsdyna_composite_text(
+        mapping,
+        part_id=part_id,
+        uncovered_set_id=uncovered_set_id,
+        materials=materials,
+        u_fraction=u_fraction,
+        title=title,
     )
     text = text.replace("γ", "gamma").encode("ascii", "replace").decode("ascii")
     with atomic_open(path, "w", encoding="ascii") as handle:

@@ -24,6 +24,58 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
+#: Bytes per MB in ``limits.max_mesh_mb`` (decimal, as for tool meshes).
+MB = 1_000_000
+
+
+def mesh_file_problem(path: str | os.PathLike[str], max_bytes: int | None = None) -> str | None:
+    """Why the FE mesh at ``path`` cannot be read, or None: checked before any drape runs,
+    without reading it (its content is judged when the mapping step reads it).
+
+    Refused: a missing path; anything but a regular file (a FIFO would block the reader, a
+    device never ends, a directory is no mesh); an empty file; one larger than ``max_bytes``
+    (by ``stat``, so a huge file costs nothing to refuse); one this process may not open; a
+    suffix no reader here knows (``.inp``, ``.bdf``/``.nas``/``.dat``, or one of meshio's).
+    """
+    import stat
+
+    file = Path(path)
+    try:
+        info = os.stat(file)
+    except FileNotFoundError:
+        return f"{file}: no such file"
+    except (OSError, ValueError) as error:
+        why = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+        return f"{file}: cannot be looked up: {why}"
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a directory" if stat.S_ISDIR(info.st_mode) else "not a regular file"
+        return f"{file}: is {kind}; the FE mesh must be a mesh file"
+    if info.st_size == 0:
+        return f"{file}: is empty (0 bytes)"
+    if max_bytes is not None and info.st_size > max_bytes:
+        return (
+            f"{file}: {info.st_size / MB:.1f} MB, larger than the limit of {max_bytes / MB:g} MB "
+            "(limits.max_mesh_mb)"
+        )
+    suffix = file.suffix.lower()
+    if suffix not in (".inp", ".bdf", ".nas", ".dat"):
+        import meshio
+
+        known = meshio.extension_to_filetypes
+        if suffix not in known and "".join(file.suffixes[-2:]).lower() not in known:
+            return (
+                f"{file}: no reader for {suffix or 'a file without a suffix'!r} files "
+                "(Abaqus .inp, Nastran .bdf/.nas/.dat, or a format meshio reads: .stl, .obj, "
+                ".vtu, .msh, ...)"
+            )
+    try:
+        with open(file, "rb"):
+            pass
+    except OSError as error:
+        return f"{file}: cannot be opened: {error.strerror or error}"
+    return None
+
+
 #: meshio cell types read as shells, and how many corner nodes each keeps.
 MESHIO_SHELLS = {"triangle": 3, "triangle6": 3, "triangle7": 3, "quad": 4, "quad8": 4, "quad9": 4}
 

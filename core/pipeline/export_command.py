@@ -72,6 +72,12 @@ def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, fl
 )
 @click.option("--seam-allowance-mm", type=float, default=None, help="Seam allowance [mm].")
 @click.option(
+    "--lsdyna-form",
+    type=click.Choice(["beta", "composite"]),
+    default=None,
+    help="lsdyna: *ELEMENT_SHELL_BETA (u fibres) or _COMPOSITE (both families; needs t0).",
+)
+@click.option(
     "--out",
     "out_dir",
     type=click.Path(file_okay=False),
@@ -92,6 +98,7 @@ def export_command(
     thickness_mm: float | None,
     thickness_cap: float | None,
     seam_allowance_mm: float | None,
+    lsdyna_form: str | None,
     out_dir: str,
     libraries: tuple[str, ...],
     no_bundled: bool,
@@ -126,6 +133,12 @@ def export_command(
     data = dict(data)
     section = dict(data.get("export") or {})
     if mesh is not None:
+        from preform.export.shell_mesh import mesh_file_problem
+
+        # refused before the drape runs, as a scene's export.mesh is at validation
+        problem = mesh_file_problem(mesh)
+        if problem is not None:
+            fail([f"error: --mesh: {problem}"])
         section["mesh"] = str(Path(mesh).resolve())
     elif "mesh" in section:
         section["mesh"] = str((scene_path.parent / section["mesh"]).resolve())
@@ -135,6 +148,7 @@ def export_command(
         ("nominal_thickness_mm", thickness_mm),
         ("thickness_cap_ratio", thickness_cap),
         ("seam_allowance_mm", seam_allowance_mm),
+        ("lsdyna_form", lsdyna_form),
     ):
         if value is not None:
             section[key] = list(value) if isinstance(value, tuple) else value
@@ -192,7 +206,13 @@ def export_command(
                 "thickness_model",
             )
         }
-    for key in ("cut_pattern_area_mm2", "cut_pattern_allowance_area_mm2"):
+    for key in (
+        "cut_pattern_area_mm2",
+        "cut_pattern_allowance_area_mm2",
+        "cut_pattern_darts_removed_area_mm2",
+        "cut_pattern_pieces",
+        "cut_pattern_past_locking_area_mm2",
+    ):
         if key in ctx.summary:
             report[key] = ctx.summary[key]
     if as_json:

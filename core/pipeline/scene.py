@@ -234,7 +234,8 @@ class LimitsSection(BaseModel):
     max_mesh_mb: float = Field(
         default=512.0,
         gt=0,
-        description="Largest tool mesh file read [MB]; larger files are refused before reading.",
+        description="Largest tool or FE (export.mesh) mesh file read [MB]; larger files are "
+        "refused before reading.",
     )
 
 
@@ -402,6 +403,7 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
             errors.append(err(("tool", *where), label, message))
     ply = scene.ply
     errors += _section_problems(scene, err)
+    errors += _export_mesh_problems(scene, err)
     if ply is None:
         return errors
     outline = ply_outline(scene)
@@ -446,6 +448,21 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
         if problem is not None:
             errors.append(err(("start", "point_mm"), "start.point_mm", problem))
     return errors
+
+
+def _export_mesh_problems(scene: Scene, err: Any) -> list[SourceError]:
+    """``export.mesh`` missing, unreadable or too large, refused here like a tool mesh file
+    (checked, not read) rather than after the drape has run."""
+    from preform.export.shell_mesh import MB, mesh_file_problem
+
+    section = scene.export
+    if section is None or section.mesh is None:
+        return []
+    max_bytes = int(scene.limits.max_mesh_mb * MB)
+    problem = mesh_file_problem(Path(scene.base_dir) / section.mesh, max_bytes)
+    if problem is None:
+        return []
+    return [err(("export", "mesh"), "export.mesh", problem)]
 
 
 def _section_problems(scene: Scene, err: Any) -> list[SourceError]:

@@ -160,3 +160,151 @@ def test_files_read_back(tmp_path) -> None:
 def test_bad_allowance_is_refused() -> None:
     with pytest.raises(ValueError, match="seam_allowance_mm"):
         cut_pattern(HEMI, seam_allowance_mm=-1.0)
+
+
+def plate_pattern(**kwargs):
+    """A 200 × 100 mm rectangle on a plate at d = 10 mm; smoothing 0 keeps it exactly the
+    rectangle [−100, 100] × [−50, 50] mm, so every area below is known by hand."""
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.2, 0.1)),
+    )
+    return cut_pattern(result, smoothing=0, **kwargs)
+
+
+def test_plate_pattern_is_the_rectangle() -> None:
+    assert plate_pattern().area_mm2 == pytest.approx(20000.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("cut", "areas"),
+    [
+        # vertical at x = 30: 130 × 100 and 70 × 100
+        (((30.0, -80.0), (30.0, 80.0)), [7000.0, 13000.0]),
+        # y = x/4 + 10 from edge to edge: below it ∫(x/4 + 60) dx over [−100, 100] = 12000
+        (((-120.0, -20.0), (120.0, 40.0)), [8000.0, 12000.0]),
+    ],
+)
+def test_a_straight_cut_splits_the_area_exactly(cut, areas) -> None:
+    pattern = plate_pattern(cuts_mm=[cut])
+    assert len(pattern.outline.geoms) == 2 and pattern.cuts[0].splits
+    assert sorted(g.area for g in pattern.outline.geoms) == pytest.approx(areas, rel=1e-12)
+    assert pattern.area_mm2 == pytest.approx(20000.0, rel=1e-12)
+    assert pattern.problems == ()
+
+
+def test_a_slit_ending_inside_keeps_one_piece_and_its_length() -> None:
+    pattern = plate_pattern(cuts_mm=[((0.0, 80.0), (0.0, 10.0))])
+    assert len(pattern.outline.geoms) == 1 and not pattern.cuts[0].splits
+    assert pattern.cuts[0].length_in_fabric_mm == pytest.approx(40.0, rel=1e-12)
+    assert pattern.area_mm2 == pytest.approx(20000.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "mouth",
+    [
+        ((-10.0, 50.0), (10.0, 50.0)),  # on the edge: the whole triangle, ½·20·30
+        ((-20.0, 80.0), (20.0, 80.0)),  # past it: the similar triangle up to y = 50, ½·20·30
+    ],
+)
+def test_a_dart_removes_its_triangle(mouth) -> None:
+    pattern = plate_pattern(darts_mm=[((0.0, 20.0), mouth)])
+    assert pattern.darts[0].removed_area_mm2 == pytest.approx(300.0, rel=1e-12)
+    assert pattern.area_mm2 == pytest.approx(20000.0 - 300.0, rel=1e-12)
+    assert not pattern.outline.contains(Point(0.0, 45.0))
+    assert pattern.outline.contains(Point(0.0, 15.0))
+
+
+def test_dart_and_cut_open_the_allowance_too() -> None:
+    pattern = plate_pattern(
+        seam_allowance_mm=5.0,
+        darts_mm=[((0.0, 20.0), ((-10.0, 50.0), (10.0, 50.0)))],
+        cuts_mm=[((30.0, -60.0), (30.0, 60.0))],
+    )
+    assert not pattern.allowance.contains(Point(0.0, 52.0))  # in the wedge carried on
+    assert pattern.allowance.buffer(1e-9).contains(Point(-50.0, 52.0))
+    assert len(pattern.allowance.geoms) == 2  # the cut runs on across the allowance
+
+
+def test_a_dart_or_cut_off_the_pattern_is_reported() -> None:
+    pattern = plate_pattern(
+        darts_mm=[((300.0, 0.0), ((310.0, 10.0), (310.0, -10.0)))],
+        cuts_mm=[((300.0, -10.0), (300.0, 10.0))],
+    )
+    assert pattern.area_mm2 == pytest.approx(20000.0, rel=1e-12)
+    assert len(pattern.problems) == 2
+    assert "dart 0" in pattern.problems[0] and "cut 0 misses" in pattern.problems[1]
+
+
+def test_darts_and_cuts_read_back(tmp_path) -> None:
+    dart = ((0.0, 20.0), ((-10.0, 50.0), (10.0, 50.0)))
+    cut = ((30.0, -80.0), (30.0, 80.0))
+    pattern = plate_pattern(darts_mm=[dart], cuts_mm=[cut])
+    write_cut_pattern_dxf(pattern, tmp_path / "p.dxf")
+    msp = ezdxf.readfile(tmp_path / "p.dxf").modelspace()
+    darts = [e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "DARTS"]
+    assert len(darts) == 1 and not darts[0].closed
+    pts = [tuple(p[:2]) for p in darts[0].get_points()]
+    assert pts == [(-10.0, 50.0), (0.0, 20.0), (10.0, 50.0)]
+    cuts = [e for e in msp.query("LINE") if e.dxf.layer == "CUTS"]
+    assert len(cuts) == 1
+    assert tuple(cuts[0].dxf.start)[:2] == cut[0] and tuple(cuts[0].dxf.end)[:2] == cut[1]
+    assert len([e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "OUTLINE"]) == 2
+
+    write_cut_pattern_csv(pattern, tmp_path / "p.csv")
+    table = pd.read_csv(tmp_path / "p.csv")
+    rows = table[table.layer == "dart"][["x_mm", "y_mm"]].to_numpy()
+    np.testing.assert_array_equal(rows, [[-10, 50], [0, 20], [10, 50]])
+    rows = table[table.layer == "cut"][["x_mm", "y_mm"]].to_numpy()
+    np.testing.assert_array_equal(rows, [[30, -80], [30, 80]])
+    assert set(table[table.layer == "outline"].piece) == {0, 1}
+
+    write_cut_pattern_svg(pattern, tmp_path / "p.svg")
+    root = ET.parse(tmp_path / "p.svg").getroot()
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    assert len(root.findall("s:polyline[@class='dart']", ns)) == 1
+    assert len(root.findall("s:line[@class='cut']", ns)) == 1
+
+
+def test_cells_past_locking_are_drawn_where_they_lie_in_the_flat(tmp_path) -> None:
+    """Cell (i, j) of the net is the square from ((i − i0)·d, (j − j0)·d) in the flat: marking
+    two neighbouring cells and one far away draws exactly those squares (area 3·d²)."""
+    result = drape(
+        Plane((1.0, 1.0)),
+        start_xy_m=(0.0, 0.0),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.2, 0.1)),
+    )
+    i0, j0 = result.start_index
+    region = result.valid & result.in_part
+    mask = np.zeros_like(region)
+    for di, dj in ((2, -1), (3, -1), (-5, 2)):
+        assert region[i0 + di, j0 + dj]
+        mask[i0 + di, j0 + dj] = True
+    pattern = cut_pattern(result, smoothing=0, past_locking=mask)
+    assert pattern.past_locking.area == pytest.approx(300.0, rel=1e-12)
+    assert len(pattern.past_locking.geoms) == 2
+    assert pattern.past_locking.buffer(1e-9).contains(Point(25.0, -5.0))
+    assert pattern.past_locking.buffer(1e-9).contains(Point(-45.0, 25.0))
+    assert pattern.past_locking.bounds == pytest.approx((-50.0, -10.0, 40.0, 30.0))
+    write_cut_pattern_dxf(pattern, tmp_path / "p.dxf")
+    msp = ezdxf.readfile(tmp_path / "p.dxf").modelspace()
+    drawn = [e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "PAST_LOCKING"]
+    assert len(drawn) == 2 and all(e.closed for e in drawn)
+    write_cut_pattern_csv(pattern, tmp_path / "p.csv")
+    assert "past_locking" in set(pd.read_csv(tmp_path / "p.csv").layer)
+    with pytest.raises(ValueError, match="cell shape"):
+        cut_pattern(result, past_locking=mask[:-1])
+
+
+def test_marked_cells_outside_the_pattern_region_are_not_drawn(make_net) -> None:
+    """A 10 × 12 node net (9 × 11 cells, d = 5 mm) with one cell out of the part and one
+    folded: every cell marked, the drawing covers the 97 cells of the region, 97 · 25 mm²."""
+    net = make_net(10, 12, outside_part=[(4, 7)], folded=[(2, 2)])
+    pattern = cut_pattern(net, past_locking=np.ones(net.valid.shape, dtype=bool))
+    assert pattern.past_locking.area == pytest.approx(97 * 25.0, rel=1e-12)
+    i0, j0 = net.start_index
+    hole = Point((4 - i0 + 0.5) * 5.0, (7 - j0 + 0.5) * 5.0)
+    assert not pattern.past_locking.contains(hole)

@@ -76,6 +76,9 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
     assert report["units"] == {"length": "mm", "angle": "deg"}
     assert any("compaction cap" in w for w in report["warnings"])
     assert report["cut_pattern_allowance_area_mm2"] > report["cut_pattern_area_mm2"]
+    # whole net cells (d = 5 mm) past the fabric's locking angle, drawn in the flat
+    cells = report["cut_pattern_past_locking_area_mm2"] / 25.0
+    assert abs(cells - round(cells)) < 1e-9
 
 
 def test_export_command_refusals(tmp_path) -> None:
@@ -107,9 +110,9 @@ def test_export_command_refusals(tmp_path) -> None:
             "--json",
         ],
     )
-    assert missing.exit_code == 1
-    assert "export.mesh" in json.loads(missing.stdout)["error"]
-    assert "failed: export.mesh" in missing.stderr
+    # refused before anything is draped, as bad input
+    assert missing.exit_code == 2 and missing.stdout == ""
+    assert "--mesh" in missing.stderr and "absent.inp: no such file" in missing.stderr
 
 
 def test_scene_outputs_run_in_the_pipeline_and_mark_the_case_partial(tmp_path) -> None:
@@ -148,3 +151,78 @@ def test_scene_outputs_run_in_the_pipeline_and_mark_the_case_partial(tmp_path) -
         "cut_pattern.csv",
     ):
         assert (case / name).is_file(), name
+
+
+def test_scene_darts_and_cuts_reach_the_cutting_pattern(tmp_path) -> None:
+    """A dart into the flat pattern's edge at y = 50 mm (the 100 mm ply, start in its middle)
+    and a cut far off it: the dart is on the DARTS layer and removes fabric, the cut is
+    reported as missing the pattern."""
+    import ezdxf
+
+    scene = tmp_path / "darted.yaml"
+    scene.write_text(
+        "name: darted\n"
+        "tool: {surface: plane, size_mm: [400, 400]}\n"
+        "ply: {node_spacing_mm: 10, size_mm: [100, 100]}\n"
+        "start: {point_mm: [0, 0], orientation_deg: 0, generator_angle_deg: 90}\n"
+        "export:\n"
+        "  darts: [{apex_mm: [0, 20], mouth_mm: [[-10, 60], [10, 60]]}]\n"
+        "  cuts: [{from_mm: [500, 0], to_mm: [600, 0]}]\n"
+        "outputs: [drape, cut_pattern]\n"
+    )
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "export",
+            "plain-weave-600",
+            "flat-pattern",
+            "--scene",
+            str(scene),
+            "--out",
+            str(out),
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    # the dart's triangle up to the edge y = 50: similar to the whole one, ½ · 15 · 30; the
+    # smoothed outline's side is straight away from the corners to ~1e-5 mm
+    assert abs(report["cut_pattern_darts_removed_area_mm2"] - 225.0) < 1e-3
+    assert any("cut 0 misses the pattern" in w for w in report["warnings"])
+    msp = ezdxf.readfile(out / "cut_pattern.dxf").modelspace()
+    assert len([e for e in msp.query("LWPOLYLINE") if e.dxf.layer == "DARTS"]) == 1
+    assert len([e for e in msp.query("LINE") if e.dxf.layer == "CUTS"]) == 1
+
+
+def test_export_command_writes_both_families_for_lsdyna_and_ansys(tmp_path) -> None:
+    scene = write_scene(tmp_path)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        cli,
+        [
+            "export",
+            "plain-weave-600",
+            "lsdyna",
+            "ansys",
+            "--scene",
+            str(scene),
+            "--lsdyna-form",
+            "composite",
+            "--thickness-mm",
+            "0.3",
+            "--out",
+            str(out),
+            "--json",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    covered = report["mesh"]["elements_covered"]
+    k = (out / "drape_lsdyna.k").read_text().splitlines()
+    at = k.index("*ELEMENT_SHELL_COMPOSITE")
+    cards = [line for line in k[at + 1 : k.index("*SET_SHELL_LIST")] if not line.startswith("$")]
+    assert len(cards) == 2 * covered
+    mac = (out / "drape_ansys.mac").read_text().splitlines()
+    assert sum(line.startswith("SECTYPE,") for line in mac) == covered
+    assert sum(line.startswith("SECDATA,") for line in mac) == 2 * covered
