@@ -10,7 +10,13 @@ The outline is one of:
   point by point through the net: closest point on the draped net, then the same (i + s,
   j + t) in the flat, linear inside each half-cell. This is the outline once scenes have
   parts;
-- **until then, the boundary of the covered net region** (valid cells in the part): the exact
+- **the part, clipped in the flat** (``part``: the scene's part, ``preform.drape.part``): the
+  part's level function φ at the net's nodes, taken as linear on the two triangles of each
+  cell (split along its (i, j)–(i+1, j+1) diagonal), and each cell's region φ ≥ 0 laid out in
+  the flat. The outline is then the part's edge interpolated inside the cells it cuts, exact
+  where the edge is straight across a flat cell, with the same share of each cell that the
+  energy counts (to the O(d²) difference between one diagonal split and their average);
+- **without a part, the boundary of the covered net region** (valid cells in the part): the exact
   union of its cells, with the outer boundary of each piece interpolated inside its boundary
   cells: the polygon through the middle of every cell side on the boundary (a staircase
   along 45° becomes its straight line), then smoothed along its length by a Gaussian of
@@ -63,6 +69,8 @@ from preform.export.flat_pattern import flat_pattern
 
 if TYPE_CHECKING:
     from shapely.geometry import MultiPolygon
+
+    from preform.drape.part import Part
 
 FloatArray = NDArray[np.float64]
 MM_PER_M = 1e3
@@ -371,6 +379,7 @@ def cut_pattern(
     darts_mm: Sequence[tuple[Point2, tuple[Point2, Point2]]] = (),
     cuts_mm: Sequence[tuple[Point2, Point2]] = (),
     past_locking: NDArray[np.bool_] | None = None,
+    part: Part | None = None,
 ) -> CutPattern:
     """The cutting pattern of a drape (module docstring). ``seam_allowance_mm`` ≥ 0;
     ``smoothing``: 0 the exact staircase of the cells, 1 the polygon through the middles of
@@ -379,7 +388,8 @@ def cut_pattern(
     ``mark_spacing_mm`` the grid of fibre marks (default: about a fifth of the pattern);
     ``darts_mm`` (apex, (mouth₁, mouth₂)) and ``cuts_mm`` (start, end) in the flat [mm]
     (module docstring); ``past_locking`` a cell mask (the net's cell shape) of cells sheared
-    past locking, drawn in the flat where they lie in the pattern's region."""
+    past locking, drawn in the flat where they lie in the pattern's region; ``part`` the
+    scene's part, whose region in the flat becomes the outline (module docstring)."""
     shapely = _require_shapely()
     from shapely.geometry import Polygon
 
@@ -393,6 +403,9 @@ def cut_pattern(
         flat = flat_points(result, part_outline_m)
         outline = shapely.make_valid(Polygon(flat))
         source = "part outline"
+    elif part is not None:
+        outline = part_region_in_flat(result, part)
+        source = "part, clipped in the flat"
     else:
         outline = _smooth(cells, d_mm, smoothing - 1)
         source = "covered net region"
@@ -439,6 +452,54 @@ def cut_pattern(
         problems=tuple(problems),
         past_locking=locking,
     )
+
+
+def _inside_of_triangle(corners: FloatArray, phi: FloatArray) -> FloatArray:
+    """The polygon of a flat triangle where the linear function with corner values ``phi`` is
+    ≥ 0 (Sutherland–Hodgman against one half-plane): 0, 3 or 4 vertices."""
+    out = []
+    for k in range(3):
+        a, b = corners[k], corners[(k + 1) % 3]
+        fa, fb = phi[k], phi[(k + 1) % 3]
+        if fa >= 0:
+            out.append(a)
+        if (fa >= 0) != (fb >= 0):
+            out.append(a + (b - a) * (fa / (fa - fb)))
+    return np.asarray(out, dtype=float)
+
+
+def part_region_in_flat(result: DrapeResult, part: Part) -> MultiPolygon:
+    """The region of the flat ply that the part takes [mm] (module docstring): whole cells
+    with every corner inside, and the inside of each triangle of a cell the part's edge cuts."""
+    from shapely.geometry import Polygon
+    from shapely.ops import unary_union
+
+    d_mm = MM_PER_M * result.node_spacing
+    ni, nj = result.shape
+    phi = np.asarray(part.level(np.asarray(result.nodes, dtype=float).reshape(-1, 3)))
+    phi = phi.reshape(ni, nj)
+    corners = np.stack([phi[:-1, :-1], phi[1:, :-1], phi[:-1, 1:], phi[1:, 1:]])
+    valid = np.asarray(result.valid, dtype=bool) & np.all(np.isfinite(corners), axis=0)
+    inside = valid & np.all(corners >= 0, axis=0)
+    cut = valid & ~inside & np.any(corners > 0, axis=0)
+    pieces = [_cells_in_flat(result, inside, d_mm)] if inside.any() else []
+    i0, j0 = result.start_index
+    for i, j in zip(*np.nonzero(cut), strict=True):
+        x0, y0 = (i - i0) * d_mm, (j - j0) * d_mm
+        p00, p10 = np.array([x0, y0]), np.array([x0 + d_mm, y0])
+        p01, p11 = np.array([x0, y0 + d_mm]), np.array([x0 + d_mm, y0 + d_mm])
+        f00, f10, f01, f11 = corners[0, i, j], corners[1, i, j], corners[2, i, j], corners[3, i, j]
+        for tri, f in (
+            ((p00, p10, p11), (f00, f10, f11)),
+            ((p00, p11, p01), (f00, f11, f01)),
+        ):
+            poly = _inside_of_triangle(np.asarray(tri), np.asarray(f))
+            if len(poly) >= 3:
+                pieces.append(Polygon(poly))
+    if not pieces:
+        return _as_multi(Polygon())
+    # the pieces share edges exactly; a tiny buffer round trip would only blur the outline
+    return _as_multi(unary_union(pieces))
 
 
 def _cells_in_flat(result: DrapeResult, mask: NDArray[np.bool_], d_mm: float) -> MultiPolygon:

@@ -164,6 +164,7 @@ def write_ansys_step(ctx: CaseContext) -> dict[str, Any]:
 
 
 def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.drape.steps import scene_part
     from preform.export.cut_pattern import (
         cut_pattern,
         write_cut_pattern_csv,
@@ -180,6 +181,7 @@ def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
         darts_mm=[(d.apex_mm, d.mouth_mm) for d in options.darts],
         cuts_mm=[(c.from_mm, c.to_mm) for c in options.cuts],
         past_locking=None if ply.energy is None else ply.energy.past_locking,
+        part=scene_part(ctx.scene, ctx.products["surface"]) if "surface" in ctx.products else None,
     )
     # where a dart or cut lands is known only after the drape: one that misses the
     # pattern is the scene's mistake, said, not silently dropped
