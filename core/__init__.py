@@ -19,10 +19,10 @@ __version__ = "0.1.0"
 
 from preform.material import FabricBase, Location
 from preform.pipeline.status import CaseFailure, CaseStatus
-from preform.pipeline.step import CaseContext, Step
 from preform.plugin_manager import PluginHost, default_host, hookimpl
 from preform.registry import RegistrationError, Registry
 from preform.shear.law import ShearLaw, force_per_length_N_per_mm
+from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:
     from preform.api import (

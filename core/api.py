@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from preform.material import FabricBase
     from preform.pipeline.runner import CaseResult, RunReport
     from preform.pipeline.scene import Scene
-    from preform.pipeline.step import CaseContext
+    from preform.step import CaseContext
 
 PathLike = str | os.PathLike[str]
 

@@ -15,7 +15,7 @@ from typing import Any, Generic, TypeVar
 from pydantic import BaseModel
 
 from preform.material import FabricBase
-from preform.pipeline.step import Step
+from preform.step import Step
 
 
 class RegistrationError(ValueError):

@@ -375,7 +375,7 @@ def _run_case(setting: Setting, fabric: Any, registry: Any, case_dir: Path) -> A
     from preform.drape.search_steps import run_energy_vs_angle, run_optimum
     from preform.drape.steps import run_drape, run_surface
     from preform.pipeline.core_steps import run_shear_law
-    from preform.pipeline.step import CaseContext
+    from preform.step import CaseContext
 
     ctx = CaseContext(fabric=fabric, scene=setting.scene, registry=registry, case_dir=case_dir)
     for step in (run_surface, run_shear_law, run_energy_vs_angle, run_optimum, run_drape):

@@ -50,7 +50,7 @@ from preform.drape.steps import drape_settings, record_knobs, start_problem
 from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
 from preform.pipeline import fidelity
 from preform.pipeline.status import CaseFailure
-from preform.pipeline.step import CaseContext, Step
+from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene

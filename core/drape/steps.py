@@ -32,7 +32,7 @@ from preform.drape.verdict import (
 )
 from preform.pipeline import fidelity
 from preform.pipeline.status import CaseFailure
-from preform.pipeline.step import CaseContext, Step
+from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene

@@ -24,7 +24,7 @@ from typing import Any
 
 from preform.pipeline.export_section import ExportSection
 from preform.pipeline.status import CaseFailure
-from preform.pipeline.step import CaseContext, Step
+from preform.step import CaseContext, Step
 
 
 def export_options(ctx: CaseContext) -> ExportSection:

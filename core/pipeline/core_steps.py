@@ -13,7 +13,7 @@ import numpy as np
 
 from preform.library import build_shear_law
 from preform.pipeline.status import CaseFailure
-from preform.pipeline.step import CaseContext, Step
+from preform.step import CaseContext, Step
 
 
 def _scalars(prefix: str, values: Mapping[str, Any]) -> dict[str, Any]:

@@ -117,8 +117,8 @@ def export_command(
     from preform.pipeline.planner import PlanError, plan
     from preform.pipeline.scene import SceneError, load_scene, resolve_scene_path, scene_from_data
     from preform.pipeline.status import CaseFailure
-    from preform.pipeline.step import CaseContext
     from preform.plugin_manager import default_host
+    from preform.step import CaseContext
 
     host = default_host()
     lib = load_library_or_exit(libraries, bundled=not no_bundled)

@@ -10,8 +10,8 @@ import difflib
 import graphlib
 from typing import TYPE_CHECKING
 
-from preform.pipeline.step import Step
 from preform.registry import Registry
+from preform.step import Step
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene

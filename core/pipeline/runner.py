@@ -39,8 +39,8 @@ from preform.pipeline.rundir import (
 from preform.pipeline.rundir import clean_json as _clean_json
 from preform.pipeline.scene import Scene, scene_from_data
 from preform.pipeline.status import REUSABLE, CaseFailure, CaseStatus
-from preform.pipeline.step import CaseContext
 from preform.plugin_manager import PluginHost
+from preform.step import CaseContext
 
 #: Wall-time limit of a case when neither the scene (``limits.case_timeout_s``) nor the
 #: command line (``--case-timeout``) sets one [s]. The bundled studies take seconds a case.

@@ -1,88 +1,9 @@
-"""A pipeline step: a named computation with what it provides, what it requires, a version."""
+"""Where ``Step`` and ``CaseContext`` lived until 0.1: they are ``preform.step`` now.
 
-from __future__ import annotations
+Kept so plugins importing ``preform.pipeline.step`` keep working; new code imports
+``preform.Step`` / ``preform.CaseContext``.
+"""
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from preform.step import CaseContext, Step, StepFunction
 
-if TYPE_CHECKING:
-    from preform.material import FabricBase
-    from preform.pipeline.scene import Scene
-    from preform.registry import Registry
-
-
-@dataclass
-class CaseContext:
-    """What a step sees while one (material, scene) case runs."""
-
-    fabric: FabricBase
-    scene: Scene
-    registry: Registry
-    #: The case's output folder; file-writing steps write here (atomically).
-    case_dir: Path
-    #: Products computed so far, by name.
-    products: dict[str, Any] = field(default_factory=dict)
-    #: Scalar results of the case (go to summary.json and a row of results.csv).
-    summary: dict[str, Any] = field(default_factory=dict)
-    #: Files written by the case, relative to case_dir.
-    files: list[str] = field(default_factory=list)
-    #: Why the result covers less than the scene asked, in words; any makes the case
-    #: ``partial`` (see ``preform.pipeline.status``). Set through :meth:`partial`.
-    partial_reasons: list[str] = field(default_factory=list)
-    #: What the user must know about a result that is still complete (cells past locking,
-    #: angles outside the law's data range), in words. Set through :meth:`warn`.
-    warnings: list[str] = field(default_factory=list)
-
-    def partial(self, reason: str, covered_fraction: float | None = None) -> None:
-        """Mark the result partial: it is finite but does not cover what the scene asked.
-
-        ``covered_fraction`` (0..1) is the share of what was asked that the result covers
-        (e.g. of the part's area); the smallest one given is recorded as ``covered_fraction``.
-        """
-        if reason not in self.partial_reasons:
-            self.partial_reasons.append(reason)
-        if covered_fraction is not None:
-            previous = self.summary.get("covered_fraction")
-            value = float(covered_fraction)
-            self.summary["covered_fraction"] = (
-                value if previous is None else min(float(previous), value)
-            )
-
-    def warn(self, message: str) -> None:
-        """Say something the user must know about this case's result, in words."""
-        if message not in self.warnings:
-            self.warnings.append(message)
-
-
-#: A step's body: reads ``ctx.products`` (its requirements), returns what it provides.
-StepFunction = Callable[[CaseContext], Mapping[str, Any]]
-
-
-@dataclass(frozen=True)
-class Step:
-    """One registered computation.
-
-    ``run`` must be a module-level function (picklable). It returns a mapping with a value for
-    every name in ``provides``; a file-writing step (``writes_files``) returns the relative paths
-    it wrote as the value of its product.
-    """
-
-    name: str
-    provides: tuple[str, ...]
-    requires: tuple[str, ...]
-    version: str
-    run: StepFunction
-    description: str = ""
-    writes_files: bool = False
-    #: Scene sections the step needs (checked when a scene is planned: "tool", "ply", ...).
-    scene_sections: tuple[str, ...] = ()
-    #: Extra requirements that depend on the scene (a module-level function of the scene),
-    #: e.g. the drape needs the search's optimum when the scene searches.
-    extra_requires: Callable[[Scene], tuple[str, ...]] | None = None
-    #: Run-level output (module-level function): called once per scene after all its cases,
-    #: with the scene's results folder and the summaries of its successful cases (each with
-    #: ``material`` and the case's scalar and list results); returns the files it wrote,
-    #: relative to the folder. E.g. one energy curve per fabric on one figure.
-    aggregate: Callable[[Path, list[Mapping[str, Any]]], list[str]] | None = None
+__all__ = ["CaseContext", "Step", "StepFunction"]

@@ -1,0 +1,236 @@
+"""Imports flow one way: no module of ``core/`` imports, at module level, something that imports
+it back, and the plugin machinery (registry, step contract, plugin manager) sits below the
+pipeline, which plans and runs what it registered.
+
+The static checks read the source with ``ast``: an import counts when it runs on import, so not
+inside a function or under ``if TYPE_CHECKING:`` (annotation-only imports may point back).
+"""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+CORE = Path(__file__).resolve().parents[2] / "core"
+
+#: The layer plugins register into; it must not need the pipeline, the drape or the exports,
+#: which import it (issue 16: the registry imported ``preform.pipeline.step`` while the
+#: pipeline's planner and scene imported the registry).
+FOUNDATION = (
+    "preform.hookspecs",
+    "preform.material",
+    "preform.plugin_manager",
+    "preform.registry",
+    "preform.step",
+)
+ABOVE_FOUNDATION = ("preform.pipeline", "preform.drape", "preform.export", "preform.api")
+
+
+def core_modules(core: Path) -> dict[str, Path]:
+    """Every module under ``core`` by its import name (``core/`` is ``preform``)."""
+    modules = {}
+    for path in core.rglob("*.py"):
+        parts = ["preform", *path.relative_to(core).with_suffix("").parts]
+        if parts[-1] == "__init__":
+            parts.pop()
+        modules[".".join(parts)] = path
+    return modules
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _module_level_imports(body: list[ast.stmt]) -> Iterator[ast.Import | ast.ImportFrom]:
+    """Import statements that run when the module is imported (class bodies, try and if
+    blocks included; functions and ``if TYPE_CHECKING:`` blocks not)."""
+    for node in body:
+        if isinstance(node, ast.Import | ast.ImportFrom):
+            yield node
+        elif isinstance(node, ast.If):
+            if not _is_type_checking(node.test):
+                yield from _module_level_imports(node.body)
+            yield from _module_level_imports(node.orelse)
+        elif isinstance(node, ast.ClassDef | ast.With):
+            yield from _module_level_imports(node.body)
+        elif isinstance(node, ast.Try):
+            for block in (node.body, node.orelse, node.finalbody):
+                yield from _module_level_imports(block)
+            for handler in node.handlers:
+                yield from _module_level_imports(handler.body)
+
+
+def _ancestors(name: str) -> list[str]:
+    parts = name.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
+
+
+def import_graph(core: Path) -> dict[str, set[str]]:
+    """Module -> the ``core`` modules its import runs, directly.
+
+    ``import a.b.c`` runs ``a``, ``a.b`` and ``a.b.c``; a package that is the importer's own
+    ancestor is already initialised (Python imports parents first), so it counts only when a
+    name other than a submodule is taken from it.
+    """
+    modules = core_modules(core)
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        own = set(_ancestors(name)) | ({name} if path.name == "__init__.py" else set())
+        targets: set[str] = set()
+        for node in _module_level_imports(ast.parse(path.read_text(), str(path)).body):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    targets.update(m for m in [*_ancestors(alias.name), alias.name] if m not in own)
+                continue
+            if node.level:  # relative: from .x import y
+                base = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                source = ".".join([*base, *([node.module] if node.module else [])])
+            else:
+                source = node.module or ""
+            targets.update(m for m in _ancestors(source) if m not in own)
+            submodules = [
+                f"{source}.{a.name}" for a in node.names if f"{source}.{a.name}" in modules
+            ]
+            targets.update(submodules)
+            if source not in own or len(submodules) < len(node.names):
+                targets.add(source)
+        graph[name] = {t for t in targets if t in modules and t != name}
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def reachable(graph: dict[str, set[str]], start: str) -> dict[str, str]:
+    """Every module ``start`` imports transitively, with the module that imports it."""
+    seen: dict[str, str] = {}
+    todo = [start]
+    while todo:
+        node = todo.pop()
+        for child in graph[node]:
+            if child not in seen and child != start:
+                seen[child] = node
+                todo.append(child)
+    return seen
+
+
+def test_no_module_imports_a_module_that_imports_it_back():
+    found = cycles(import_graph(CORE))
+    assert not found, "module-level import cycles in core/: " + "; ".join(
+        " <-> ".join(c) for c in found
+    )
+
+
+@pytest.mark.parametrize("module", FOUNDATION)
+def test_the_plugin_layer_does_not_import_the_pipeline(module):
+    graph = import_graph(CORE)
+    above = {
+        target: via
+        for target, via in reachable(graph, module).items()
+        if target.startswith(tuple(f"{a}." for a in ABOVE_FOUNDATION)) or target in ABOVE_FOUNDATION
+    }
+    assert not above, f"{module} imports, at module level: " + ", ".join(
+        f"{t} (from {v})" for t, v in sorted(above.items())
+    )
+
+
+def test_the_checks_see_a_cycle_and_ignore_what_does_not_run_on_import(tmp_path):
+    """The checks themselves: a toy package with a real cycle, a cycle through a parent
+    package, and back-imports that do not run on import (TYPE_CHECKING, in a function)."""
+    files = {
+        "__init__.py": "",
+        "registry.py": "from preform.pipeline.step import Step\n",
+        "pipeline/__init__.py": "from preform.pipeline.planner import plan\n",
+        "pipeline/step.py": "class Step: ...\n",
+        "pipeline/planner.py": "from preform import registry\ndef plan(): ...\n",
+        "quiet.py": (
+            "from typing import TYPE_CHECKING\n"
+            "if TYPE_CHECKING:\n    from preform.loud import x\n"
+            "def f():\n    from preform.loud import x\n"
+        ),
+        "loud.py": "from preform.quiet import f\nx = 1\n",
+    }
+    for name, text in files.items():
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text(text)
+    graph = import_graph(tmp_path)
+    # the registry's import of pipeline.step runs pipeline/__init__, which imports the planner
+    assert graph["preform.registry"] == {"preform.pipeline", "preform.pipeline.step"}
+    assert cycles(graph) == [["preform.pipeline", "preform.pipeline.planner", "preform.registry"]]
+    assert graph["preform.quiet"] == set()
+
+
+@pytest.mark.parametrize(
+    "module",
+    [
+        "preform.registry",
+        "preform.step",
+        "preform.pipeline.step",
+        "preform.pipeline.planner",
+        "preform.pipeline.scene",
+        "preform.plugin_manager",
+    ],
+)
+def test_each_module_imports_first_in_a_fresh_interpreter(module):
+    """Whatever is imported first, the import completes (a cycle shows as a partially
+    initialised module depending on which side is imported first)."""
+    done = subprocess.run(
+        [sys.executable, "-c", f"import {module}"], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+
+
+def test_step_and_case_context_keep_their_old_import_path():
+    import preform
+    import preform.pipeline.step
+    import preform.step
+
+    assert preform.Step is preform.step.Step is preform.pipeline.step.Step
+    assert preform.CaseContext is preform.step.CaseContext is preform.pipeline.step.CaseContext
