@@ -1,9 +1,9 @@
 """The speed/accuracy trade of the fidelity knobs on a scene: the table in benchmarks/README.md.
 
-Runs ``preform.tradeoff.run_tradeoff`` (the same study as ``preform bench tradeoff``) on one
+Runs ``preform.bench.tradeoff.run_tradeoff`` (the same study as ``preform bench tradeoff``) on one
 core, prints the table and the reference's convergence, and writes tradeoff.csv and
 tradeoff.png to ``--out``. Short runs are timed ``--repeat`` times (best kept), since the
-machine may be shared; see ``preform.tradeoff`` for what every column means.
+machine may be shared; see ``preform.bench.tradeoff`` for what every column means.
 
     python benchmarks/bench_tradeoff.py [--scene hemisphere-min-energy] [--material E-BX-318]
                                         [--out preform-bench] [--repeat 3] [--quick]
@@ -24,7 +24,7 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from preform.tradeoff import (  # noqa: E402
+from preform.bench.tradeoff import (  # noqa: E402
     DEFAULT_MATERIAL,
     DEFAULT_SCENE,
     TradeoffRow,

@@ -544,10 +544,10 @@ def run_report_lines(report: Any) -> list[str]:
 
 
 def _add_physics_commands() -> None:
+    from preform.bench.tradeoff import bench
     from preform.commands.scenes import scenes
     from preform.pipeline.export_command import export_command
     from preform.shear.commands import fit_command, shear_command
-    from preform.tradeoff import bench
 
     cli.add_command(scenes, "scenes")
     cli.add_command(export_command, "export")

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import preform
+from preform.bench.tradeoff import TradeoffResult, TradeoffRow, error_floors, plot_tradeoff
 from preform.export.fig_curves import (
     ENERGY_AXIS_FACTOR,
     energy_vs_angle_figure,
     library_energy_figure,
 )
-from preform.tradeoff import TradeoffResult, TradeoffRow, error_floors, plot_tradeoff
 
 
 def _curve(best: float, energy: float, lock: float) -> list[tuple[float, float]]:
@@ -116,7 +116,7 @@ def test_tradeoff_errors_below_the_reference_resolution_are_not_drawn_as_data(tm
         _row("standard", "preset", 0.5, 73.3 + 5e-8, 0.5844 * (1 + 2e-9)),
         _row("draft", "preset", 0.2, 74.4, 0.55),
     ]
-    from preform.tradeoff import _fill_errors
+    from preform.bench.tradeoff import _fill_errors
 
     _fill_errors(rows, rows[0], rows[1])
     result = TradeoffResult("hemisphere-min-energy", "E-BX-318", rows, "reference", "standard")

@@ -45,6 +45,21 @@ def test_the_package_is_marked_typed_and_ships_the_marker():
     assert "py.typed" in data["package-data"]["preform"]
 
 
+def test_every_package_folder_is_a_listed_package():
+    """A package folder missing from ``[tool.setuptools] packages`` is left out of a wheel."""
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    folders = {
+        "preform": ROOT / "core",
+        "preform.plugins": ROOT / "plugins",
+    }
+    found = set()
+    for name, root in folders.items():
+        for init in root.rglob("__init__.py"):
+            parts = init.parent.relative_to(root).parts
+            found.add(".".join([name, *parts]))
+    assert found <= set(data["packages"]), sorted(found - set(data["packages"]))
+
+
 def test_every_relative_link_in_the_docs_points_into_the_repository():
     """CONTRIBUTING once sent readers to a design page outside the repository."""
     broken = []
