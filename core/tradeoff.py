@@ -4,14 +4,6 @@ Kept for one release for code that imported ``preform.tradeoff``: importing it w
 the same module object, so every name (and patching one) works as before.
 """
 
-import sys
-import warnings
+from preform._moved import alias_moved_module
 
-from preform.bench import tradeoff as _tradeoff
-
-warnings.warn(
-    "preform.tradeoff is deprecated: import preform.bench.tradeoff",
-    DeprecationWarning,
-    stacklevel=2,
-)
-sys.modules[__name__] = _tradeoff
+alias_moved_module(__name__, "preform.bench.tradeoff")
