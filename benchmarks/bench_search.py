@@ -30,12 +30,12 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from preform.drape.curved import optimise_curved_generators  # noqa: E402
 from preform.drape.net import drape  # noqa: E402
 from preform.drape.ply import PlyOutline  # noqa: E402
-from preform.drape.relax import relax_net  # noqa: E402
-from preform.drape.search import DrapeObjective, search_generator_angle  # noqa: E402
 from preform.library import load_library  # noqa: E402
+from preform.optimise.curved import optimise_curved_generators  # noqa: E402
+from preform.optimise.relax import relax_net  # noqa: E402
+from preform.optimise.search import DrapeObjective, search_generator_angle  # noqa: E402
 from preform.plugins.surfaces.basic import Hemisphere  # noqa: E402
 
 RADIUS = 0.1

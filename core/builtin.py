@@ -19,9 +19,9 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 
 @hookimpl
 def preform_register_steps(register: StepRegistrar) -> None:
-    from preform.drape import search_steps
     from preform.drape import steps as drape_steps
     from preform.export import export_steps
+    from preform.optimise import search_steps
     from preform.pipeline.core_steps import STEPS
 
     for step in [*STEPS, *drape_steps.STEPS, *search_steps.STEPS, *export_steps.STEPS]:
@@ -30,9 +30,9 @@ def preform_register_steps(register: StepRegistrar) -> None:
 
 @hookimpl
 def preform_register_exporters(register: ExporterRegistrar) -> None:
-    from preform.drape import search_steps
     from preform.drape import steps as drape_steps
     from preform.export import export_steps
+    from preform.optimise import search_steps
     from preform.pipeline.core_steps import EXPORTERS
 
     for step in [

@@ -75,7 +75,7 @@ DRAPE_BUDGETS: tuple[int, ...] = (30, 60, 120)
 #: Drape budgets of the curved-generator optimisation.
 CURVED_BUDGETS: tuple[int, ...] = (40, 120)
 #: Curved-generator options when the scene gives none: mirror-tied families suit a dome
-#: started at its pole (``preform.drape.curved``), and halve the unknowns.
+#: started at its pole (``preform.optimise.curved``), and halve the unknowns.
 CURVED_DEFAULT: dict[str, Any] = {"terms": 2, "mirror_families": True}
 
 #: The converged reference: every knob at its finest (spacing as a fraction of tool size).
@@ -372,8 +372,8 @@ def tradeoff_settings(scene: Scene, tool_size_m: float, *, quick: bool = False) 
 
 def _run_case(setting: Setting, fabric: Any, registry: Any, case_dir: Path) -> Any:
     """The pipeline steps of a minimum-energy drape, in order; returns the case context."""
-    from preform.drape.search_steps import run_energy_vs_angle, run_optimum
     from preform.drape.steps import run_drape, run_surface
+    from preform.optimise.search_steps import run_energy_vs_angle, run_optimum
     from preform.pipeline.core_steps import run_shear_law
     from preform.step import CaseContext
 

@@ -1,4 +1,9 @@
-"""The kinematic drape: tool surfaces, the pin-jointed net, its shear and energy fields."""
+"""The kinematic drape: tool surfaces, the pin-jointed net, its shear and energy fields.
+
+The optimisation on top of it (the least-energy search, curved generators, relaxation) is
+``preform.optimise``; ``preform.drape.search``, ``.curved``, ``.relax`` and ``.search_steps``
+are deprecated aliases of its modules.
+"""
 
 import sys as _sys
 import types as _types

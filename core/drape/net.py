@@ -236,7 +236,7 @@ def _generators(
             surface, start, lines, spacing, count, substeps=substeps, tolerance=tolerance
         )
     if hasattr(kind, "nodes"):
-        # Paths that build their own nodes, e.g. preform.drape.curved.CurvedGenerators.
+        # Paths that build their own nodes, e.g. preform.optimise.curved.CurvedGenerators.
         return kind.nodes(
             surface, start, t_u, t_v, spacing, count, substeps=substeps, tolerance=tolerance
         )
@@ -281,7 +281,7 @@ def drape(
         the outward normal, in the tangent plane; 0 < α < π.
     generators: "geodesic", "plan" (tool surface above straight plan lines), or
         :class:`PlanPolylines` (then orientation and α follow from the polylines; pass None),
-        or paths with a ``nodes`` method (:class:`preform.drape.curved.CurvedGenerators`).
+        or paths with a ``nodes`` method (:class:`preform.optimise.curved.CurvedGenerators`).
     trim: predicate on cell centroids (n, 3) [m] giving the part (default: every valid cell).
     tolerance: relative tolerance; every solve stops at ``tolerance``·d [m].
     max_iterations: cap on Newton steps per front on surfaces without a closed form.

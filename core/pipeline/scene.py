@@ -144,7 +144,7 @@ class RangeDeg(BaseModel):
 
 
 class SearchSection(BaseModel):
-    """The minimum-energy search over generator choices (see ``preform.drape.search``)."""
+    """The minimum-energy search over generator choices (see ``preform.optimise.search``)."""
 
     model_config = _STRICT
     generator_angle_deg: RangeDeg | None = Field(
@@ -183,7 +183,7 @@ class SearchSection(BaseModel):
     layout: dict[str, Any] | None = Field(
         default=None,
         description="Also search the orientation and start point (Nelder-Mead): "
-        "{orientation: true, start_point: true, ...}; see preform.drape.search.",
+        "{orientation: true, start_point: true, ...}; see preform.optimise.search.",
     )
     curved_generators: dict[str, Any] | None = Field(
         default=None,
@@ -468,7 +468,7 @@ def _export_mesh_problems(scene: Scene, err: Any) -> list[SourceError]:
 def _section_problems(scene: Scene, err: Any) -> list[SourceError]:
     """Problems of the start, search and shear sections that would only surface at run time
     (or take the machine first): checked by arithmetic."""
-    from preform.drape.search import scan_size
+    from preform.optimise.search import scan_size
     from preform.pipeline import fidelity
 
     errors: list[SourceError] = []

@@ -4,15 +4,11 @@ behave (a behaviour test, not a timed one)."""
 from __future__ import annotations
 
 import csv
-import importlib
 import math
-import sys
 from pathlib import Path
 
-import pytest
 from click.testing import CliRunner
 
-import preform.bench.tradeoff
 from preform.bench.tradeoff import bench, pareto_front
 
 
@@ -53,13 +49,3 @@ def test_pareto_front_keeps_only_undominated_points() -> None:
     times = [1.0, 2.0, 3.0, 2.5, 0.5]
     errors = [0.1, 0.05, 0.0, 0.2, math.nan]
     assert pareto_front(times, errors) == [True, True, True, False, False]
-
-
-def test_the_old_module_path_still_imports_with_a_deprecation_warning():
-    sys.modules.pop("preform.tradeoff", None)
-    with pytest.warns(DeprecationWarning, match="preform.bench.tradeoff"):
-        old = importlib.import_module("preform.tradeoff")
-    assert old is preform.bench.tradeoff
-    from preform.tradeoff import bench as old_bench
-
-    assert old_bench is bench

@@ -9,6 +9,7 @@ inside a function or under ``if TYPE_CHECKING:`` (annotation-only imports may po
 from __future__ import annotations
 
 import ast
+import importlib
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -18,17 +19,38 @@ import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "core"
 
-#: The layer plugins register into; it must not need the pipeline, the drape or the exports,
-#: which import it (issue 16: the registry imported ``preform.pipeline.step`` while the
-#: pipeline's planner and scene imported the registry).
-FOUNDATION = (
-    "preform.hookspecs",
-    "preform.material",
-    "preform.plugin_manager",
-    "preform.registry",
-    "preform.step",
-)
-ABOVE_FOUNDATION = ("preform.pipeline", "preform.drape", "preform.export", "preform.api")
+#: Layers: (lower, upper). No module of a lower layer imports (at module level, transitively) a
+#: module of the upper one, which imports it. The plugin layer must not need the pipeline, the
+#: drape or the exports (issue 16: the registry imported ``preform.pipeline.step`` while the
+#: pipeline's planner and scene imported the registry); the drape engine must not need the
+#: optimisation built on it.
+LAYERS = [
+    (
+        (
+            "preform.hookspecs",
+            "preform.material",
+            "preform.plugin_manager",
+            "preform.registry",
+            "preform.step",
+        ),
+        ("preform.pipeline", "preform.drape", "preform.export", "preform.optimise", "preform.api"),
+    ),
+    (("preform.drape",), ("preform.optimise",)),
+]
+
+#: Modules moved by issue 16, old path -> new path; the old path is a deprecated alias (it imports
+#: the new one, so it is no part of the layer it sits in).
+MOVED = {
+    "preform.tradeoff": "preform.bench.tradeoff",
+    "preform.drape.search": "preform.optimise.search",
+    "preform.drape.curved": "preform.optimise.curved",
+    "preform.drape.relax": "preform.optimise.relax",
+    "preform.drape.search_steps": "preform.optimise.search_steps",
+}
+
+
+def _within(module: str, packages: tuple[str, ...]) -> bool:
+    return any(module == p or module.startswith(p + ".") for p in packages)
 
 
 def core_modules(core: Path) -> dict[str, Path]:
@@ -168,17 +190,17 @@ def test_no_module_imports_a_module_that_imports_it_back():
     )
 
 
-@pytest.mark.parametrize("module", FOUNDATION)
-def test_the_plugin_layer_does_not_import_the_pipeline(module):
+@pytest.mark.parametrize(("lower", "upper"), LAYERS, ids=["plugin layer", "drape engine"])
+def test_a_lower_layer_does_not_import_the_one_above(lower, upper):
     graph = import_graph(CORE)
-    above = {
-        target: via
-        for target, via in reachable(graph, module).items()
-        if target.startswith(tuple(f"{a}." for a in ABOVE_FOUNDATION)) or target in ABOVE_FOUNDATION
-    }
-    assert not above, f"{module} imports, at module level: " + ", ".join(
-        f"{t} (from {v})" for t, v in sorted(above.items())
-    )
+    wrong = [
+        f"{module} reaches {target} (imported by {via})"
+        for module in sorted(graph)
+        if _within(module, lower) and module not in MOVED
+        for target, via in sorted(reachable(graph, module).items())
+        if _within(target, upper)
+    ]
+    assert not wrong, "; ".join(wrong)
 
 
 def test_the_checks_see_a_cycle_and_ignore_what_does_not_run_on_import(tmp_path):
@@ -234,3 +256,12 @@ def test_step_and_case_context_keep_their_old_import_path():
 
     assert preform.Step is preform.step.Step is preform.pipeline.step.Step
     assert preform.CaseContext is preform.step.CaseContext is preform.pipeline.step.CaseContext
+
+
+@pytest.mark.parametrize(("old", "new"), sorted(MOVED.items()))
+def test_a_moved_module_keeps_its_old_path_with_a_deprecation_warning(old, new):
+    moved = importlib.import_module(new)
+    sys.modules.pop(old, None)
+    with pytest.warns(DeprecationWarning, match=new):
+        alias = importlib.import_module(old)
+    assert alias is moved  # the same module: every name, private ones and patching included

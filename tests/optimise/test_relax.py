@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
-from preform.drape.relax import cell_shear_and_gradient, relax_net
+from preform.optimise.relax import cell_shear_and_gradient, relax_net
 from preform.plugins.surfaces.basic import Hemisphere, Plane
 
 R = 0.1

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from preform.drape.fields import energy_field
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
-from preform.drape.search import (
+from preform.optimise.search import (
     DrapeObjective,
     SearchError,
     scan_angles,

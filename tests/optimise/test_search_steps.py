@@ -13,8 +13,8 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
-from preform.drape import search_steps
-from preform.drape.search_steps import EXPORTERS, STEPS, search_knobs
+from preform.optimise import search_steps
+from preform.optimise.search_steps import EXPORTERS, STEPS, search_knobs
 from preform.pipeline.runner import make_cases, run_cases
 from preform.pipeline.scene import Scene, bundled_scene_dir, load_scene
 from preform.pipeline.step import CaseContext

@@ -1,0 +1,764 @@
+"""The minimum-energy drape: among kinematic drapes, the one needing least shear strain energy.
+
+The paper's energy approach (PHYSICS §6, paper "Energy approach"): vary the generators, drape
+each choice as a pin-jointed net, and keep the pattern of least total shear strain energy. Here
+the choice is the generator angle α (:func:`search_generator_angle`: a scan, then a local
+refinement), optionally also the generator orientation and the start point
+(:func:`search_layout`: Nelder–Mead).
+
+The energy of the part [D]
+--------------------------
+Every drape is judged on the same part (PHYSICS §6 "The energy of a part"): the net is draped
+over the tool as far as the ply reaches and clipped to the part (the drape's ``trim``, a
+:class:`~preform.drape.part.Part`, further restricted by an optional ``region``); each cell
+counts W(γ) times its undeformed area inside the part, s·d² (``DrapeResult.part_weight``), so a
+cell cut by the part's edge counts by its share, and
+
+    E(α) = Σ_cells W(γ)·s·d² [J].
+
+No energy is charged for part area the net does not reach. Such a charge has no physical basis
+on a part the ply covers, and it biased the optimum: before parts existed, cells straddling a
+hemisphere's rim were dropped and cells above it went unreached behind nodes that dipped below
+it, for numerical reasons only, and a charge at locked energy on that "bare" area moved
+E-BX-318's optimum from about 66.5° to 73.3° (issue 11). Part area the net genuinely cannot
+cover (the ply runs out, the net folds or loses its intersection) is reported, as
+``coverage(α)`` = covered area / A_ref and as the uncovered area, A_ref being the part's own
+area when known (a bare hemisphere: 2πR²; ``part_area_m2``), else the largest area any drape of
+the scan covers.
+
+Pricing it is a stated user choice (``uncovered_shear_rad``: the bare area is charged at
+W_miss = max(W(+γ_m), W(−γ_m)) per unit area, the same rule for every architecture; the
+pipeline then reports the case ``partial``). ``min_coverage`` > 0 marks an α whose coverage
+falls below it infeasible instead: never chosen as the optimum (its energy is still reported).
+
+Refinement and symmetry
+-----------------------
+The scan grid is laid symmetrically about 90° (90° ± k·step, plus the range ends), so a
+mirror-symmetric set-up (symmetric law, start at a hemisphere's pole) gives E(α) = E(180° − α)
+on the grid. The refinement then fits least-squares parabolas over windows centred on the
+current estimate, adding the points estimate ± δ (and the estimate itself) with δ halving each
+level: every sample set stays symmetric about a symmetric optimum, so the estimate stays at
+90° to rounding. A least-squares fit, not interpolation, so that what remains of the discrete
+E(α)'s roughness (clipped cells are smooth in α, but folds or the ply's end still add or drop
+whole cells) is averaged rather than chased; when a window's fit is no longer convex the
+refinement stops there and says it is noise-limited.
+
+Uncertainty of the optimum [D]
+------------------------------
+Reported from E(α) near the minimum, not from window sizes: the samples within one scan step
+of α* are fitted by least squares with a parabola and with a cubic. The uncertainty combines
+the parabola vertex's standard error (the scatter of E about a smooth curve: what is left of
+the rim staircase, folds, the ply's end) and the distance between the two fits' minima (what
+the parabola's shape assumption costs over that window):
+u = √(σ_vertex² + (α*_parabola − α*_cubic)²). The relative rms residual of the cubic fit is
+reported too (``residual_rms_rel``), a direct measure of E(α)'s roughness.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from preform.drape.net import DrapeError, drape
+from preform.drape.result import DrapeResult
+from preform.drape.surface import Surface
+from preform.shear.law import ShearLaw
+from preform.shear.surrogate import TabulatedSurrogate
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+CentroidPredicate = Callable[[FloatArray], BoolArray]
+
+#: A layout or curved-generator trial must cover at least this share of what its starting
+#: drape covers of the part [-] [C]: with no price on bare area, a trial that leaves the part
+#: bare would look cheap, so it is infeasible instead (not priced). The slack allows the O(d²)
+#: change of the clipped area as the net moves (1.3e-4 of a hemisphere at d = R/40).
+COVERAGE_SLACK = 1e-3
+#: Defaults of the angle search (documented fidelity knobs) [rad].
+DEFAULT_SCAN_STEP_RAD = math.radians(5.0)
+DEFAULT_TOLERANCE_RAD = math.radians(1.0)
+DEFAULT_MAX_DRAPES = 60
+#: Step of the shear law's energy table during a search [rad] (a fidelity knob; see
+#: ``preform.shear.surrogate`` for its measured error, below 3e-7 of W at this step).
+DEFAULT_ENERGY_TABLE_STEP_RAD = math.radians(0.25)
+
+
+class SearchError(ValueError):
+    """A search that cannot run: empty range, nothing feasible, no drape at all."""
+
+
+@dataclass(frozen=True)
+class DrapeEvaluation:
+    """One drape judged on the part (module docstring). Lengths m, angles rad, energy J."""
+
+    generator_angle_rad: float
+    orientation_rad: float
+    start_xy_m: tuple[float, float]
+    #: Σ W(γ)·s·d² over the valid cells in the part, s the share inside it [J].
+    drape_energy_J: float
+    #: Draped (tool-side) area of those cells inside the part, Σ s·area [m²].
+    covered_area_m2: float
+    #: Number of cells counted.
+    cells_counted: int
+    #: Largest |γ| over the counted cells [rad].
+    max_abs_shear_rad: float
+    #: False when the drape could not start at all (set-up error); energies are then inf.
+    draped: bool = True
+    #: The net itself, when the caller asked to keep it.
+    result: DrapeResult | None = field(default=None, repr=False, compare=False)
+
+
+class DrapeObjective:
+    """Drape-and-judge: E(choices) for one fabric on one tool (see the module docstring).
+
+    ``drape_kwargs`` are the fixed keyword arguments of :func:`preform.drape.net.drape`
+    (``node_spacing_m``, ``ply``, ``start_xy_m`` or ``start_point``, ``orientation_rad``,
+    ``generators``, ``trim``, ``tolerance``, ...); :meth:`evaluate` overrides the generator
+    angle and, optionally, the orientation, the start point and the generators.
+    ``region`` (a predicate on cell centroids (n, 3) [m]) restricts the part further.
+    ``uncovered_shear_rad`` [rad]: price uncovered part area at W_miss = max W(±γ_m) [J/m²]
+    (module docstring; default None: no charge).
+    """
+
+    def __init__(
+        self,
+        surface: Surface,
+        law: ShearLaw,
+        *,
+        region: CentroidPredicate | None = None,
+        uncovered_shear_rad: float | None = None,
+        energy_table_step_rad: float | None = DEFAULT_ENERGY_TABLE_STEP_RAD,
+        **drape_kwargs: Any,
+    ) -> None:
+        if "node_spacing_m" not in drape_kwargs or "ply" not in drape_kwargs:
+            raise TypeError("DrapeObjective needs node_spacing_m and ply among the drape kwargs")
+        drape_kwargs.pop("generator_angle_rad", None)
+        self.surface = surface
+        self.law = law
+        self.region = region
+        self.drape_kwargs = drape_kwargs
+        #: The shear at which uncovered part area is priced [rad], None: not priced.
+        self.uncovered_shear_rad = (
+            None if uncovered_shear_rad is None else float(uncovered_shear_rad)
+        )
+        #: Energy density charged on uncovered part area [J/m²] (0: not priced).
+        self.uncovered_energy_density = 0.0
+        if self.uncovered_shear_rad is not None:
+            g = self.uncovered_shear_rad
+            both = np.asarray(law.energy(np.array([g, -g])), dtype=float)
+            self.uncovered_energy_density = float(np.max(both))
+        trim = drape_kwargs.get("trim")
+        #: The part's own area [m²] when it knows it (a bare hemisphere: 2πR²), else None.
+        self.part_area_m2: float | None = getattr(trim, "area_m2", None)
+        #: Number of drapes run so far.
+        self.drapes = 0
+        self._table = (
+            None
+            if energy_table_step_rad is None
+            else TabulatedSurrogate(law, energy_table_step_rad)
+        )
+
+    def energy_density(self, gamma: FloatArray) -> FloatArray:
+        """W(γ) [J/m²] at signed shear angles γ [rad] (tabulated unless the table is off)."""
+        if self._table is None:
+            return np.asarray(self.law.energy(gamma), dtype=float)
+        return self._table.energy(gamma)
+
+    def evaluate(
+        self,
+        generator_angle_rad: float,
+        *,
+        orientation_rad: float | None = None,
+        start_xy_m: Sequence[float] | None = None,
+        generators: Any = None,
+        keep_result: bool = False,
+    ) -> DrapeEvaluation:
+        """Drape at generator angle α [rad] (and the given overrides) and judge it on the part.
+
+        A set-up that cannot drape at all (start off the tool, α outside (0, π)) returns an
+        evaluation with ``draped=False`` and infinite energy instead of raising, so optimisers
+        can step there and back.
+        """
+        kwargs = dict(self.drape_kwargs)
+        if orientation_rad is not None:
+            kwargs["orientation_rad"] = float(orientation_rad)
+        if start_xy_m is not None:
+            kwargs.pop("start_point", None)
+            kwargs["start_xy_m"] = (float(start_xy_m[0]), float(start_xy_m[1]))
+        if generators is not None:
+            kwargs["generators"] = generators
+        where = kwargs.get("start_xy_m")
+        start = (float(where[0]), float(where[1])) if where is not None else (math.nan, math.nan)
+        theta = float(kwargs.get("orientation_rad", 0.0) or 0.0)
+        self.drapes += 1
+        try:
+            result = drape(self.surface, generator_angle_rad=float(generator_angle_rad), **kwargs)
+        except DrapeError:
+            return DrapeEvaluation(
+                float(generator_angle_rad), theta, start, math.inf, 0.0, 0, 0.0, draped=False
+            )
+        return self.judge(result, start_xy_m=start, keep_result=keep_result)
+
+    def counted(self, result: DrapeResult) -> BoolArray:
+        """The cells the energy counts: valid, in the part, inside ``region`` (ni−1, nj−1)."""
+        mask = result.valid & result.in_part
+        if self.region is not None and mask.any():
+            keep = np.asarray(self.region(result.centroid[mask]), dtype=bool)
+            mask = mask.copy()
+            mask[mask] = keep
+        return np.asarray(mask, dtype=bool)
+
+    def judge(
+        self,
+        result: DrapeResult,
+        *,
+        start_xy_m: tuple[float, float] = (math.nan, math.nan),
+        keep_result: bool = False,
+    ) -> DrapeEvaluation:
+        """Energy [J], covered area [m²] and counted cells of a finished drape.
+
+        Equal to :func:`preform.drape.fields.energy_field`'s total over the same cells, up to
+        the energy table's interpolation (relative error ~1e-6 at the default step; pass
+        ``energy_table_step_rad=None`` for the law itself). The table matters for mechanistic
+        laws that cost microseconds per angle: a drape has ~10⁴ cells and a search ~30 drapes.
+        """
+        mask = self.counted(result)
+        gamma = result.shear[mask]
+        share = result.part_weight[mask]
+        density = self.energy_density(gamma)
+        energy = float((density * share).sum() * result.node_spacing**2)
+        return DrapeEvaluation(
+            generator_angle_rad=float(result.generator_angle),
+            orientation_rad=float(result.orientation),
+            start_xy_m=start_xy_m,
+            drape_energy_J=energy,
+            covered_area_m2=float((result.area[mask] * share).sum()),
+            cells_counted=int(np.count_nonzero(mask)),
+            max_abs_shear_rad=float(np.abs(gamma).max()) if gamma.size else 0.0,
+            result=result if keep_result else None,
+        )
+
+    def charged(self, evaluation: DrapeEvaluation, reference_area_m2: float) -> float:
+        """The comparable energy [J]: the drape energy, plus W_miss × uncovered part area when
+        the user priced it (module docstring)."""
+        if not evaluation.draped:
+            return math.inf
+        missing = max(0.0, reference_area_m2 - evaluation.covered_area_m2)
+        return evaluation.drape_energy_J + self.uncovered_energy_density * missing
+
+
+@dataclass(frozen=True)
+class SearchPoint:
+    """One generator angle of the search. Angles rad, energies J, areas m²."""
+
+    generator_angle_rad: float
+    #: The comparable objective: drape energy plus the uncovered-area charge.
+    energy_J: float
+    drape_energy_J: float
+    uncovered_charge_J: float
+    covered_area_m2: float
+    #: covered area / reference area, capped at 1.
+    coverage: float
+    feasible: bool
+    #: "scan", "refine" or "optimum".
+    stage: str
+    #: Largest |γ| over the counted cells of this drape [rad] (to say where E(α) leaves the
+    #: law's trustworthy range).
+    max_abs_shear_rad: float = 0.0
+
+    @property
+    def generator_angle_deg(self) -> float:
+        return math.degrees(self.generator_angle_rad)
+
+
+@dataclass(frozen=True)
+class AngleSearchResult:
+    """The generator-angle search: the optimum, the whole curve, and how well it is resolved."""
+
+    #: The optimum generator angle α* [rad] and its comparable energy [J] (a drape at α*). α*
+    #: is the vertex of a least-squares fit, so with the energy's small staircase its energy
+    #: may exceed the lowest sampled one by that noise.
+    optimum_angle_rad: float
+    optimum_energy_J: float
+    #: Every evaluated angle, sorted by angle (scan, refinement and the optimum).
+    points: tuple[SearchPoint, ...]
+    #: Drapes run by the search.
+    drapes: int
+    #: The window of the final fit [rad]: α* lies inside it; its half-width is the resolution.
+    bracket_rad: tuple[float, float]
+    #: Standard error of α* from the final least-squares fit [rad] (None with 3 points).
+    vertex_std_rad: float | None
+    #: The optimum sits at (within the scan step of) an end of the searched range.
+    at_boundary: bool
+    #: The refinement stopped because the energy's staircase noise hid the curvature.
+    noise_limited: bool
+    #: The part's reference area [m²] and the energy density charged where it is bare [J/m²]
+    #: (0 unless the user priced it).
+    reference_area_m2: float
+    uncovered_energy_density_J_per_m2: float
+    #: Uncertainty of α* from E(α) near the minimum [rad] (module docstring), None when too
+    #: few samples lie near it; and the relative rms residual of E about the local cubic.
+    uncertainty_rad: float | None = None
+    residual_rms_rel: float | None = None
+    #: The knobs the search ran with (degrees, for the record).
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def optimum_angle_deg(self) -> float:
+        return math.degrees(self.optimum_angle_rad)
+
+    @property
+    def bracket_half_width_rad(self) -> float:
+        return 0.5 * (self.bracket_rad[1] - self.bracket_rad[0])
+
+    def curve_deg(self) -> list[tuple[float, float]]:
+        """(α [deg], E [J]) pairs of every evaluated angle, sorted by angle."""
+        return [(p.generator_angle_deg, p.energy_J) for p in self.points]
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready record (degrees, J, m²)."""
+        return {
+            "optimum_generator_angle_deg": self.optimum_angle_deg,
+            "optimum_energy_J": self.optimum_energy_J,
+            "bracket_deg": [math.degrees(a) for a in self.bracket_rad],
+            "bracket_half_width_deg": math.degrees(self.bracket_half_width_rad),
+            "vertex_std_deg": (
+                None if self.vertex_std_rad is None else math.degrees(self.vertex_std_rad)
+            ),
+            "uncertainty_deg": (
+                None if self.uncertainty_rad is None else math.degrees(self.uncertainty_rad)
+            ),
+            "residual_rms_rel": self.residual_rms_rel,
+            "at_boundary": self.at_boundary,
+            "noise_limited": self.noise_limited,
+            "drapes": self.drapes,
+            "reference_area_m2": self.reference_area_m2,
+            "uncovered_energy_density_J_per_m2": self.uncovered_energy_density_J_per_m2,
+            "min_coverage": min((p.coverage for p in self.points), default=1.0),
+            **self.settings,
+        }
+
+
+def _scan_layout(lo_rad: float, hi_rad: float, step_rad: float) -> tuple[float, int, int]:
+    """(origin, k_lo, k_hi) of :func:`scan_angles`' grid origin + k·step; raises SearchError
+    for an empty range, and for a step so small the grid's indices overflow."""
+    if not (lo_rad < hi_rad and step_rad > 0):
+        raise SearchError(f"need lo < hi and step > 0, got [{lo_rad}, {hi_rad}], {step_rad}")
+    half = 0.5 * math.pi
+    eps = 1e-9 * step_rad
+    origin = half if lo_rad - eps <= half <= hi_rad + eps else lo_rad
+    low, high = (lo_rad - origin - eps) / step_rad, (hi_rad - origin + eps) / step_rad
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise SearchError(f"a scan step of {step_rad!r} rad is too small to count")
+    return origin, math.ceil(low), math.floor(high)
+
+
+def scan_size(lo_rad: float, hi_rad: float, step_rad: float) -> int:
+    """Number of angles :func:`scan_angles` gives, by arithmetic, so that a budget is checked
+    before a grid is built (a step of 1e-12° must not build 10¹⁴ angles)."""
+    try:
+        origin, k_lo, k_hi = _scan_layout(lo_rad, hi_rad, step_rad)
+    except SearchError:
+        if lo_rad < hi_rad and step_rad > 0:
+            return 2**63  # uncountably many, for any budget
+        raise
+    eps = 1e-9 * step_rad
+    ends = sum(
+        1 for end, k in ((lo_rad, k_lo), (hi_rad, k_hi)) if abs(origin + k * step_rad - end) > eps
+    )
+    return max(k_hi - k_lo + 1, 0) + ends
+
+
+def scan_angles(lo_rad: float, hi_rad: float, step_rad: float) -> FloatArray:
+    """Scan grid [rad] over [lo, hi]: 90° ± k·step when 90° is inside, plus both ends.
+
+    Laid about 90° (not from ``lo``) so a range symmetric about 90° gives a grid symmetric
+    about it, and 90° itself is always sampled when the range contains it.
+    """
+    half = 0.5 * math.pi
+    eps = 1e-9 * step_rad
+    origin, k_lo, k_hi = _scan_layout(lo_rad, hi_rad, step_rad)
+    grid = [origin + k * step_rad for k in range(k_lo, k_hi + 1)]
+    # Mirror pairs computed as half ± k·step are symmetric to the last bit.
+    if origin == half:
+        grid = [
+            half + k * step_rad if k >= 0 else half - (-k) * step_rad for k in range(k_lo, k_hi + 1)
+        ]
+    values = np.array(grid)
+    ends = [a for a in (lo_rad, hi_rad) if np.all(np.abs(values - a) > eps)]
+    return np.sort(np.concatenate([values, ends]))
+
+
+@dataclass
+class _Fit:
+    vertex: float
+    curvature: float
+    std: float | None
+
+
+def _parabola(x: FloatArray, y: FloatArray, centre: float) -> _Fit | None:
+    """Least-squares y ≈ a·t² + b·t + c, t = x − centre; vertex, 2a, and the vertex's std."""
+    if len(x) < 3 or len(np.unique(np.round((x - centre) / max(np.ptp(x), 1e-300), 12))) < 3:
+        return None
+    t = x - centre
+    scale = float(np.max(np.abs(t))) or 1.0
+    s = t / scale
+    design = np.column_stack([s * s, s, np.ones_like(s)])
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    a, b = float(coef[0]), float(coef[1])
+    if not a > 0:
+        return _Fit(math.nan, 2.0 * a / scale**2, None)
+    vertex_s = -b / (2.0 * a)
+    std = None
+    if len(x) > 3:
+        residual = y - design @ coef
+        var = float(residual @ residual) / (len(x) - 3)
+        cov = var * np.linalg.pinv(design.T @ design)
+        grad = np.array([b / (2.0 * a * a), -1.0 / (2.0 * a), 0.0])
+        std = math.sqrt(max(float(grad @ cov @ grad), 0.0)) * scale
+    return _Fit(centre + vertex_s * scale, 2.0 * a / scale**2, std)
+
+
+def optimum_uncertainty(
+    angles_rad: FloatArray, energies_J: FloatArray, optimum_rad: float, window_rad: float
+) -> tuple[float | None, float | None]:
+    """Uncertainty [rad] of a least-energy angle and E's relative rms roughness [-] from the
+    samples (α [rad], E [J]) within ``window_rad`` of ``optimum_rad`` (module docstring).
+    (None, None) with fewer than 5 samples there or no convex parabola."""
+    x = np.asarray(angles_rad, dtype=float)
+    y = np.asarray(energies_J, dtype=float)
+    near = (np.abs(x - optimum_rad) <= window_rad * (1 + 1e-9)) & np.isfinite(y)
+    x, y = x[near], y[near]
+    if len(x) < 5:
+        return None, None
+    fit = _parabola(x, y, optimum_rad)
+    if fit is None or not fit.curvature > 0 or fit.std is None:
+        return None, None
+    scale = float(np.max(np.abs(x - optimum_rad))) or 1.0
+    t = (x - optimum_rad) / scale
+    coef = np.polyfit(t, y, 3)
+    residual = y - np.polyval(coef, t)
+    rms = float(np.sqrt(np.mean(residual**2)) / max(float(np.mean(np.abs(y))), 1e-300))
+    # The cubic's minimum nearest the parabola's vertex.
+    roots = np.roots(np.polyder(coef))
+    real = roots[np.abs(roots.imag) < 1e-12].real
+    minima = [r for r in real if np.polyval(np.polyder(coef, 2), r) > 0]
+    vertex_t = (fit.vertex - optimum_rad) / scale
+    if not minima:
+        return None, rms
+    cubic = float(min(minima, key=lambda r: abs(r - vertex_t)))
+    shape = (cubic - vertex_t) * scale
+    return math.sqrt(fit.std**2 + shape**2), rms
+
+
+def search_generator_angle(
+    objective: DrapeObjective,
+    *,
+    angle_range_rad: tuple[float, float] = (math.radians(30.0), math.radians(150.0)),
+    scan_step_rad: float = DEFAULT_SCAN_STEP_RAD,
+    tolerance_rad: float = DEFAULT_TOLERANCE_RAD,
+    max_drapes: int = DEFAULT_MAX_DRAPES,
+    min_coverage: float = 0.0,
+    part_area_m2: float | None = None,
+) -> AngleSearchResult:
+    """The generator angle α [rad] of least comparable energy over ``angle_range_rad`` [rad].
+
+    A scan every ``scan_step_rad`` [rad] (:func:`scan_angles`), then least-squares parabolic
+    refinement around the best scan point with steps δ = step/2, step/4, ... down to
+    ``tolerance_rad`` [rad] (module docstring), at most ``max_drapes`` drapes in all; finally a
+    drape at the optimum itself. ``part_area_m2`` [m²] fixes the reference area (default: the
+    part's own area when it knows it, else the largest area covered in the scan); ``min_coverage`` [-] marks angles below it infeasible.
+    """
+    lo, hi = (float(a) for a in angle_range_rad)
+    if not (0.0 < lo < hi < math.pi):
+        raise SearchError(
+            f"the generator-angle range must lie in (0°, 180°), got "
+            f"[{math.degrees(lo):.6g}°, {math.degrees(hi):.6g}°]"
+        )
+    if not tolerance_rad > 0:
+        raise SearchError("tolerance must be positive")
+    first = objective.drapes
+    needed = scan_size(lo, hi, scan_step_rad)
+    if needed > max_drapes:
+        # Counted before the grid is built: a step of 1e-12° must not build 10¹⁴ angles.
+        raise SearchError(
+            f"the scan alone needs {needed:,} drapes, more than max_drapes = "
+            f"{max_drapes}; widen the step or raise the budget"
+        )
+    grid = scan_angles(lo, hi, scan_step_rad)
+    evaluated: dict[float, tuple[DrapeEvaluation, str]] = {}
+    for alpha in grid:
+        evaluated[float(alpha)] = (objective.evaluate(float(alpha)), "scan")
+    if part_area_m2 is not None:
+        reference = float(part_area_m2)
+    elif objective.part_area_m2 is not None:
+        reference = float(objective.part_area_m2)
+    else:
+        reference = max(ev.covered_area_m2 for ev, _ in evaluated.values())
+    if not reference > 0:
+        raise SearchError("no drape of the scan covers any of the part")
+
+    def point(alpha: float) -> SearchPoint:
+        ev, stage = evaluated[alpha]
+        energy = objective.charged(ev, reference)
+        coverage = min(1.0, ev.covered_area_m2 / reference)
+        return SearchPoint(
+            alpha,
+            energy,
+            ev.drape_energy_J,
+            energy - ev.drape_energy_J,
+            ev.covered_area_m2,
+            coverage,
+            ev.draped and coverage >= min_coverage,
+            stage,
+            ev.max_abs_shear_rad,
+        )
+
+    def feasible_samples() -> tuple[FloatArray, FloatArray]:
+        pts = [point(a) for a in sorted(evaluated)]
+        ok = [p for p in pts if p.feasible and math.isfinite(p.energy_J)]
+        return (np.array([p.generator_angle_rad for p in ok]), np.array([p.energy_J for p in ok]))
+
+    xs, ys = feasible_samples()
+    if xs.size == 0:
+        raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+    best = int(np.argmin(ys))
+    # Ties (a symmetric set-up) go to the angle nearest the middle of the range.
+    ties = np.flatnonzero(ys <= ys[best] * (1 + 1e-12) + 1e-300)
+    best = int(ties[np.argmin(np.abs(xs[ties] - 0.5 * (lo + hi)))])
+    estimate = float(xs[best])
+    at_boundary = best in (0, len(xs) - 1)
+    half_window = scan_step_rad
+    vertex_std: float | None = None
+    noise_limited = False
+
+    def refit(centre: float, window: float) -> _Fit | None:
+        x, y = feasible_samples()
+        # A relative slack keeps a mirror pair together at the window's edge.
+        inside = np.abs(x - centre) <= window * (1 + 1e-6)
+        return _parabola(x[inside], y[inside], centre)
+
+    fit = refit(estimate, half_window)
+    if fit is not None and fit.curvature > 0:
+        estimate = float(np.clip(fit.vertex, estimate - half_window, estimate + half_window))
+        vertex_std = fit.std
+    delta = 0.5 * scan_step_rad
+    while delta >= tolerance_rad:
+        probes = [estimate - delta, estimate, estimate + delta]
+        known = np.array(list(evaluated))
+        new = [a for a in probes if lo <= a <= hi and np.all(np.abs(known - a) > 1e-9 * delta)]
+        if objective.drapes - first + len(new) > max_drapes - 1:
+            break
+        for alpha in new:
+            evaluated[alpha] = (objective.evaluate(alpha), "refine")
+        window = 2.0 * delta
+        fit = refit(estimate, window)
+        if fit is None or not fit.curvature > 0:
+            noise_limited = fit is not None
+            break
+        estimate = float(
+            np.clip(fit.vertex, max(lo, estimate - window), min(hi, estimate + window))
+        )
+        vertex_std = fit.std
+        half_window = window
+        delta *= 0.5
+    estimate = float(np.clip(estimate, lo, hi))
+    at_boundary = at_boundary or min(estimate - lo, hi - estimate) < 0.5 * scan_step_rad
+    known = np.array(list(evaluated))
+    nearest = float(known[np.argmin(np.abs(known - estimate))])
+    if abs(nearest - estimate) <= 1e-9 * tolerance_rad:
+        final = point(nearest)
+    else:
+        evaluated[estimate] = (objective.evaluate(estimate), "optimum")
+        final = point(estimate)
+    if not final.feasible:
+        raise SearchError("the refined optimum is not feasible; raise min_coverage's margin")
+    points = tuple(point(a) for a in sorted(evaluated))
+    ok = [p for p in points if p.feasible and math.isfinite(p.energy_J)]
+    uncertainty, roughness = optimum_uncertainty(
+        np.array([p.generator_angle_rad for p in ok]),
+        np.array([p.energy_J for p in ok]),
+        estimate,
+        scan_step_rad,
+    )
+    return AngleSearchResult(
+        optimum_angle_rad=estimate,
+        optimum_energy_J=final.energy_J,
+        points=points,
+        drapes=objective.drapes - first,
+        bracket_rad=(max(lo, estimate - half_window), min(hi, estimate + half_window)),
+        vertex_std_rad=vertex_std,
+        at_boundary=at_boundary,
+        noise_limited=noise_limited,
+        reference_area_m2=reference,
+        uncovered_energy_density_J_per_m2=objective.uncovered_energy_density,
+        uncertainty_rad=uncertainty,
+        residual_rms_rel=roughness,
+        settings={
+            "range_deg": [math.degrees(lo), math.degrees(hi)],
+            "scan_step_deg": math.degrees(scan_step_rad),
+            "tolerance_deg": math.degrees(tolerance_rad),
+            "max_drapes": max_drapes,
+            "min_coverage_required": min_coverage,
+            "uncovered_shear_deg": (
+                None
+                if objective.uncovered_shear_rad is None
+                else math.degrees(objective.uncovered_shear_rad)
+            ),
+        },
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Orientation and start point
+
+
+@dataclass(frozen=True)
+class LayoutResult:
+    """The best (generator angle, orientation, start point) found by :func:`search_layout`."""
+
+    generator_angle_rad: float
+    orientation_rad: float
+    start_xy_m: tuple[float, float]
+    energy_J: float
+    #: Energy [J] of the layout the search started from.
+    initial_energy_J: float
+    drapes: int
+    converged: bool
+    #: Names of the varied quantities.
+    varied: tuple[str, ...]
+
+
+_LAYOUT_VARIABLES = ("generator_angle", "orientation", "start_point")
+
+
+def search_layout(
+    objective: DrapeObjective,
+    *,
+    generator_angle_rad: float,
+    orientation_rad: float = 0.0,
+    start_xy_m: tuple[float, float] = (0.0, 0.0),
+    vary: Sequence[str] = _LAYOUT_VARIABLES,
+    reference_area_m2: float | None = None,
+    angle_step_rad: float = math.radians(5.0),
+    orientation_step_rad: float = math.radians(10.0),
+    start_step_m: float | None = None,
+    tolerance_rad: float = math.radians(0.5),
+    max_drapes: int = 80,
+) -> LayoutResult:
+    """Nelder–Mead over the generator angle α [rad], orientation θ [rad] and start (x, y) [m].
+
+    Chosen over a coordinate search because the variables interact (turning the generators
+    and moving the start both move where the shear lands) and because it needs no gradient of
+    an energy with a small staircase in it. Variables are scaled by their initial steps
+    (``angle_step_rad``, ``orientation_step_rad``, ``start_step_m``, default 4·d), which also
+    size the starting simplex; it stops when the simplex is smaller than ``tolerance_rad``
+    in scaled angle units or after ``max_drapes`` drapes. The reference area (for a priced
+    uncovered area) is fixed for the whole search (default: the starting layout's coverage),
+    so every layout is judged on the same part; a layout that covers less of the part than the
+    starting one (by more than :data:`COVERAGE_SLACK`) is infeasible.
+    """
+    from scipy.optimize import minimize
+
+    names = tuple(vary)
+    unknown = set(names) - set(_LAYOUT_VARIABLES)
+    if unknown or not names:
+        raise SearchError(f"vary must name some of {_LAYOUT_VARIABLES}, got {names}")
+    d = float(objective.drape_kwargs["node_spacing_m"])
+    start_step = 4.0 * d if start_step_m is None else float(start_step_m)
+    x0: list[float] = []
+    scale: list[float] = []
+    if "generator_angle" in names:
+        x0.append(generator_angle_rad)
+        scale.append(angle_step_rad)
+    if "orientation" in names:
+        x0.append(orientation_rad)
+        scale.append(orientation_step_rad)
+    if "start_point" in names:
+        x0 += [float(start_xy_m[0]), float(start_xy_m[1])]
+        scale += [start_step, start_step]
+    steps = np.array(scale)
+    first = objective.drapes
+
+    def unpack(z: FloatArray) -> tuple[float, float, tuple[float, float]]:
+        values = list(np.asarray(z) * steps)
+        alpha = values.pop(0) if "generator_angle" in names else generator_angle_rad
+        theta = values.pop(0) if "orientation" in names else orientation_rad
+        xy = (values[0], values[1]) if "start_point" in names else start_xy_m
+        return float(alpha), float(theta), (float(xy[0]), float(xy[1]))
+
+    initial = objective.evaluate(
+        generator_angle_rad, orientation_rad=orientation_rad, start_xy_m=start_xy_m
+    )
+    reference = initial.covered_area_m2 if reference_area_m2 is None else float(reference_area_m2)
+    initial_energy = objective.charged(initial, reference)
+
+    must_cover = (1.0 - COVERAGE_SLACK) * min(initial.covered_area_m2, reference)
+
+    def energy(z: FloatArray) -> float:
+        alpha, theta, xy = unpack(z)
+        if not 0.0 < alpha < math.pi:
+            return math.inf
+        ev = objective.evaluate(alpha, orientation_rad=theta, start_xy_m=xy)
+        if ev.covered_area_m2 < must_cover:
+            return math.inf  # leaves the part barer than the start: infeasible, not priced
+        return objective.charged(ev, reference)
+
+    z0 = np.array(x0) / steps
+    simplex = np.vstack([z0, z0 + np.eye(len(z0))])
+    budget = max(max_drapes - 1, len(z0) + 2)
+    res = minimize(
+        energy,
+        z0,
+        method="Nelder-Mead",
+        options={
+            "initial_simplex": simplex,
+            "xatol": tolerance_rad / angle_step_rad,
+            "fatol": 1e-9 * max(abs(initial_energy), 1e-300),
+            "maxfev": budget,
+        },
+    )
+    alpha, theta, xy = unpack(res.x)
+    best = float(res.fun)
+    if not best < initial_energy:
+        alpha, theta, xy, best = generator_angle_rad, orientation_rad, start_xy_m, initial_energy
+    return LayoutResult(
+        alpha,
+        theta,
+        (float(xy[0]), float(xy[1])),
+        best,
+        initial_energy,
+        objective.drapes - first,
+        bool(res.success),
+        names,
+    )
+
+
+def with_generators(objective: DrapeObjective, generators: Any) -> DrapeObjective:
+    """A copy of ``objective`` draping with other ``generators`` (e.g. curved ones)."""
+    clone = DrapeObjective.__new__(DrapeObjective)
+    clone.__dict__.update(objective.__dict__)
+    clone.drape_kwargs = {**objective.drape_kwargs, "generators": generators}
+    clone.drapes = 0
+    return clone
+
+
+__all__ = [
+    "COVERAGE_SLACK",
+    "AngleSearchResult",
+    "DrapeEvaluation",
+    "DrapeObjective",
+    "LayoutResult",
+    "SearchError",
+    "SearchPoint",
+    "scan_angles",
+    "scan_size",
+    "search_generator_angle",
+    "search_layout",
+    "with_generators",
+]

@@ -1,0 +1,519 @@
+"""Pipeline steps of the minimum-energy drape: E(α), the optimum, and the paper's Fig. 10.
+
+A scene with a ``search`` section asks for them (``outputs: [energy_vs_angle, optimum,
+energy_plot_png, ...]``); the drape step then drapes at the optimum. The search section's
+fidelity knobs (degrees, as in every scene; defaults in brackets):
+
+    search:
+      generator_angle_deg: {min: 30, max: 150, step: 5}   # range [30, 150]; step = scan step
+      scan_step_deg: 5            # same as generator_angle_deg.step [5]
+      tolerance_deg: 1            # refinement stops below this step [1]
+      max_drapes: 60              # budget of the angle search [60]
+      min_coverage: 0.0           # angles covering less of the part are infeasible [0]
+      part_area_mm2: null         # the part's area; default: the part's own (a bare
+                                  # hemisphere: 2πR²), else the best coverage of the scan
+      uncovered_shear_deg: null   # price bare part area at W(this shear) [off: no charge];
+                                  # when set, the case is partial
+      layout: {vary: [orientation, start_point], max_drapes: 60}   # Nelder–Mead [off]
+      curved_generators: {terms: 2, mirror_families: false, max_drapes: 120}      # [off]
+      relax: false                # beyond the paper; coarse nets only [off]; or
+                                  # {max_rounds: 8, max_iterations: 1500}
+
+Every knob used is recorded in the case summary (``search_settings``).
+
+The steps say what the search is worth (``docs/results.md``): an optimum at an end of the
+searched range or one the energy's staircase kept from resolving is a warning; a drape at the
+optimum that does not cover the ply where it lies over the tool makes the case partial; angles
+whose drape shears cells past the law's packing limit or data range are named, since E(α) there
+is the law's continuation, not a measured or physical energy; a law that returns NaN, or a start
+point off the tool, fails the case with the reason.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from preform.drape.steps import drape_settings, record_knobs, start_problem
+from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
+from preform.optimise.search import (
+    AngleSearchResult,
+    DrapeObjective,
+    SearchError,
+    search_generator_angle,
+    search_layout,
+)
+from preform.pipeline import fidelity
+from preform.pipeline.status import CaseFailure
+from preform.step import CaseContext, Step
+
+if TYPE_CHECKING:
+    from preform.pipeline.scene import Scene
+
+MM = 1e-3
+
+
+@dataclass(frozen=True)
+class AngleStudy:
+    """The ``energy_vs_angle`` product: the search and the objective it used."""
+
+    search: AngleSearchResult
+    objective: DrapeObjective
+
+
+def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, Any]:
+    """The search section's settings with the fidelity knobs resolved (degrees, mm²)."""
+    section = scene.search
+    if section is None:
+        raise ValueError("the angle search needs the scene section 'search'")
+    knobs = fidelity.resolve(scene, tool_size_m)
+    span = section.generator_angle_deg
+    return {
+        "range_deg": [span.min, span.max] if span is not None else [30.0, 150.0],
+        "scan_step_deg": knobs.scan_step_deg,
+        "tolerance_deg": knobs.tolerance_deg,
+        "max_drapes": knobs.max_drapes,
+        "energy_table_step_deg": knobs.energy_table_step_deg,
+        "min_coverage": section.min_coverage,
+        "part_area_mm2": section.part_area_mm2,
+        "uncovered_shear_deg": section.uncovered_shear_deg,
+        "layout": section.layout,
+        "curved_generators": section.curved_generators,
+        "relax": section.relax,
+    }
+
+
+def build_objective(ctx: CaseContext) -> DrapeObjective:
+    """The drape-and-judge objective of the case: its tool, ply, start and shear law."""
+    settings = drape_settings(ctx.scene, ctx.products["surface"])
+    if not isinstance(settings["generators"], str):
+        raise ValueError(
+            "the generator-angle search needs geodesic or plan generators, not "
+            "polylines (polylines fix the angle themselves)"
+        )
+    knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
+    shear = knobs["uncovered_shear_deg"]
+    table = knobs["energy_table_step_deg"]
+    return DrapeObjective(
+        ctx.products["surface"],
+        ctx.products["shear_law"],
+        uncovered_shear_rad=None if shear is None else math.radians(float(shear)),
+        energy_table_step_rad=math.radians(table) if table > 0 else None,
+        **settings,
+    )
+
+
+def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
+    knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
+    record_knobs(ctx, ctx.products["surface"])
+    with np.errstate(invalid="ignore", over="ignore"):
+        objective = build_objective(ctx)
+    where = objective.drape_kwargs.get("start_xy_m")
+    if where is not None:
+        problem = start_problem(objective.surface, where)
+        if problem is not None:
+            raise CaseFailure(f"the search cannot drape: {problem}")
+    area = knobs["part_area_mm2"]
+    try:
+        # A non-finite law is detected below and failed in words; numpy's own warnings about
+        # it (from the energy table) would only repeat that without the angle.
+        with np.errstate(invalid="ignore", over="ignore"):
+            result = search_generator_angle(
+                objective,
+                angle_range_rad=(
+                    math.radians(knobs["range_deg"][0]),
+                    math.radians(knobs["range_deg"][1]),
+                ),
+                scan_step_rad=math.radians(knobs["scan_step_deg"]),
+                tolerance_rad=math.radians(knobs["tolerance_deg"]),
+                max_drapes=knobs["max_drapes"],
+                min_coverage=knobs["min_coverage"],
+                part_area_m2=None if area is None else float(area) * MM * MM,
+            )
+    except SearchError as error:
+        broken = law_nonfinite_angle(objective.law)
+        if broken is not None:
+            raise CaseFailure(f"{broken}: no drape of the search has a finite energy") from None
+        raise CaseFailure(f"the generator-angle search failed: {error}") from None
+    bad = [p for p in result.points if p.coverage > 0 and not math.isfinite(p.energy_J)]
+    if bad:
+        broken = law_nonfinite_angle(objective.law)
+        angles = ", ".join(f"{p.generator_angle_deg:.4g}°" for p in bad[:5])
+        lead = broken or "total energy is not finite"
+        raise CaseFailure(
+            f"{lead}: E(α) is not finite at generator angle(s) {angles}"
+            + (f" and {len(bad) - 5} more" if len(bad) > 5 else "")
+        )
+    _warn_law_range(ctx, result)
+    ctx.summary["energy_vs_angle"] = [[a, e] for a, e in result.curve_deg()]
+    ctx.summary["energy_vs_angle_coverage"] = [
+        [p.generator_angle_deg, p.coverage] for p in result.points
+    ]
+    ctx.summary["energy_vs_angle_feasible"] = [
+        [p.generator_angle_deg, p.feasible] for p in result.points
+    ]
+    ctx.summary["search_min_coverage"] = min(p.coverage for p in result.points)
+    ctx.summary["search_reference_area_m2"] = result.reference_area_m2
+    ctx.summary["search_uncovered_energy_density_J_per_m2"] = (
+        result.uncovered_energy_density_J_per_m2
+    )
+    ctx.summary["search_drapes"] = result.drapes
+    ctx.summary["search_settings"] = {**knobs, **result.settings}
+    return {"energy_vs_angle": AngleStudy(result, objective)}
+
+
+def _angles_text(angles_deg: list[float]) -> str:
+    shown = ", ".join(f"{a:.4g}°" for a in angles_deg[:6])
+    return shown + (f" and {len(angles_deg) - 6} more" if len(angles_deg) > 6 else "")
+
+
+def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
+    """Name the searched angles whose drape leaves the law's physical or measured range."""
+    law = ctx.products["shear_law"]
+    block = getattr(ctx.fabric, "shear_law", None)
+    if block is None and hasattr(ctx.fabric, "default_shear_law"):
+        block = ctx.fabric.default_shear_law()
+    limits = law_range(law, block)
+    points = [p for p in result.points if p.coverage > 0]
+    if limits.packing is not None:
+        past = [p for p in points if p.max_abs_shear_rad > limits.packing]
+        ctx.summary["search_angles_past_packing"] = len(past)
+        if past:
+            worst = max(p.energy_J for p in past)
+            ctx.warn(
+                f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
+                f"the drape shears cells past {math.degrees(limits.packing):.1f}°, where the "
+                "law's tows are packed solid: E(α) there (up to "
+                f"{worst:.3g} J) is the law's continuation past that physical limit, not a "
+                "physical energy"
+            )
+    ends = [e for e in (limits.data_positive, limits.data_negative) if e is not None]
+    if ends:
+        # The search keeps only |γ|, so the smaller end of the two senses is the safe bound.
+        end = min(ends)
+        past = [p for p in points if p.max_abs_shear_rad > end]
+        ctx.summary["search_angles_outside_law_data"] = len(past)
+        if past:
+            ctx.warn(
+                f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
+                f"the drape shears cells beyond the shear law's data range (up to "
+                f"{math.degrees(end):.1f}° in one sense at least): E(α) there rests on the "
+                "law's continuation past its data, not on measurements"
+            )
+
+
+def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
+    lo, hi = search.settings.get("range_deg", [None, None])
+    if search.at_boundary:
+        ctx.warn(
+            f"the least-energy generator angle {search.optimum_angle_deg:.4g}° lies at an end "
+            f"of the searched range [{lo:.4g}°, {hi:.4g}°]: the true optimum may lie outside "
+            "it; widen search.generator_angle_deg"
+        )
+    if search.noise_limited:
+        a, b = (math.degrees(v) for v in search.bracket_rad)
+        ctx.warn(
+            "the angle refinement stopped noise-limited: the energy's staircase (rim cells "
+            "appearing and disappearing as α changes) hid its curvature, so the optimum "
+            f"{search.optimum_angle_deg:.4g}° is resolved only to [{a:.4g}°, {b:.4g}°]; a "
+            "finer node spacing resolves it better"
+        )
+
+
+def _judge_optimum_drape(
+    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any]
+) -> None:
+    """Drape once at the optimum and mark the case partial when it does not cover the ply
+    where it lies over the tool (the same words the drape step uses for the same net). Only
+    for scenes that do not drape anyway."""
+    evaluation = objective.evaluate(
+        float(optimum["generator_angle_rad"]),
+        orientation_rad=optimum.get("orientation_rad"),
+        start_xy_m=optimum.get("start_xy_m"),
+        generators=optimum.get("generators"),
+        keep_result=True,
+    )
+    if evaluation.result is None:
+        raise CaseFailure("the drape at the least-energy generator angle cannot start")
+    start = optimum.get("start_xy_m") or objective.drape_kwargs.get("start_xy_m") or (0.0, 0.0)
+    cover = coverage(evaluation.result, objective.surface, (float(start[0]), float(start[1])))
+    ctx.summary["optimum_covered_fraction"] = cover.covered_fraction
+    if not cover.complete:
+        ctx.partial(cover.reason(), cover.covered_fraction)
+
+
+def run_optimum(ctx: CaseContext) -> dict[str, Any]:
+    study: AngleStudy = ctx.products["energy_vs_angle"]
+    search = study.search
+    knobs = search_knobs(ctx.scene, float(study.objective.surface.size))
+    optimum: dict[str, Any] = {
+        "generator_angle_rad": search.optimum_angle_rad,
+        "energy_J": search.optimum_energy_J,
+    }
+    record = search.summary()
+    ctx.summary.update(
+        {
+            key if key.startswith("optimum_") else f"optimum_{key}": record[key]
+            for key in (
+                "optimum_generator_angle_deg",
+                "optimum_energy_J",
+                "bracket_deg",
+                "bracket_half_width_deg",
+                "vertex_std_deg",
+                "uncertainty_deg",
+                "residual_rms_rel",
+                "at_boundary",
+                "noise_limited",
+            )
+        }
+    )
+    objective = study.objective
+    at_optimum = min(
+        search.points, key=lambda p: abs(p.generator_angle_rad - search.optimum_angle_rad)
+    )
+    uncovered = max(0.0, search.reference_area_m2 - at_optimum.covered_area_m2)
+    ctx.summary["optimum_part_area_m2"] = search.reference_area_m2
+    ctx.summary["optimum_uncovered_part_area_m2"] = uncovered
+    if objective.uncovered_energy_density > 0:
+        # A priced bare area is the user's stated choice: the energy is not the part's alone.
+        assert objective.uncovered_shear_rad is not None
+        ctx.partial(
+            f"the search priced uncovered part area at the shear energy of "
+            f"{math.degrees(objective.uncovered_shear_rad):.4g}° (search.uncovered_shear_deg, "
+            f"{objective.uncovered_energy_density:.4g} J/m²): E(α) is not the part's shear "
+            f"energy alone; at the optimum {uncovered * 1e6:.4g} mm² of the part is bare",
+            min(1.0, at_optimum.coverage),
+        )
+    layout = knobs["layout"]
+    if layout:
+        _run_layout(ctx, objective, search, layout, optimum)
+    curved = knobs["curved_generators"]
+    if curved:
+        _run_curved(ctx, objective, search, curved, optimum)
+    relax = knobs["relax"]
+    if relax:
+        _run_relax(ctx, objective, optimum, relax if isinstance(relax, Mapping) else {})
+    _warn_resolution(ctx, search)
+    from preform.pipeline.planner import plan
+
+    if "drape" not in {step.name for step in plan(ctx.scene, ctx.registry)}:
+        # Otherwise the drape step drapes at the optimum and judges that same net itself.
+        _judge_optimum_drape(ctx, objective, optimum)
+    return {"optimum": optimum}
+
+
+def _run_layout(
+    ctx: CaseContext,
+    objective: DrapeObjective,
+    search: AngleSearchResult,
+    layout: Mapping[str, Any],
+    optimum: dict[str, Any],
+) -> None:
+    settings = objective.drape_kwargs
+    start = settings.get("start_xy_m") or (0.0, 0.0)
+    vary = tuple(layout.get("vary", ("orientation", "start_point")))
+    found = search_layout(
+        objective,
+        generator_angle_rad=search.optimum_angle_rad,
+        orientation_rad=float(settings.get("orientation_rad") or 0.0),
+        start_xy_m=(float(start[0]), float(start[1])),
+        vary=vary,
+        reference_area_m2=search.reference_area_m2,
+        max_drapes=int(layout.get("max_drapes", 60)),
+    )
+    optimum.update(
+        generator_angle_rad=found.generator_angle_rad,
+        orientation_rad=found.orientation_rad,
+        start_xy_m=found.start_xy_m,
+        energy_J=found.energy_J,
+    )
+    ctx.summary.update(
+        {
+            "layout_varied": list(found.varied),
+            "layout_generator_angle_deg": math.degrees(found.generator_angle_rad),
+            "layout_orientation_deg": math.degrees(found.orientation_rad),
+            "layout_start_mm": [found.start_xy_m[0] / MM, found.start_xy_m[1] / MM],
+            "layout_energy_J": found.energy_J,
+            "layout_relative_saving": 1.0 - found.energy_J / found.initial_energy_J,
+            "layout_drapes": found.drapes,
+        }
+    )
+
+
+def _run_curved(
+    ctx: CaseContext,
+    objective: DrapeObjective,
+    search: AngleSearchResult,
+    curved: Any,
+    optimum: dict[str, Any],
+) -> None:
+    from preform.optimise.curved import optimise_curved_generators
+
+    options = curved if isinstance(curved, Mapping) else {}
+    result = optimise_curved_generators(
+        objective,
+        generator_angle_rad=float(optimum["generator_angle_rad"]),
+        terms=int(options.get("terms", 2)),
+        mirror_families=bool(options.get("mirror_families", False)),
+        reference_area_m2=search.reference_area_m2,
+        max_drapes=int(options.get("max_drapes", 120)),
+    )
+    ctx.summary.update(result.summary())
+    _flag_curved_range(ctx, objective, result)
+    if result.relative_saving > 0:
+        # The drape step drapes with these when it honours optimum["generators"].
+        optimum.update(
+            generators=result.generators,
+            generator_angle_rad=result.generator_angle_rad,
+            energy_J=result.energy_J,
+        )
+
+
+def _flag_curved_range(ctx: CaseContext, objective: DrapeObjective, curved: Any) -> None:
+    """Flag a curved-generator optimum whose drape shears cells of the part beyond the law's
+    data (or packing) range: its saving then rests on the law's continuation (e.g. 72° where a
+    warp-knit law holds its 60° value), not on measurements."""
+    evaluation = objective.evaluate(
+        curved.generator_angle_rad, generators=curved.generators, keep_result=True
+    )
+    result = evaluation.result
+    if result is None:
+        return
+    counted = objective.counted(result)
+    gamma = np.where(counted, result.shear, 0.0)
+    ctx.summary["curved_max_abs_shear_deg"] = float(np.degrees(np.abs(gamma).max()))
+    block = getattr(ctx.fabric, "shear_law", None)
+    if block is None and hasattr(ctx.fabric, "default_shear_law"):
+        block = ctx.fabric.default_shear_law()
+    limits = law_range(objective.law, block)
+    beyond = np.zeros_like(counted)
+    if limits.data_positive is not None:
+        beyond |= counted & (gamma > limits.data_positive)
+    if limits.data_negative is not None:
+        beyond |= counted & (gamma < -limits.data_negative)
+    if limits.packing is not None:
+        beyond |= counted & (np.abs(gamma) > limits.packing)
+    count = int(np.count_nonzero(beyond))
+    ctx.summary["curved_cells_outside_law_data"] = count
+    if count:
+        share = float(result.part_weight[beyond].sum() / max(result.part_weight.sum(), 1e-300))
+        ctx.warn(
+            f"the curved-generator optimum shears {count} cells ({100 * share:.2g} % of the "
+            f"part's fabric) beyond the shear law's data range, up to "
+            f"{ctx.summary['curved_max_abs_shear_deg']:.1f}°: its energy saving of "
+            f"{100 * curved.relative_saving:.3g} % rests on the law's continuation there, "
+            "not on measurements"
+        )
+
+
+def _run_relax(
+    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any], options: Mapping[str, Any]
+) -> None:
+    from preform.optimise.relax import relax_net
+
+    kinematic = objective.evaluate(
+        float(optimum["generator_angle_rad"]),
+        orientation_rad=optimum.get("orientation_rad"),
+        start_xy_m=optimum.get("start_xy_m"),
+        generators=optimum.get("generators"),
+        keep_result=True,
+    )
+    assert kinematic.result is not None
+    relaxed = relax_net(
+        kinematic.result,
+        objective.surface,
+        objective.law,
+        counted=objective.counted(kinematic.result),
+        max_rounds=int(options.get("max_rounds", 8)),
+        max_iterations=int(options.get("max_iterations", 1500)),
+    )
+    ctx.summary.update(relaxed.summary())
+    # The drape step exports the relaxed net when it drapes the same kinematic net.
+    optimum["relaxed_nodes"] = relaxed.nodes
+
+
+def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.fig_curves import energy_vs_angle_figure
+
+    study: AngleStudy = ctx.products["energy_vs_angle"]
+    name = ctx.fabric.name
+    energy_vs_angle_figure(
+        {name: study.search.curve_deg()},
+        ctx.case_dir / "energy_vs_angle.png",
+        optima={name: math.degrees(float(ctx.products["optimum"]["generator_angle_rad"]))},
+        title=f"{name}: total shear strain energy against generator angle",
+    )
+    return {"energy_plot_png": "energy_vs_angle.png"}
+
+
+def energy_vs_angle_library(folder: Path, summaries: list[Mapping[str, Any]]) -> list[str]:
+    """The scene-wide figure (paper Fig. 10): one E(α) curve per fabric, optima marked.
+
+    Written to ``folder``/energy_vs_angle.png from the case summaries (``material``,
+    ``energy_vs_angle``, ``optimum_generator_angle_deg``); returns the file names written.
+    """
+    from preform.export.fig_curves import energy_vs_angle_figure
+
+    curves: dict[str, list[tuple[float, float]]] = {}
+    optima: dict[str, float] = {}
+    for summary in summaries:
+        pairs = summary.get("energy_vs_angle")
+        if not pairs:
+            continue
+        name = str(summary.get("material", f"case {len(curves) + 1}"))
+        curves[name] = [(float(a), float(e)) for a, e in pairs]
+        best = summary.get("optimum_generator_angle_deg")
+        if best is not None:
+            optima[name] = float(best)
+    if not curves:
+        return []
+    folder.mkdir(parents=True, exist_ok=True)
+    energy_vs_angle_figure(
+        curves,
+        folder / "energy_vs_angle.png",
+        optima=optima,
+        title="Total shear strain energy against generator angle",
+        size_px=(1200, 650),
+    )
+    return ["energy_vs_angle.png"]
+
+
+STEPS = [
+    Step(
+        "energy_vs_angle",
+        ("energy_vs_angle",),
+        ("surface", "shear_law"),
+        "1",
+        run_energy_vs_angle,
+        "Total shear strain energy of the drape against generator angle, with part coverage.",
+        scene_sections=("tool", "ply", "start", "search"),
+    ),
+    Step(
+        "optimum",
+        ("optimum",),
+        ("energy_vs_angle",),
+        "1",
+        run_optimum,
+        "The minimum-energy generator angle (and layout, curved generators, relaxation when "
+        "the search section asks).",
+        scene_sections=("search",),
+    ),
+]
+
+EXPORTERS = [
+    Step(
+        "energy_plot_png",
+        ("energy_plot_png",),
+        ("energy_vs_angle", "optimum"),
+        "1",
+        write_energy_plot_png,
+        "energy_vs_angle.png per case; the scene folder gets all fabrics on one figure",
+        writes_files=True,
+        aggregate=energy_vs_angle_library,
+    ),
+]
