@@ -7,7 +7,7 @@ import copy
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import click
 
@@ -278,7 +278,7 @@ def view(
     repeats: tuple[int, int],
     png: str | None,
     vtu: str | None,
-    colour_by: str,
+    colour_by: Literal["level", "type"],
     libraries: tuple[str, ...],
     no_bundled: bool,
     as_json: bool,

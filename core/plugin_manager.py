@@ -442,6 +442,7 @@ class PluginHost:
                 and owner is not None
                 and not owner.builtin
                 and owner.name != record.name
+                and isinstance(exc, NameConflict)
             ):
                 self._displace(owner, record, exc)
                 continue

@@ -40,8 +40,8 @@ class PluginSandbox:
         self, plugin: Any, name: str | None = None, version: str = "0.0.test"
     ) -> PluginRecord:
         """Register a plugin (module or object with hookimpls) for this test."""
-        name = name or getattr(plugin, "__name__", type(plugin).__name__)
-        return self.host.add(plugin, name, version=version)
+        label: str = name or getattr(plugin, "__name__", None) or type(plugin).__name__
+        return self.host.add(plugin, label, version=version)
 
     def load_builtins(self, *names: str) -> None:
         """Load preform's own plugins by entry-point name (all of them when none is given)."""

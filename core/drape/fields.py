@@ -16,6 +16,7 @@ triangles, again so that a mirrored net has mirrored areas.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -94,7 +95,7 @@ def cell_fields(
     status: NDArray[np.int8],
     *,
     trim: Part | CentroidPredicate | None = None,
-) -> dict[str, NDArray[np.generic]]:
+) -> dict[str, Any]:
     """The cell arrays of a :class:`DrapeResult` from node positions (ni, nj, 3) [m] and
     statuses (ni, nj): ``cell_status``, ``shear`` [rad], ``centroid`` [m], ``area`` [m²],
     ``fibre_u``, ``fibre_v`` (unit), ``in_part`` and ``part_share``. ``trim`` is a

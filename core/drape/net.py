@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -458,7 +458,8 @@ def drape(
         orient = np.sign(da[ready]) * db[ready]
         a, b, c = pos[ia], pos[ib], pos[ic]
         if closed_form:
-            p, st = surface.place_nodes(a, b, c, d)
+            # closed_form: the surface has its own exact placement (the sphere)
+            p, st = cast(Any, surface).place_nodes(a, b, c, d)
             st = np.asarray(st, dtype=np.int8).copy()
         else:
             p, st, used = _solve_on_circle(surface, a, b, c, d, tol_m, max_iterations)

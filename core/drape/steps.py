@@ -15,7 +15,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -190,12 +190,12 @@ def scene_part(scene: Scene, surface: Any) -> Part | None:
             return None
         tool_part: Part = own()
         if area is not None:
-            tool_part = dataclasses.replace(tool_part, area_m2=area)
+            tool_part = dataclasses.replace(cast(Any, tool_part), area_m2=area)
         return tool_part
     part = combine(parts)
     assert part is not None
     if area is not None:
-        part = dataclasses.replace(part, area_m2=area)
+        part = dataclasses.replace(cast(Any, part), area_m2=area)
     return part
 
 

@@ -632,7 +632,7 @@ def _run_aggregates(
         except Exception as exc:
             written[scene_name] = {"error": f"{type(exc).__name__}: {exc}"}
             continue
-        summaries = [
+        summaries: list[Mapping[str, Any]] = [
             rec
             for rec in rundir.records.values()
             if rec.get("scene") == scene_name and rec.get("status") in REUSABLE

@@ -15,6 +15,7 @@ is a regular file (not a device, FIFO or directory) and is no larger than
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
@@ -261,7 +262,7 @@ _BUILDERS: dict[type, Any] = {
     ParaboloidTool: build_paraboloid,
 }
 
-SURFACES = [
+SURFACES: list[tuple[str, type[BaseModel], Callable[..., Any]]] = [
     ("plane", PlaneTool, build_plane),
     ("hemisphere", HemisphereTool, build_hemisphere),
     ("cylinder", CylinderTool, build_cylinder),
