@@ -29,6 +29,7 @@ layer thickness cannot be "the section's").
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 
@@ -57,6 +58,15 @@ def _f16(x: float) -> str:
     if len(text) > 16:
         text = f"{x:16.8e}"[:16]
     return text
+
+
+def _uncovered_set(element_ids: Any, set_id: int) -> list[str]:
+    """A ``*SET_SHELL_LIST`` of the elements the drape does not cover (8 ids a card)."""
+    ids = [int(e) for e in element_ids]
+    lines = ["*SET_SHELL_LIST", "$#     sid", f"{set_id:10d}"]
+    for k in range(0, len(ids), 8):
+        lines.append("".join(f"{e:10d}" for e in ids[k : k + 8]))
+    return lines
 
 
 def lsdyna_include_text(
@@ -103,11 +113,7 @@ def lsdyna_include_text(
         t = mapping.thickness_mm[k]
         t = 0.0 if not np.isfinite(t) else float(t)
         lines.append("".join(_f16(v) for v in (t, t, t, t, float(beta[k]))))
-    lines += ["*SET_SHELL_LIST", "$#     sid"]
-    lines.append(f"{uncovered_set_id:10d}")
-    uncovered = mesh.element_ids[~cov].tolist()
-    for k in range(0, len(uncovered), 8):
-        lines.append("".join(f"{int(e):10d}" for e in uncovered[k : k + 8]))
+    lines += _uncovered_set(mesh.element_ids[~cov], uncovered_set_id)
     lines.append("*END")
     return "\n".join(lines) + "\n"
 
@@ -200,11 +206,7 @@ def lsdyna_composite_text(
             f"{int(materials[0]):10d}{_f10(u_fraction * t)}{_f10(float(beta_u[k]))}{'':10}"
             f"{int(materials[1]):10d}{_f10((1 - u_fraction) * t)}{_f10(float(beta_v[k]))}"
         )
-    lines += ["*SET_SHELL_LIST", "$#     sid"]
-    lines.append(f"{uncovered_set_id:10d}")
-    uncovered = mesh.element_ids[~cov].tolist()
-    for k in range(0, len(uncovered), 8):
-        lines.append("".join(f"{int(e):10d}" for e in uncovered[k : k + 8]))
+    lines += _uncovered_set(mesh.element_ids[~cov], uncovered_set_id)
     lines.append("*END")
     return "\n".join(lines) + "\n"
 
