@@ -153,10 +153,12 @@ def materials_list(libraries: tuple[str, ...], no_bundled: bool, as_json: bool) 
 
 def fabric_document(fabric: Any) -> dict[str, Any]:
     """A fabric as shown by ``materials show``: YAML units, plus derived properties."""
+    from preform.plugin_manager import call_plugin
+
     data: dict[str, Any] = fabric.model_dump(mode="json", exclude_none=True)
-    try:
-        derived = fabric.derived()
-    except Exception as exc:
+    # derived() is the architecture plugin's code: contained (its prints go to stderr)
+    derived, exc = call_plugin(f"architecture {fabric.architecture}", fabric.derived)
+    if exc is not None:
         derived = {"error": f"{type(exc).__name__}: {exc}"}
     if derived:
         data["derived"] = derived

@@ -195,15 +195,21 @@ def validate_entry(
     range_errors, range_warnings = _range_problems(fabric, err)
     if range_errors:
         return None, range_errors, []
-    try:
-        consistency = fabric.errors()
-        warns = list(fabric.check())
-    except Exception as exc:  # a plugin bug must be reported, not crash the whole library
+    # the architecture's own checks are plugin code: contained like a hook (a SystemExit or a
+    # print there must neither end the command nor reach a --json stdout)
+    from preform.plugin_manager import call_plugin
+
+    def own_checks() -> tuple[list[Any], list[Any]]:
+        return list(fabric.errors()), list(fabric.check())
+
+    checked, exc = call_plugin(f"architecture {tag}", own_checks)
+    if exc is not None:  # a plugin bug must be reported, not crash the whole library
         return (
             None,
             [err((), f"architecture {tag!r} failed to check this entry: {exc!r}", label)],
             [],
         )
+    consistency, warns = checked
     errors += [err(tuple(path), msg) for path, msg in consistency]
     if errors:
         return None, errors, []

@@ -754,3 +754,66 @@ def test_plugins_list_text_shows_each_failure_with_its_reason(site):
     assert "surface'hemisphere'isalreadyregisteredbybuilt-inplugin'surfaces'" in flat
     assert "failedtoimport:SystemExit:[bold]markup[/bold]inamessage" in flat
     assert "woven(built-in)" in flat
+
+
+# -- an architecture's own code (checks, derived properties) is contained too ---------------
+
+ODD_ARCHITECTURE = """
+from typing import Literal
+from preform import FabricBase, hookimpl
+
+
+class Odd(FabricBase):
+    architecture: Literal["odd"]
+    behaviour: str = "quiet"
+
+    def check(self):
+        if self.behaviour == "exit-in-check":
+            raise SystemExit(5)
+        if self.behaviour == "print-in-check":
+            print("odd: checking")
+        return []
+
+    def derived(self):
+        print("odd: deriving")
+        if self.behaviour == "exit-in-derived":
+            raise SystemExit(6)
+        return {"answer": 42}
+
+
+@hookimpl
+def preform_register_architectures(register):
+    register.add(Odd)
+"""
+
+
+@pytest.mark.parametrize(
+    "behaviour", ["exit-in-check", "print-in-check", "exit-in-derived", "quiet"]
+)
+def test_an_architectures_own_code_cannot_end_the_command_or_corrupt_json(
+    site, tmp_path, behaviour
+):
+    site.install("odd", ODD_ARCHITECTURE)
+    lib = tmp_path / "odd.yaml"
+    lib.write_text(
+        f"- {{name: odd-1, architecture: odd, source: s, note: n, behaviour: {behaviour}}}\n"
+    )
+    validate = invoke(["materials", "validate", str(lib)])
+    assert_contained(validate)
+    if behaviour == "exit-in-check":
+        assert validate.exit_code == 1
+        assert "odd.yaml:1:3: odd-1: architecture 'odd' failed to check this entry: " in (
+            validate.stderr
+        )
+        assert "SystemExit(5)" in validate.stderr
+        return
+    assert validate.exit_code == 0, validate.stdout + validate.stderr
+    shown = invoke(["materials", "show", "odd-1", "--library", str(lib), "--json"])
+    assert_contained(shown)
+    assert shown.exit_code == 0
+    doc = shown.json()  # stdout is nothing but the JSON document
+    assert "plugin architecture odd: odd: deriving" in shown.stderr
+    if behaviour == "exit-in-derived":
+        assert doc["derived"] == {"error": "SystemExit: 6"}
+    else:
+        assert doc["derived"] == {"answer": 42}
