@@ -202,11 +202,11 @@ def validate_entry(
     def own_checks() -> tuple[list[Any], list[Any]]:
         return list(fabric.errors()), list(fabric.check())
 
-    checked, exc = call_plugin(f"architecture {tag}", own_checks)
-    if exc is not None:  # a plugin bug must be reported, not crash the whole library
+    checked, failure = call_plugin(f"architecture {tag}", own_checks)
+    if failure is not None:  # a plugin bug must be reported, not crash the whole library
         return (
             None,
-            [err((), f"architecture {tag!r} failed to check this entry: {exc!r}", label)],
+            [err((), f"architecture {tag!r} failed to check this entry: {failure!r}", label)],
             [],
         )
     consistency, warns = checked
