@@ -18,7 +18,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
 
 FloatArray = NDArray[np.float64]
 
@@ -75,6 +74,8 @@ def chebyshev_shear_profile(s: ArrayLike, alpha: float) -> FloatArray:
 
         targets = flat[far]
         end = float(targets.max() if sign > 0 else targets.min())
+        from scipy.integrate import solve_ivp  # only the far field needs scipy
+
         sol = solve_ivp(
             rhs,
             (s0, end),

@@ -204,7 +204,10 @@ def energy_field(
                 raise ValueError(f"region mask shape {keep.shape} != cell shape {counted.shape}")
         counted = counted & keep
     gamma = np.where(counted, result.shear, 0.0)
-    density = np.where(counted, np.asarray(law.energy(gamma), dtype=float), 0.0)
+    # the law is evaluated on the counted cells only (a mechanistic law is costly per angle)
+    density = np.zeros(counted.shape, dtype=float)
+    if counted.any():
+        density[counted] = np.asarray(law.energy(gamma[counted]), dtype=float)
     thickness_ratio = np.where(counted, 1.0 / np.maximum(np.cos(gamma), 1e-12), 1.0)
     locking = law.locking_angle
     failure = law.failure_angle

@@ -32,6 +32,7 @@ from preform.drape.verdict import (
 )
 from preform.pipeline import fidelity
 from preform.pipeline.status import CaseFailure
+from preform.shear.surrogate import surrogate
 from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:
@@ -266,7 +267,14 @@ def run_surface(ctx: CaseContext) -> dict[str, Any]:
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
     surface = ctx.products["surface"]
     settings = drape_settings(ctx.scene, surface)
-    record_knobs(ctx, surface)
+    knobs = record_knobs(ctx, surface)
+    # The energy fields use the law's tabulated surrogate unless the fidelity asks for the law
+    # itself (energy_table_step_deg 0): within its documented error, far cheaper per cell.
+    exact = ctx.products["shear_law"]
+    with np.errstate(all="ignore"):
+        law = surrogate(exact, knobs.energy_table_step_deg or None)
+    if law is not exact and not law.finite:
+        law = exact  # a non-finite law is reported by the law itself, at the angle it fails
     optimum = ctx.products.get("optimum")
     if optimum is not None:
         # the search may also have chosen the orientation, the start or curved generators
@@ -293,14 +301,14 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     relaxed = optimum.get("relaxed_nodes") if optimum is not None else None
     if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
         with np.errstate(all="ignore"):
-            kinematic = energy_field(result, ctx.products["shear_law"])
+            kinematic = energy_field(result, law)
         ctx.summary["kinematic_total_energy_J"] = kinematic.total_energy
         result = relaxed_result(result, np.asarray(relaxed, dtype=float), part)
         ctx.summary["result_net"] = "relaxed"
     elif optimum is not None:
         ctx.summary["result_net"] = "kinematic"
     with np.errstate(all="ignore"):
-        energy = energy_field(result, ctx.products["shear_law"])
+        energy = energy_field(result, law)
     ctx.summary.update(summary(result, energy, part))
     if part is not None:
         ctx.summary["part"] = part.describe()
@@ -398,7 +406,7 @@ STEPS = [
         "drape",
         ("drape",),
         ("surface", "shear_law"),
-        "1",
+        "2",  # 2: the energy field from the law's table unless the fidelity says exact
         run_drape,
         "Pin-jointed net on the tool, its shear field and strain energy.",
         scene_sections=("tool", "ply", "start"),

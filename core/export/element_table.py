@@ -8,12 +8,15 @@ carry their unit in the name: lengths in mm, angles in degrees.
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from preform.export.fe_mapping import MeshMapping
 from preform.export.tables import write_table
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Column order of :func:`element_table`.
 ELEMENT_COLUMNS: tuple[str, ...] = (
@@ -48,6 +51,8 @@ def element_table(mapping: MeshMapping) -> pd.DataFrame:
     ``shear_deg``, ``thickness_ratio`` (t/t0 [-]), ``thickness_mm``, ``energy_J_per_m2``,
     the flags ``past_locking``, ``past_failure``, ``above_thickness_cap``, and ``gap_mm``
     (centroid to net [mm]). Values of uncovered elements are NaN / <NA>."""
+    import pandas as pd
+
     cov = mapping.covered
 
     def flag(values: np.ndarray) -> pd.arrays.BooleanArray:

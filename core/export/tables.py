@@ -10,15 +10,18 @@ import enum
 import json
 import math
 import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from preform.drape.result import CellStatus, DrapeResult, EnergyField
 from preform.export.atomic import atomic_open, atomic_path
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Column order of ``cells_table``.
 CELL_COLUMNS: tuple[str, ...] = (
@@ -52,6 +55,8 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
     the thickness ratio then follows from the shear.
     """
+    import pandas as pd
+
     n1, n2 = np.asarray(result.cell_status).shape
     ii, jj = np.meshgrid(np.arange(n1), np.arange(n2), indexing="ij")
     valid = np.asarray(result.cell_status == CellStatus.VALID).ravel()
@@ -146,7 +151,8 @@ def to_json_compatible(obj: Any) -> Any:
         return sorted((to_json_compatible(v) for v in obj), key=repr)
     if isinstance(obj, os.PathLike):
         return os.fspath(obj)
-    if obj is pd.NA:
+    pandas = sys.modules.get("pandas")  # pd.NA exists only once pandas is imported
+    if pandas is not None and obj is pandas.NA:
         return None
     raise TypeError(f"cannot write {type(obj).__name__} to JSON: {obj!r}")
 

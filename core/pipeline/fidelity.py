@@ -13,8 +13,9 @@ Knobs (units in the names):
   absolute, so refining the net does not degrade it).
 - ``generator_substeps``: sub-steps per node spacing when marching geodesic generators on
   surfaces without a closed form.
-- ``energy_table_step_deg``: step of the tabulated surrogate of the shear law used while
-  searching (cubic Hermite, error ∝ step⁴); ``0`` uses the law itself.
+- ``energy_table_step_deg``: step of the tabulated surrogate of the shear law used for every
+  energy field, the search's and the drape step's (cubic Hermite, error ∝ step⁴); ``0`` uses
+  the law itself.
 - ``scan_step_deg``, ``tolerance_deg``, ``max_drapes``: the generator-angle search's global
   scan step, refinement tolerance and drape budget.
 

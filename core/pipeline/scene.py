@@ -209,7 +209,7 @@ class NumericsSection(BaseModel):
         default=None,
         ge=0,
         le=10,
-        description="Step of the shear law's energy table while searching [deg]; 0 = exact.",
+        description="Step of the shear law's energy table (search and drape energy) [deg]; 0 = exact.",
     )
 
 

@@ -25,7 +25,6 @@ from numpy.polynomial import polynomial as npoly
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, Field, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
-from scipy.interpolate import PchipInterpolator
 
 from preform.material import ParamsModel, Plausible, size_limit
 from preform.shear.energy import DOMAIN_END, Branch, PiecewiseBranch
@@ -437,6 +436,8 @@ def tabulated_branch(
         a, v = np.concatenate([[0.0], a]), np.concatenate([[0.0], v])
     scale = N_PER_MM_TO_N_PER_M if quantity == "force" else 1.0
     radians = np.radians(a)
+    from scipy.interpolate import PchipInterpolator  # only tabulated laws need scipy
+
     interpolant = PchipInterpolator(radians, v * scale, extrapolate=False)
     # scipy stores each cubic piece with descending powers in the local variable.
     pieces: list[FloatArray] = [np.asarray(c[::-1], dtype=float) for c in interpolant.c.T]

@@ -117,6 +117,16 @@ class TabulatedSurrogate:
         self._positive = _SenseTable(law, nodes, 1.0)
         self._negative = _SenseTable(law, nodes, -1.0)
 
+    @property
+    def finite(self) -> bool:
+        """Whether every tabulated energy and slope is finite (a law returning NaN or inf
+        somewhere cannot be interpolated: use the law itself, which says where)."""
+        return all(
+            bool(np.isfinite(values).all())
+            for table in (self._positive, self._negative)
+            for values in (table.energy, table.slope_left, table.slope_right)
+        )
+
     def torque(self, gamma: ArrayLike) -> FloatArray:
         """Torque per unit undeformed area [N·m/m²]: dW/dγ of the tabulated energy, so that
         gradient-based solvers see the energy they minimise (equal to the law's torque at the

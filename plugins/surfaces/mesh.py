@@ -17,9 +17,6 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -188,6 +185,8 @@ class TriangleMesh:
             vertex_normals, axis=1, keepdims=True
         )
         centroids = corners.mean(axis=1)
+        from scipy.spatial import cKDTree  # scipy only once a mesh is built
+
         self._centroid_tree = cKDTree(centroids)
         self._bounding_radius = float(np.max(np.linalg.norm(corners - centroids[:, None], axis=2)))
         self._build_plan_grid()
@@ -366,6 +365,10 @@ def _merge_vertices(
     """Merge vertices within ``tolerance`` [m] (transitively) and re-index the faces."""
     if tolerance <= 0.0:
         return vertices, faces
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
     pairs = cKDTree(vertices).query_pairs(tolerance, output_type="ndarray")
     if pairs.size == 0:
         return vertices, faces

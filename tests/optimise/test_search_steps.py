@@ -139,6 +139,26 @@ def test_run_writes_curves_optima_and_the_library_figure(sandbox, tmp_path):
     assert (folder / "energy_vs_angle.png").stat().st_size > 0
 
 
+def test_a_sweep_draws_no_figure_its_scene_does_not_name(sandbox, tmp_path):
+    # issue 15: figures cost a quarter of a case; they are drawn only when the scene asks
+    lib = sandbox.library(bundled=True)
+    path = coarse_scene(tmp_path)
+    data = yaml.safe_load(path.read_text())
+    data["outputs"] = ["energy_vs_angle", "optimum", "drape", "cells_csv"]
+    path.write_text(yaml.safe_dump(data))
+    scene = load_scene(path, sandbox.registry)
+    out = tmp_path / "out"
+    report = run_cases(
+        make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-*"),
+        out,
+        sandbox.host,
+        engine="serial",
+    )
+    assert [r.status for r in report.results] == ["ok", "ok"], [r.error for r in report.results]
+    assert list(out.rglob("*.png")) == []
+    assert len(list(out.rglob("cells.csv"))) == 2
+
+
 def test_library_figure_skips_cases_without_a_curve(tmp_path):
     assert search_steps.energy_vs_angle_library(tmp_path, [{"material": "x"}]) == []
     files = search_steps.energy_vs_angle_library(
