@@ -9,6 +9,7 @@ hangs or is interrupted costs only itself, and everything that finished is kept.
 
 from __future__ import annotations
 
+import contextlib
 import fnmatch
 import hashlib
 import json
@@ -491,6 +492,12 @@ def run_cases(
     the rest is recorded ``interrupted``, and the report says so. Raises ``RunDirectoryError``
     when ``out_dir`` cannot be used (a file, or another run holds it).
     """
+    # the table writers' imports, now rather than at the first finished case: a Ctrl-C that
+    # lands inside a half-done `import pandas` would leave it broken for the rest of the run
+    import pandas  # noqa: F401
+
+    with contextlib.suppress(ImportError):
+        import pyarrow  # noqa: F401
     with RunDirectory(out_dir) as rundir:
         run: dict[str, Any] = {
             "id": f"{now_utc()}-{os.getpid()}-{os.urandom(3).hex()}",
