@@ -60,6 +60,19 @@ def _f16(x: float) -> str:
     return text
 
 
+def _element_cards(mapping: MeshMapping, part_id: int) -> tuple[Any, Any]:
+    """Part id and the four node labels (a triangle repeats its third) of every element, after
+    checking the ids fit LS-DYNA's 8-character fields; Nastran's PID is kept where given."""
+    mesh = mapping.mesh
+    if mesh.element_ids.max(initial=0) > MAX_ID or mesh.node_ids.max(initial=0) > MAX_ID:
+        raise ValueError(
+            "element or node ids above 99,999,999 do not fit LS-DYNA's 8-character fields"
+        )
+    pids = np.where(mesh.property_ids > 0, mesh.property_ids, part_id)
+    corners = np.where(mesh.corners < 0, mesh.corners[:, [2]], mesh.corners)
+    return pids, mesh.node_ids[corners]
+
+
 def _uncovered_set(element_ids: Any, set_id: int) -> list[str]:
     """A ``*SET_SHELL_LIST`` of the elements the drape does not cover (8 ids a card)."""
     ids = [int(e) for e in element_ids]
@@ -80,14 +93,8 @@ def lsdyna_include_text(
     mesh gave none (Nastran's PID is kept)."""
     mesh = mapping.mesh
     cov = mapping.covered
-    if mesh.element_ids.max(initial=0) > MAX_ID or mesh.node_ids.max(initial=0) > MAX_ID:
-        raise ValueError(
-            "element or node ids above 99,999,999 do not fit LS-DYNA's 8-character fields"
-        )
-    pids = np.where(mesh.property_ids > 0, mesh.property_ids, part_id)
+    pids, node_labels = _element_cards(mapping, part_id)
     beta = _angle_from_first_edge_deg(mapping)
-    corners = np.where(mesh.corners < 0, mesh.corners[:, [2]], mesh.corners)
-    node_labels = mesh.node_ids[corners]
     summary = mapping.summary()
     lines = [
         "*KEYWORD",
@@ -169,15 +176,9 @@ def lsdyna_composite_text(
         raise ValueError(f"u_fraction must lie strictly between 0 and 1, got {u_fraction!r}")
     if min(materials) < 1:
         raise ValueError("LS-DYNA material ids start at 1")
-    if mesh.element_ids.max(initial=0) > MAX_ID or mesh.node_ids.max(initial=0) > MAX_ID:
-        raise ValueError(
-            "element or node ids above 99,999,999 do not fit LS-DYNA's 8-character fields"
-        )
-    pids = np.where(mesh.property_ids > 0, mesh.property_ids, part_id)
+    pids, node_labels = _element_cards(mapping, part_id)
     beta_u = _angle_from_first_edge_to(mapping, mapping.fibre_u)
     beta_v = _angle_from_first_edge_to(mapping, mapping.fibre_v)
-    corners = np.where(mesh.corners < 0, mesh.corners[:, [2]], mesh.corners)
-    node_labels = mesh.node_ids[corners]
     summary = mapping.summary()
     lines = [
         "*KEYWORD",
