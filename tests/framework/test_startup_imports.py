@@ -12,7 +12,7 @@ import sys
 
 import pytest
 
-HEAVY = ("scipy", "matplotlib", "pandas", "pyarrow", "dask", "distributed", "shapely", "meshio")
+HEAVY = ("scipy", "matplotlib", "pandas", "pyarrow", "dask", "distributed", "shapely", "meshio", "numba", "gmsh")
 
 PROBE = """
 import contextlib, io, json, sys
