@@ -187,6 +187,11 @@ class Coverage:
     #: first cause among their corners: folded, no_intersection, stopped_on_tool,
     #: behind_failure, behind_outline.
     uncovered_area_m2: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    #: The fold zones: each connected patch of ply cells lost to a fold (a corner FOLDED or not
+    #: reached behind a FOLDED node, none past the tool's edge: a sharp convex vertex's
+    #: shadow), also where that fabric would hang past the tool's plan, as (undeformed plan
+    #: centre (x, y) [m], fabric area [m²]), largest first.
+    fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
 
     @property
     def covered_fraction(self) -> float:
@@ -231,6 +236,15 @@ class Coverage:
                 f"{m['not_reached_behind_outline']} node(s) over the tool were not reached "
                 "because the ply outline cuts a generator before them"
             )
+        if self.fold_zones:
+            zones = ", ".join(
+                f"{1e6 * area:.0f} mm² around ({round(1e3 * x) + 0.0:.0f}, "
+                f"{round(1e3 * y) + 0.0:.0f}) mm"
+                for (x, y), area in self.fold_zones
+            )
+            causes.append(
+                f"{len(self.fold_zones)} fold zone(s) of the flat ply lost behind a fold: {zones}"
+            )
         where = ""
         if self.first_missing_xy_m is not None:
             # rounded first, then + 0.0, so that -0.4 mm reads "0", not "-0"
@@ -259,6 +273,11 @@ class Coverage:
             out[f"nodes_missing_{key}"] = value
         for key, area in self.uncovered_area_m2.items():
             out[f"uncovered_area_m2_{key}"] = area
+        out["fold_zones"] = len(self.fold_zones)
+        out["fold_zone_area_m2"] = float(sum(area for _, area in self.fold_zones))
+        for k, ((x, y), area) in enumerate(self.fold_zones, start=1):
+            out[f"fold_zone_{k}_x_m"], out[f"fold_zone_{k}_y_m"] = x, y
+            out[f"fold_zone_{k}_area_m2"] = area
         return out
 
 
@@ -329,6 +348,16 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     if left.any():
         uncovered["other"] = float(np.count_nonzero(left)) * result.node_spacing**2
 
+    # The fold zone is all the fabric lost behind a fold, also where it would have hung past
+    # the tool's plan (a vertex's shadow on a tool with vertical walls lies wholly there).
+    fold_nodes = lost & dependency_shadow(status == NodeStatus.FOLDED, start)
+    fold_corner = (
+        fold_nodes[:-1, :-1] | fold_nodes[1:, :-1] | fold_nodes[:-1, 1:] | fold_nodes[1:, 1:]
+    )
+    zones = _fold_zones(
+        cell_in_ply & ~valid & ~edge_corner & fold_corner, plan, result.node_spacing
+    )
+
     first: tuple[float, float] | None = None
     if missing.any():
         i0, j0 = start
@@ -344,7 +373,27 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         first_missing_xy_m=first,
         node_spacing_m=result.node_spacing,
         uncovered_area_m2=uncovered,
+        fold_zones=zones,
     )
+
+
+def _fold_zones(
+    cells: BoolArray, plan: FloatArray, spacing: float
+) -> tuple[tuple[tuple[float, float], float], ...]:
+    """Connected patches (edge or corner neighbours) of ``cells`` (ni−1, nj−1): undeformed
+    plan centre [m] and fabric area (d² a cell) [m²] of each, largest first."""
+    if not cells.any():
+        return ()
+    from scipy import ndimage
+
+    labels, count = ndimage.label(cells, structure=np.ones((3, 3), dtype=int))
+    centre = 0.25 * (plan[:-1, :-1] + plan[1:, :-1] + plan[:-1, 1:] + plan[1:, 1:])
+    zones = []
+    for k in range(1, count + 1):
+        mine = labels == k
+        x, y = centre[mine].mean(axis=0)
+        zones.append(((float(x), float(y)), float(np.count_nonzero(mine)) * spacing**2))
+    return tuple(sorted(zones, key=lambda zone: -zone[1]))
 
 
 # --------------------------------------------------------------------------------------------
