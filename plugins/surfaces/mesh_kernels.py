@@ -154,7 +154,9 @@ def place_nodes_kernel(  # type: ignore[no-untyped-def]
             n0, n1, n2 = normals[t, 0], normals[t, 1], normals[t, 2]
             al = _dot3(n0, n1, n2, x0, x1, x2)
             be = _dot3(n0, n1, n2, y0, y1, y2)
-            ga = _dot3(n0, n1, n2, m0 - corners[t, 0, 0], m1 - corners[t, 0, 1], m2 - corners[t, 0, 2])
+            ga = _dot3(
+                n0, n1, n2, m0 - corners[t, 0, 0], m1 - corners[t, 0, 1], m2 - corners[t, 0, 2]
+            )
             rho = math.sqrt(al * al + be * be)
             if rho * r < abs(ga) or rho == 0.0:
                 continue

@@ -131,6 +131,66 @@ def test_a_box_corner_folds_in_its_shadow_and_nowhere_else() -> None:
     assert area > 0 and area == pytest.approx(cover.summary()["fold_zone_area_m2"])
 
 
+def rounded_box_corner(radius: float, length: float = 0.3, n: int = 81) -> TriangleMesh:
+    """The box corner of :func:`box_corner` with its edges and vertex rounded to ``radius``
+    [m]: the surface at distance ``radius`` from the solid x, y, z ≤ −radius (cylinders along
+    the edges, a sphere octant at the vertex). Each vertex q of the sharp mesh moves to
+    c + radius·(q − c)/|q − c|, c its closest point on that solid."""
+    sharp = box_corner(length, n)
+    c = np.minimum(sharp.vertices, -radius)
+    w = sharp.vertices - c
+    moved = c + radius * w / np.linalg.norm(w, axis=1, keepdims=True)
+    return TriangleMesh(moved, sharp.faces)
+
+
+def test_a_rounded_corner_turns_the_net_by_its_angle_deficit_whatever_its_radius() -> None:
+    """Gauss–Bonnet for the Chebyshev net: ∂²ω/∂u∂v = −K sin ω integrates, over a fibre
+    rectangle holding the whole rounded vertex, to a change of ω by −∫K dA = −(angle deficit)
+    = −π/2, whatever the radius (the cylinders along the edges are developable). With α = 120°
+    the net deep behind the corner (flat walls) carries γ = α − π/2 − π/2 = −60°."""
+    d = 0.0025
+    alpha = math.radians(120.0)
+    start = (-0.1, -0.06)
+    # the vertex in fibre coordinates: (0.1, 0.06) = u·(1, 0) + v·(cos α, sin α)
+    v_vertex = 0.06 / math.sin(alpha)
+    u_vertex = 0.1 - v_vertex * math.cos(alpha)
+    for radius in (0.01, 0.02, 0.03):
+        result = drape(
+            rounded_box_corner(radius),
+            node_spacing_m=d,
+            ply=PlyOutline.rectangle((0.5, 0.5)),
+            start_xy_m=start,
+            orientation_rad=0.0,
+            generator_angle_rad=alpha,
+        )
+        i0, j0 = result.start_index
+        ii, jj = np.indices(result.shear.shape)
+        u, v = (ii + 0.5 - i0) * d, (jj + 0.5 - j0) * d
+        deep = (u > u_vertex + 0.06) & (u < u_vertex + 0.08) & (v > v_vertex + 0.06)
+        deep &= v < v_vertex + 0.08
+        assert np.count_nonzero(deep) > 30 and np.all(result.valid[deep]), radius
+        np.testing.assert_allclose(result.shear[deep], alpha - math.pi, atol=math.radians(0.1))
+
+
+def test_the_figures_mark_the_folds_at_the_hat_moulds_block_corners(hat: TriangleMesh) -> None:
+    from preform.export.fig_drape import fold_triangles
+
+    result = drape(
+        hat,
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.36, 0.36)),
+        start_xy_m=(0.004, 0.003),
+        generator_angle_rad=0.5 * math.pi,
+    )
+    folds = fold_triangles(result)
+    assert len(folds) == np.count_nonzero(result.status == NodeStatus.FOLDED) == 4
+    centre = folds.mean(axis=1)
+    # one fold at each of the block's top corners (±50, ±30, 40) mm, within a node spacing
+    corners = np.array([[sx * 0.05, sy * 0.03] for sx in (-1, 1) for sy in (-1, 1)])
+    gap = np.linalg.norm(centre[:, None, :2] - corners[None], axis=2)
+    assert np.all(gap.min(axis=1) < 0.01) and len(set(gap.argmin(axis=1))) == 4
+
+
 @pytest.fixture(scope="module")
 def hat() -> TriangleMesh:
     return read_obj(HAT)
