@@ -68,7 +68,7 @@ class FacePlacement(NamedTuple):
 
     #: Positions (m, 3) [m], NaN where not placed.
     points: FloatArray
-    #: NodeStatus codes (m,): PLACED, NO_INTERSECTION, OFF_TOOL.
+    #: NodeStatus codes (m,): PLACED, NO_INTERSECTION, OFF_TOOL, FOLDED (parents coincide).
     status: StatusArray
     #: The facet each node lies on (m,), −1 where not placed; the hint for its children.
     faces: IntArray

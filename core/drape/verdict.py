@@ -21,7 +21,8 @@ for want of a parent inherits the cause of whichever node of that rectangle fail
   over the tool.
 
 The generator marchers mark *any* stop as OFF_TOOL, also a geodesic that cannot cross a
-concave crease of a mesh (the hat mould's wall foot) while the tool goes on. So an OFF_TOOL
+concave crease while the tool goes on (on meshes the exact walking geodesics and placement of
+``preform.plugins.surfaces.mesh_kernels`` stop only at the mesh's boundary, and are trusted). So an OFF_TOOL
 node on a generator is taken as the tool's edge only when the generator's last chord, continued
 one step straight on, lands outside the tool's plan or farther than a node spacing from it; a
 generator that stops where the tool goes on is a failure ("stopped on the tool"). The same
@@ -29,6 +30,12 @@ test judges the interior OFF_TOOL nodes of the general Newton placement (continu
 parallelogram), which calls a node at a concave crease of a mesh OFF_TOOL too. A tool that
 ends at the foot of a vertical wall (no plate beyond) cannot be told from a crease by this test
 and reads as "stopped on the tool".
+
+Behind a sharp convex vertex a pin-jointed net cannot go on: the fibre angle there changes
+by the vertex's angle deficit (90° at a box corner), so the net closes up and folds. The
+*fold zones* are the connected patches of ply cells lost behind a FOLDED node (none past the
+tool's edge), reported with their undeformed plan centre and fabric area, also where that
+fabric would have hung past the tool's plan.
 
 A missing node has no position, so "lying over the tool" is judged on its undeformed position:
 the flat ply laid on the plan at the start point, its +u fibres along the orientation and +v at
@@ -217,8 +224,9 @@ class Coverage:
             )
         if m.get("folded"):
             causes.append(
-                f"{m['folded']} node(s) folded (the net would turn over there: an edge or "
-                "corner of the tool sharper than a net of this spacing can follow)"
+                f"{m['folded']} node(s) folded (the net would turn over there: behind a sharp "
+                "convex vertex of the tool, or at an edge or corner sharper than a net of this "
+                "spacing can follow)"
             )
         if m.get("no_intersection"):
             causes.append(

@@ -16,7 +16,9 @@ the node is the one with the smallest φ: turning from the outward side, the fir
 the circle meets the tool, which is where the fabric, lying on the tool and never inside it,
 touches it. At a crease this picks the wall beyond a convex edge and the wall rising from a
 concave foot, with no iteration to stall. No root: OFF_TOOL if the ball reaches the mesh's
-boundary, else NO_INTERSECTION.
+boundary, else NO_INTERSECTION. Parents that coincide (a cell closed up completely, as behind a
+sharp convex vertex when the fibre angle falls to 0) or lie on facets facing opposite ways
+(the net folded flat over a knife edge): FOLDED.
 
 Geodesics. The straightest path on a piecewise-flat surface is straight inside each triangle
 and crosses an edge by unfolding: the component of the direction along the edge is kept and the
@@ -37,6 +39,7 @@ from preform.drape.result import NodeStatus
 _PLACED = int(NodeStatus.PLACED)
 _OFF_TOOL = int(NodeStatus.OFF_TOOL)
 _NO_INTERSECTION = int(NodeStatus.NO_INTERSECTION)
+_FOLDED = int(NodeStatus.FOLDED)
 
 
 @numba.njit(cache=True, inline="always")
@@ -98,7 +101,12 @@ def place_nodes_kernel(  # type: ignore[no-untyped-def]
         e0, e1, e2 = b[i, 0] - a[i, 0], b[i, 1] - a[i, 1], b[i, 2] - a[i, 2]
         chord = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
         r2 = spacing * spacing - 0.25 * chord * chord
-        if not (r2 > 0.0) or chord == 0.0:
+        if chord <= 1e-9 * spacing:
+            # The parents coincide: the cell has closed up completely (ω = 0, the collapse
+            # behind a sharp convex vertex), the limit of a fold.
+            out_status[i] = _FOLDED
+            continue
+        if not r2 > 0.0:
             out_status[i] = _NO_INTERSECTION
             continue
         r = math.sqrt(r2)
@@ -112,7 +120,7 @@ def place_nodes_kernel(  # type: ignore[no-untyped-def]
         length = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
         if length < 1e-12:
             # Parents' normals cancel or lie along the chord: the net is folded flat here.
-            out_status[i] = _NO_INTERSECTION
+            out_status[i] = _FOLDED
             continue
         x0, x1, x2 = x0 / length, x1 / length, x2 / length
         y0, y1, y2 = e1 * x2 - e2 * x1, e2 * x0 - e0 * x2, e0 * x1 - e1 * x0
