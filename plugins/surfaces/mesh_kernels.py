@@ -43,12 +43,12 @@ _FOLDED = int(NodeStatus.FOLDED)
 
 
 @numba.njit(cache=True, inline="always")
-def _dot3(u0, u1, u2, v0, v1, v2):  # type: ignore[no-untyped-def]
+def _dot3(u0, u1, u2, v0, v1, v2):
     return u0 * v0 + u1 * v1 + u2 * v2
 
 
 @numba.njit(cache=True)
-def _segment_distance(p, q0, q1):  # type: ignore[no-untyped-def]
+def _segment_distance(p, q0, q1):
     """Distance [m] from point p to the segment q0–q1 (3-vectors)."""
     e0, e1, e2 = q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]
     w0, w1, w2 = p[0] - q0[0], p[1] - q0[1], p[2] - q0[2]
@@ -61,7 +61,7 @@ def _segment_distance(p, q0, q1):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def place_nodes_kernel(  # type: ignore[no-untyped-def]
+def place_nodes_kernel(
     corners,
     normals,
     neighbours,
@@ -223,7 +223,7 @@ def place_nodes_kernel(  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True)
-def geodesic_kernel(  # type: ignore[no-untyped-def]
+def geodesic_kernel(
     corners,
     normals,
     neighbours,
