@@ -245,14 +245,7 @@ class Coverage:
                 "because the ply outline cuts a generator before them"
             )
         if self.fold_zones:
-            zones = ", ".join(
-                f"{1e6 * area:.0f} mm² around ({round(1e3 * x) + 0.0:.0f}, "
-                f"{round(1e3 * y) + 0.0:.0f}) mm"
-                for (x, y), area in self.fold_zones
-            )
-            causes.append(
-                f"{len(self.fold_zones)} fold zone(s) of the flat ply lost behind a fold: {zones}"
-            )
+            causes.append(self.fold_words())
         where = ""
         if self.first_missing_xy_m is not None:
             # rounded first, then + 0.0, so that -0.4 mm reads "0", not "-0"
@@ -266,6 +259,28 @@ class Coverage:
             f"lies over the tool ({self.cells_covered} of {self.cells_asked} cells): "
             + "; ".join(causes)
             + where
+        )
+
+    def fold_words(self) -> str:
+        """The fold zones in words (empty when there are none)."""
+        if not self.fold_zones:
+            return ""
+        zones = ", ".join(
+            f"{1e6 * area:.0f} mm² around ({round(1e3 * x) + 0.0:.0f}, "
+            f"{round(1e3 * y) + 0.0:.0f}) mm"
+            for (x, y), area in self.fold_zones
+        )
+        return f"{len(self.fold_zones)} fold zone(s) of the flat ply lost behind a fold: {zones}"
+
+    def fold_warning(self) -> str:
+        """For a complete drape that still folded (its fold zones lie past the tool's plan,
+        e.g. behind a box corner whose walls are vertical): what the coverage does not say."""
+        if not (self.complete and self.fold_zones):
+            return ""
+        return (
+            "the net folded (behind a sharp convex vertex of the tool, where the fibre angle "
+            "changes by the vertex's angle deficit); the fabric lost there lies past the tool's "
+            "plan, so the coverage counts it as overhang: " + self.fold_words()
         )
 
     def summary(self) -> dict[str, Any]:

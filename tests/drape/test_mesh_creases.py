@@ -129,6 +129,9 @@ def test_a_box_corner_folds_in_its_shadow_and_nowhere_else() -> None:
     ((x, y), area), *rest = cover.fold_zones
     assert not rest and x > 0 and y > 0  # behind the vertex, in plan
     assert area > 0 and area == pytest.approx(cover.summary()["fold_zone_area_m2"])
+    # the coverage takes the shadow (past the tool's plan) for overhang, so a warning says it
+    assert cover.complete and cover.fold_warning().startswith("the net folded")
+    assert "1 fold zone(s)" in cover.fold_warning()
 
 
 def rounded_box_corner(radius: float, length: float = 0.3, n: int = 81) -> TriangleMesh:
