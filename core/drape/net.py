@@ -7,6 +7,8 @@ nodes of the two previous anti-diagonals |i − i0| + |j − j0| = k − 1, k �
 a front (all four quadrants stacked) is placed in one vectorised step:
 
 - in closed form when the surface offers it (:class:`ClosedFormPlacement`, e.g. the sphere);
+- exactly on a faceted tool that walks from the parents' facets (:class:`WalkingPlacement`,
+  triangle meshes): each node's facet is kept as the hint for its children;
 - otherwise on the circle where the two distance spheres meet: P(φ) = M + r(cos φ·a1 +
   sin φ·a2), a1 the surface normal seen from the chord A→B, a2 pointing away from the opposite
   node. Both distance constraints then hold exactly for every φ and only the signed distance
