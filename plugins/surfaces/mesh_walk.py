@@ -30,6 +30,8 @@ class MeshWalker:
     def __init__(self, topology: MeshTopology) -> None:
         self.topology = topology
         m = topology.n_triangles
+        # Scratch shared by every call: the kernels hold the GIL (no nogil) and leave it as
+        # they found it, so threads sharing one mesh never see it mid-query.
         self._visited = np.zeros(m, dtype=np.bool_)
         self._queue = np.empty(m, dtype=np.int64)
 
