@@ -64,6 +64,10 @@ def test_on_a_plane_a_node_completes_the_rhombus(
     )
     assert placed.status[0] == NodeStatus.PLACED
     np.testing.assert_allclose(placed.points[0], a + b - c, atol=1e-12)
+    # the plain protocol (parents' triangles located first) gives the same node
+    points, status = mesh.place_nodes(a[None], b[None], c[None], spacing)
+    assert status[0] == NodeStatus.PLACED
+    np.testing.assert_allclose(points[0], placed.points[0], atol=1e-15)
     # the triangle it names holds it, and the normal is the plane's
     weights = mesh.barycentric(placed.points, placed.faces)
     assert np.all(weights >= -1e-9)
