@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from preform.geometry.fibres import FIBRES, fibre
+from preform.geometry.sheared_cell import ShearedCell
 from preform.geometry.unit_cell import UnitCell
 from preform.material import (
     TOW_HEIGHT,
@@ -267,6 +268,17 @@ class WarpKnitFabric(FabricBase):
         return dataclasses.replace(
             cell, reference_direction=math.radians(self.reference_direction_deg())
         )
+
+    def sheared_cell(self, shear_rad: float) -> ShearedCell:
+        """The cell at shear angle ``shear_rad`` [rad] about the reference direction
+        (``sheared_warp_knit_cell``); raises ValueError on an entry with errors."""
+        from preform.plugins.warpknit.sheared_cell import sheared_warp_knit_cell
+
+        problems = self.errors()
+        if problems:
+            loc, message = problems[0]
+            raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
+        return sheared_warp_knit_cell(self.geometry, shear_rad, self.reference_direction_deg())
 
     def derived(self) -> dict[str, Any]:
         """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow

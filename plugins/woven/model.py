@@ -25,6 +25,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, ValidationInfo, field_validator
 
 from preform.geometry.fibres import FIBRES, Fibre
+from preform.geometry.sheared_cell import ShearedCell
 from preform.geometry.unit_cell import UnitCell
 from preform.material import (
     FIBRE_DENSITY,
@@ -493,6 +494,12 @@ class WovenFabric(FabricBase):
     def unit_cell(self) -> UnitCell:
         """The repeat as a generic unit cell [m]; x along the warp, reference direction 45°."""
         return self._require_valid().to_unit_cell()
+
+    def sheared_cell(self, shear_rad: float) -> ShearedCell:
+        """The woven cell at shear angle ``shear_rad`` [rad] (``sheared_woven_cell``)."""
+        from preform.plugins.woven.sheared_cell import sheared_woven_cell
+
+        return sheared_woven_cell(self._require_valid(), shear_rad)
 
     def crossover_geometry(self) -> CrossoverGeometry:
         """Mean crossover description for the friction–compaction shear law (SI units)."""
