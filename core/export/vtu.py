@@ -35,14 +35,22 @@ def _require_meshio() -> ModuleType:
     return meshio
 
 
-def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
-    """Write a unit cell's tow centrelines to ``path`` (.vtu) as line segments.
+def write_unit_cell_vtu(
+    cell: UnitCell, path: str | os.PathLike[str], *, volumes: bool = True
+) -> None:
+    """Write a unit cell's tows to ``path`` (.vtu): centre-lines and, with ``volumes``, solids.
 
-    Each tow becomes a chain of VTK "line" cells between its consecutive centreline points
-    (meshio has no poly-line cell). Points are in millimetres. Cell data on every segment:
-    ``tow`` (index of the tow in ``cell.tows``), ``kind`` (code from ``TOW_KIND_CODES``),
-    ``level``, ``width_mm`` [mm] and ``height_mm`` [mm].
+    Each tow's centreline becomes a chain of VTK "line" cells between its consecutive points
+    (meshio has no poly-line cell); with ``volumes`` a second block holds the tow as a solid of
+    wedges, its elliptical section swept along the centreline (``preform.export.tow_volumes``;
+    the solid of a straight tow holds exactly its (π/4)·w·h section times its length). Points
+    are in millimetres. Cell data on every cell of both blocks: ``tow`` (index of the tow in
+    ``cell.tows``), ``kind`` (code from ``TOW_KIND_CODES``), ``level``, ``width_mm`` [mm],
+    ``height_mm`` [mm] and ``solid`` (0 centre-line, 1 volume: ParaView's Threshold on it shows
+    one or the other).
     """
+    from preform.export.tow_volumes import tow_solids
+
     meshio = _require_meshio()
     point_blocks: list[np.ndarray] = []
     segment_blocks: list[np.ndarray] = []
@@ -60,22 +68,27 @@ def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
     if not segment_blocks:
         raise ValueError("the unit cell has no tow with two or more points to write")
 
-    tows = np.concatenate(tow_index)
     kind = np.array(
         [TOW_KIND_CODES.get(t.kind, OTHER_KIND_CODE) for t in cell.tows], dtype=np.int32
     )
     level = np.array([t.level for t in cell.tows], dtype=np.int32)
     width = MM_PER_M * np.array([t.width for t in cell.tows], dtype=float)
     height = MM_PER_M * np.array([t.height for t in cell.tows], dtype=float)
+    blocks = [("line", np.concatenate(segment_blocks), np.concatenate(tow_index), 0)]
+    if volumes:
+        solids = tow_solids(cell)
+        point_blocks.append(solids.points)
+        blocks.append(("wedge", solids.wedges + offset, solids.tow.astype(np.int32), 1))
     mesh = meshio.Mesh(
         points=MM_PER_M * np.concatenate(point_blocks),
-        cells=[("line", np.concatenate(segment_blocks))],
+        cells=[(name, cells) for name, cells, _, _ in blocks],
         cell_data={
-            "tow": [tows],
-            "kind": [kind[tows]],
-            "level": [level[tows]],
-            "width_mm": [width[tows]],
-            "height_mm": [height[tows]],
+            "tow": [tows for _, _, tows, _ in blocks],
+            "kind": [kind[tows] for _, _, tows, _ in blocks],
+            "level": [level[tows] for _, _, tows, _ in blocks],
+            "width_mm": [width[tows] for _, _, tows, _ in blocks],
+            "height_mm": [height[tows] for _, _, tows, _ in blocks],
+            "solid": [np.full(len(tows), s, dtype=np.int32) for _, _, tows, s in blocks],
         },
     )
     with atomic_path(path) as tmp:
