@@ -109,8 +109,6 @@ def wedge_volumes(points: FloatArray, wedges: IntArray) -> FloatArray:
     total = np.zeros(len(wedges))
     for a, b, c, d in tets:
         total += np.abs(
-            np.einsum(
-                "ij,ij->i", p[:, b] - p[:, a], np.cross(p[:, c] - p[:, a], p[:, d] - p[:, a])
-            )
+            np.einsum("ij,ij->i", p[:, b] - p[:, a], np.cross(p[:, c] - p[:, a], p[:, d] - p[:, a]))
         )
     return total / 6.0
