@@ -451,6 +451,13 @@ FIBRE_MODULUS = Plausible(
     "a fibre axial modulus",
     "thermoplastic yarns from ≈ 1 GPa; ultra-high-modulus pitch carbon ≈ 950 GPa",
 )
+FILAMENT_DIAMETER = Plausible(
+    1.0,
+    100.0,
+    "µm",
+    "a filament diameter",
+    "carbon filaments ≈ 5–8 µm, glass 9–24 µm, thick polymer monofilaments ≈ 50 µm",
+)
 
 
 class FabricBase(ParamsModel):

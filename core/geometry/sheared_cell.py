@@ -80,6 +80,8 @@ class TowFamily:
     fibre_area: float
     #: Jamming fraction V_j [-]: the tow compacts up to it, then thickens.
     jamming_fraction: float
+    #: Filament diameter [m] (for the permeability of the fibre bed).
+    filament_diameter: float = 17e-6
     #: Which fibre family of the drape net the tows belong to: 0 the first (warp; the layer
     #: at the reference direction − 45°), 1 the second (weft; reference + 45°).
     net_family: int = 0
@@ -157,6 +159,14 @@ class ShearedCell:
     def unit_cell(self) -> UnitCell:
         """The cell drawn at γ [m]."""
         return self.draw()
+
+    @property
+    def filament_radius(self) -> float:
+        """Fibre-volume-weighted mean filament radius [m] of the reinforcement."""
+        return 0.5 * sum(
+            f.filament_diameter * share
+            for f, share in zip(self.families, self.family_shares, strict=True)
+        )
 
     def net_family_shares(self) -> tuple[float, float]:
         """Fibre volume share [-] of the drape net's first and second fibre family."""

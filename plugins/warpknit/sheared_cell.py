@@ -69,6 +69,7 @@ def tow_families(
                 height=layer.tow.height,
                 fibre_area=area,
                 jamming_fraction=jamming_fraction(v0, material.modulus_Pa, compaction),
+                filament_diameter=layer.tow.filament_diameter or material.filament_diameter_m,
                 net_family=family,
             )
         )

@@ -46,6 +46,7 @@ def tow_families(
             height=tow.height,
             fibre_area=tow.fibre_area,
             jamming_fraction=jamming_fraction(v0, tow.fibre.modulus_Pa, compaction),
+            filament_diameter=tow.fibre.filament_diameter_m,
             net_family=0 if key.family == "warp" else 1,
         )
     return found

@@ -14,6 +14,7 @@ parameters default to the woven ``friction_compaction`` law's defaults (β = 30,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -35,6 +36,7 @@ class TowCompaction:
     packing_margin: float = 1e-2
 
 
+@lru_cache(maxsize=256)  # a table of sheared cells asks the same tows at every angle
 def jamming_fraction(
     initial_fraction: float, fibre_modulus_Pa: float, settings: TowCompaction | None = None
 ) -> float:
