@@ -17,6 +17,7 @@ from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatu
 from preform.export.atomic import atomic_path
 
 if TYPE_CHECKING:
+    from preform.drape.preform_fields import PreformField
     from preform.geometry.unit_cell import UnitCell
 
 #: Integer code of each tow kind in the ``kind`` cell array (VTK cell data must be numeric).
@@ -96,7 +97,10 @@ def write_unit_cell_vtu(
 
 
 def write_drape_vtu(
-    result: DrapeResult, energy: EnergyField | None, path: str | os.PathLike[str]
+    result: DrapeResult,
+    energy: EnergyField | None,
+    path: str | os.PathLike[str],
+    preform: PreformField | None = None,
 ) -> None:
     """Write the draped net to ``path`` (.vtu): placed nodes as points, valid cells as quads.
 
@@ -105,7 +109,12 @@ def write_drape_vtu(
     ``shear_deg`` (signed shear [deg]), ``fibre_u`` and ``fibre_v`` (unit 3-vectors),
     ``thickness_ratio`` (t/t0 = 1/cos γ [-]), ``status`` (CellStatus code), ``in_part`` (0/1) and,
     when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking`` and
-    ``past_failure`` (0/1). Without ``energy`` the thickness ratio is computed from the shear. A net
+    ``past_failure`` (0/1); with ``preform`` (the ``permeability`` output)
+    ``preform_thickness_mm`` [mm], ``fibre_volume_fraction`` [-], ``permeability_m2`` (the
+    in-plane tensor in the file's axes, 9 components [m²]), ``permeability_k1_m2`` and
+    ``permeability_k2_m2`` (principal values k1 ≥ k2 [m²]) and ``permeability_k1_dir`` (k1's unit
+    direction: ParaView's Glyph filter draws the flow's fast direction). Without ``energy`` the
+    thickness ratio is computed from the shear. A net
     with no valid cell is written as its placed nodes, one vertex cell each, without cell data.
     """
     meshio = _require_meshio()
@@ -143,6 +152,13 @@ def write_drape_vtu(
         cell_data["past_failure"] = np.asarray(energy.past_failure, dtype=np.int32)[ci, cj]
     else:
         cell_data["thickness_ratio"] = 1.0 / np.cos(shear)
+    if preform is not None:
+        cell_data["preform_thickness_mm"] = MM_PER_M * np.asarray(preform.thickness)[ci, cj]
+        cell_data["fibre_volume_fraction"] = np.asarray(preform.fibre_volume_fraction)[ci, cj]
+        cell_data["permeability_m2"] = np.asarray(preform.permeability)[ci, cj].reshape(-1, 9)
+        cell_data["permeability_k1_m2"] = np.asarray(preform.principal_permeability)[ci, cj, 0]
+        cell_data["permeability_k2_m2"] = np.asarray(preform.principal_permeability)[ci, cj, 1]
+        cell_data["permeability_k1_dir"] = np.asarray(preform.principal_direction)[ci, cj]
 
     # A file is a result users open and trust: never write a NaN or an infinity into one (the
     # drape step fails such a case first; this guards direct callers).
