@@ -196,3 +196,23 @@ def test_warp_knit_layer_off_the_net_families_is_refused() -> None:
     )
     with pytest.raises(ValueError, match="layer 1 at 0°"):
         sheared_warp_knit_cell(turned, 0.2, reference_deg=0.0)
+
+
+def test_filament_diameter_from_the_entry_else_the_fibre_table() -> None:
+    from preform.geometry.fibres import FIBRES
+    from preform.plugins.warpknit.model import WarpKnitFabric
+
+    assert sheared("satin-5hs-carbon", 10.0).filament_radius == pytest.approx(3.5e-6)
+    assert sheared("E-BX-318", 10.0).filament_radius == pytest.approx(8.5e-6)
+    entry = library().fabric("E-BX-318").model_dump(exclude_none=True)
+    entry["tow_layers"] = [
+        {**layer, "filament_diameter_um": 24.0} if k == 0 else layer
+        for k, layer in enumerate(entry["tow_layers"])
+    ]
+    for layer in entry["tow_layers"][1:]:
+        layer.pop("filament_diameter_um", None)
+    cell = WarpKnitFabric.model_validate(entry).sheared_cell(0.1)
+    # equal layers: the mean radius of 24 µm and the glass default
+    assert cell.filament_radius == pytest.approx(
+        0.25 * (24e-6 + FIBRES["glass"].filament_diameter_m)
+    )
