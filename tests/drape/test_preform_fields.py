@@ -150,3 +150,64 @@ def test_permeability_is_computed_only_when_a_scene_asks() -> None:
         assert ("permeability" in steps) is expected, outputs
         if expected and "cells_csv" in outputs:
             assert steps.index("permeability") < steps.index("cells_csv")
+
+
+def flat_net(shear_deg: float, n: int = 4):  # type: ignore[no-untyped-def]
+    """A flat net's cell fields, every cell at ``shear_deg`` (the drape's sign convention)."""
+    from types import SimpleNamespace
+
+    omega = math.radians(90.0 + shear_deg)
+    u = np.array([1.0, 0.0, 0.0])
+    v = np.array([math.cos(omega), math.sin(omega), 0.0])
+    shape = (n, n)
+    return SimpleNamespace(
+        valid=np.ones(shape, bool),
+        in_part=np.ones(shape, bool),
+        shear=np.full(shape, math.radians(shear_deg)),
+        fibre_u=np.broadcast_to(u, (*shape, 3)).copy(),
+        fibre_v=np.broadcast_to(v, (*shape, 3)).copy(),
+    )
+
+
+def context(fabric, net):  # type: ignore[no-untyped-def]
+    from types import SimpleNamespace
+
+    from preform.step import CaseContext
+
+    return CaseContext(
+        fabric=fabric,
+        scene=None,  # type: ignore[arg-type]
+        registry=None,  # type: ignore[arg-type]
+        case_dir=None,  # type: ignore[arg-type]
+        products={"drape": SimpleNamespace(result=net)},
+    )
+
+
+def test_cells_past_the_sheared_cell_are_held_at_89_degrees_and_said() -> None:
+    from preform import api
+    from preform.drape.preform_steps import run_permeability
+
+    fabric = api.fabric("plain-weave-600")
+    ctx = context(fabric, flat_net(-89.6))
+    field = run_permeability(ctx)["permeability"]
+    end = fabric.sheared_cell(math.radians(89.0))
+    np.testing.assert_allclose(field.thickness, end.thickness, rtol=1e-12)
+    assert field.beyond_table.all() and field.past_jamming.all()
+    assert any("past 89°" in w and "held" in w for w in ctx.warnings)
+    assert ctx.summary["cells_past_jamming"] == 16
+    # a cell inside the table: no warning
+    quiet = context(fabric, flat_net(20.0))
+    run_permeability(quiet)
+    assert quiet.warnings == []
+    assert quiet.summary["preform_thickness_mm_max"] == pytest.approx(0.64)
+
+
+def test_a_fabric_without_a_sheared_cell_fails_the_case_in_words() -> None:
+    from types import SimpleNamespace
+
+    from preform.drape.preform_steps import run_permeability
+    from preform.pipeline.status import CaseFailure
+
+    bare = SimpleNamespace(name="x", architecture="felt", sheared_cell=lambda _g: None)
+    with pytest.raises(CaseFailure, match="'felt' has no sheared unit cell"):
+        run_permeability(context(bare, flat_net(10.0)))
