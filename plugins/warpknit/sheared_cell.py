@@ -61,6 +61,10 @@ def tow_families(
         material = fibre(layer.tow.fibre)
         area = fibre_area_m2(layer.tow.linear_density_tex, material.density_g_cm3)
         v0 = area / (math.pi / 4.0 * layer.tow.width * layer.tow.height)
+        try:
+            v_jam = jamming_fraction(v0, material.modulus_Pa, compaction)
+        except ValueError as error:
+            raise ValueError(f"tow_layers.{i}: {error}") from None
         families.append(
             TowFamily(
                 name=f"layer {i + 1} {layer.orientation_deg:+g}°",
@@ -68,7 +72,7 @@ def tow_families(
                 width=layer.tow.width,
                 height=layer.tow.height,
                 fibre_area=area,
-                jamming_fraction=jamming_fraction(v0, material.modulus_Pa, compaction),
+                jamming_fraction=v_jam,
                 filament_diameter=layer.tow.filament_diameter or material.filament_diameter_m,
                 net_family=family,
             )

@@ -39,13 +39,17 @@ def tow_families(
             continue
         spacing = cell.tow_spacing_warp if key.family == "warp" else cell.tow_spacing_weft
         v0 = tow.volume_fraction
+        try:
+            v_jam = jamming_fraction(v0, tow.fibre.modulus_Pa, compaction)
+        except ValueError as error:
+            raise ValueError(f"tow_types.{tow.name} ({key.family}-wise): {error}") from None
         found[name] = TowFamily(
             name=f"{key.family} {tow.name}",
             spacing=spacing,
             width=tow.width,
             height=tow.height,
             fibre_area=tow.fibre_area,
-            jamming_fraction=jamming_fraction(v0, tow.fibre.modulus_Pa, compaction),
+            jamming_fraction=v_jam,
             filament_diameter=tow.fibre.filament_diameter_m,
             net_family=0 if key.family == "warp" else 1,
         )

@@ -216,3 +216,11 @@ def test_filament_diameter_from_the_entry_else_the_fibre_table() -> None:
     assert cell.filament_radius == pytest.approx(
         0.25 * (24e-6 + FIBRES["glass"].filament_diameter_m)
     )
+
+
+def test_a_tow_denser_than_packing_is_refused_and_named(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    entry = library().fabric("plain-weave-600").model_dump(exclude_none=True)
+    entry["tow_types"]["glass-1190"]["height_mm"] = 0.2  # 1190 tex in 3.1 × 0.2 mm: Vf 0.96
+    fabric = type(library().fabric("plain-weave-600")).model_validate(entry)
+    with pytest.raises(ValueError, match=r"tow_types.glass-1190 \(warp-wise\).*0.958.*packing"):
+        fabric.sheared_cell(0.3)
