@@ -17,8 +17,10 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from preform.geometry.fibres import FIBRES, fibre
+from preform.geometry.sheared_cell import ShearedCell
 from preform.geometry.unit_cell import UnitCell
 from preform.material import (
+    FILAMENT_DIAMETER,
     TOW_HEIGHT,
     TOW_LINEAR_DENSITY,
     TOW_SPACING,
@@ -122,7 +124,16 @@ class TowLayerEntry(_Part):
         gt=0.0, description="Tow width in the fabric plane [mm]."
     )
     tow_height_mm: Annotated[float, TOW_HEIGHT] = Field(
-        gt=0.0, description="Tow height (thickness) [mm]."
+        gt=0.0,
+        description="Tow height (thickness of one tow as built, in the unit cell) [mm]. The "
+        "cell's thickness (derived thickness_mm) stacks these with the stitch threads; the "
+        "sheared cell, and the draped preform's thickness, Vf and permeability, start from it.",
+    )
+    filament_diameter_um: Annotated[float | None, FILAMENT_DIAMETER] = Field(
+        default=None,
+        gt=0.0,
+        description="Filament diameter [µm], for the preform's permeability; default: the "
+        "fibre's typical value (illustrative).",
     )
     offset_mm: Annotated[float | None, TOW_OFFSET] = Field(
         default=None,
@@ -235,6 +246,9 @@ class WarpKnitFabric(FabricBase):
                     linear_density_tex=t.linear_density_tex,
                     width=t.tow_width_mm * MM,
                     height=t.tow_height_mm * MM,
+                    filament_diameter=None
+                    if t.filament_diameter_um is None
+                    else t.filament_diameter_um * 1e-6,
                 ),
                 offset=(t.offset_mm or 0.0) * MM,
             )
@@ -267,6 +281,17 @@ class WarpKnitFabric(FabricBase):
         return dataclasses.replace(
             cell, reference_direction=math.radians(self.reference_direction_deg())
         )
+
+    def sheared_cell(self, shear_rad: float) -> ShearedCell:
+        """The cell at shear angle ``shear_rad`` [rad] about the reference direction
+        (``sheared_warp_knit_cell``); raises ValueError on an entry with errors."""
+        from preform.plugins.warpknit.sheared_cell import sheared_warp_knit_cell
+
+        problems = self.errors()
+        if problems:
+            loc, message = problems[0]
+            raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
+        return sheared_warp_knit_cell(self.geometry, shear_rad, self.reference_direction_deg())
 
     def derived(self) -> dict[str, Any]:
         """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow

@@ -54,6 +54,7 @@ WOVEN: dict[str, Any] = {
             "height_mm": 0.32,
             "fibre_density_g_cm3": 2.55,
             "fibre_modulus_GPa": 72.0,
+            "filament_diameter_um": 17.0,
         }
     },
     "warp": {"tow_spacing_mm": 4.0, "tow_type": "glass"},
@@ -90,6 +91,7 @@ WARP_KNIT: dict[str, Any] = {
             "tow_width_mm": 2.58,
             "tow_height_mm": 0.39,
             "offset_mm": 0.5,
+            "filament_diameter_um": 17.0,
         },
         {
             "orientation_deg": -45.0,
