@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from preform.plugins.woven.crossover import CrossoverGeometry
-from preform.plugins.woven.geometry import TowKey, WovenUnitCell
+from preform.plugins.woven.geometry import Family, TowKey, WovenUnitCell
 
 #: Rises below this share of the tow's height are level (rounding of stacked heights).
 LEVEL_TOLERANCE = 1e-9
@@ -33,12 +33,14 @@ def wrap_rises(cell: WovenUnitCell) -> tuple[tuple[tuple[float, ...], ...], ...]
             paths[key] = [float(z) for z in cell.tow_points(key)[1:-1, 2]]
         return paths[key]
 
-    warp, weft = [], []
+    warp: list[tuple[float, ...]] = []
+    weft: list[tuple[float, ...]] = []
     for c in contacts:
-        for family, position, level, over, out in (
+        sides: tuple[tuple[Family, int, int, bool, list[tuple[float, ...]]], ...] = (
             ("warp", c.warp_position, c.warp_level, c.warp_over, warp),
             ("weft", c.weft_position, c.weft_level, not c.warp_over, weft),
-        ):
+        )
+        for family, position, level, over, out in sides:
             z = heights(TowKey(family, position, level))
             k = c.weft_position if family == "warp" else c.warp_position
             here, n = z[k], len(z)
