@@ -173,3 +173,19 @@ def test_one_geometry_default_uses_the_cells_tows() -> None:
     assert free.initial_fraction == pytest.approx(
         cell.tow_type(cell.tow_keys()[0]).fibre_area / (2 / 3 * 3.1e-3 * 1.0e-3), rel=1e-12
     )
+
+
+def test_straight_stuffers_press_nothing_binders_do() -> None:
+    """A 3D orthogonal weave: stuffers run straight (no wrapping arcs at any contact), binders
+    wrap the weft they pass round."""
+    cell = fabric({"pattern": "orthogonal", "stuffer_layers": 2, "weft_layers": 3}).woven_unit_cell
+    warp, _ = wrap_rises(cell)
+    binders = set(cell.weave.binder_levels)
+    stuffer_wraps = [
+        r for c, r in zip(cell.contacts(), warp, strict=True) if c.warp_level not in binders
+    ]
+    binder_wraps = [
+        r for c, r in zip(cell.contacts(), warp, strict=True) if c.warp_level in binders
+    ]
+    assert stuffer_wraps and all(r == () for r in stuffer_wraps)
+    assert binder_wraps and any(len(r) > 0 for r in binder_wraps)
