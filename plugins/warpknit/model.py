@@ -324,8 +324,24 @@ class WarpKnitFabric(FabricBase):
         }
 
     def errors(self) -> list[tuple[Location, str]]:
-        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors."""
-        return self.geometry.problems()
+        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors;
+        a thread without the strain at break the ``stitch_yarn`` law needs."""
+        problems = list(self.geometry.problems())
+        law = self.shear_law
+        if getattr(law, "law", None) == "stitch_yarn" and (
+            getattr(law, "yarn_failure_strain", None) is None
+        ):
+            problems += [
+                (
+                    ("threads", k, "failure_strain"),
+                    "the stitch_yarn shear law needs the stitching yarn's strain at break: give "
+                    "failure_strain here (regular polyester filament ≈ 0.2–0.3) or "
+                    "yarn_failure_strain in the shear_law",
+                )
+                for k, thread in enumerate(self.threads)
+                if thread.failure_strain is None
+            ]
+        return problems
 
     def check(self) -> list[tuple[Location, str]]:
         """Warnings: tows no stitch crosses, cells that fit poorly, wide overlaps, and a

@@ -25,7 +25,7 @@ route for measured data), this law derives the asymmetric response from the cons
   legs, 2T, over the patch of fabric it holds (one stitch length × one thread pitch). The plies
   (the two fibre families) turn against each other by γ at each stitch point, so each patch
   resists with μ·2T·R̄, R̄ the mean distance from the patch centre over the patch (a
-  rectangle; Gauss–Legendre, exact to rounding); torque per area μ·2T·R̄·loops/A_repeat.
+  rectangle, closed form); torque per area μ·2T·R̄·loops/A_repeat.
 * Failure: a level's stitch breaks at the first angle, in each sense, where ε reaches the yarn's
   strain at break ε_b (thread entry ``failure_strain`` or the law's ``yarn_failure_strain``).
   From there that level carries no tension, no energy is added and its friction is gone; the
@@ -53,6 +53,7 @@ from pydantic import BaseModel, Field
 
 from preform.geometry.fibres import fibre, fibre_area_m2
 from preform.material import ParamsModel, Plausible
+from preform.plugins.warpknit.model import YARN_FAILURE_STRAIN
 from preform.shear.energy import QuadratureBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import SignedShearLaw
@@ -69,13 +70,6 @@ PLY_FRICTION = Plausible(
     "an inter-ply friction coefficient",
     "dry glass and carbon plies slide on each other with μ ≈ 0.2–0.4",
 )
-FAILURE_STRAIN = Plausible(
-    0.005,
-    1.0,
-    "",
-    "a stitching yarn's strain at break",
-    "polyester filament yarns break at ≈ 0.10–0.35 strain, glass at ≈ 0.03–0.05",
-)
 
 
 class StitchYarnParams(ParamsModel):
@@ -88,7 +82,7 @@ class StitchYarnParams(ParamsModel):
         ge=0.0,
         description="Friction coefficient μ between the plies the stitch clamps [-].",
     )
-    yarn_failure_strain: Annotated[float | None, FAILURE_STRAIN] = Field(
+    yarn_failure_strain: Annotated[float | None, YARN_FAILURE_STRAIN] = Field(
         default=None,
         gt=0.0,
         description="Strain at break of every stitching yarn [-], for threads that do not "
@@ -104,14 +98,18 @@ def net_stretches(gamma: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return np.asarray(c + s, dtype=float), np.asarray(c - s, dtype=float)
 
 
-def rectangle_mean_radius(length: float, width: float, nodes: int = 24) -> float:
-    """Mean distance [m] from the centre over a rectangle of sides ``length`` × ``width`` [m]
-    (Gauss–Legendre on each quadrant, where the distance is smooth)."""
-    x, w = np.polynomial.legendre.leggauss(nodes)
-    u = 0.25 * length * (x + 1.0)  # one quadrant: [0, L/2] × [0, W/2]
-    v = 0.25 * width * (x + 1.0)
-    r = np.hypot(u[:, None], v[None, :])
-    return float((w[:, None] * w[None, :] * r).sum() / 4.0)
+def rectangle_mean_radius(length: float, width: float) -> float:
+    """Mean distance [m] from the centre over a rectangle of sides ``length`` × ``width`` [m].
+
+    Closed form, half-sides p, q and half-diagonal d: [2pq·d + p³ ln((q + d)/p) +
+    q³ ln((p + d)/q)] / (6pq) (integrating r over the four triangles centre–edge; a square of
+    side w gives w(√2 + ln(1 + √2))/6).
+    """
+    p, q = 0.5 * length, 0.5 * width
+    d = math.hypot(p, q)
+    return (2 * p * q * d + p**3 * math.log((q + d) / p) + q**3 * math.log((p + d) / q)) / (
+        6 * p * q
+    )
 
 
 @dataclass(frozen=True)

@@ -159,3 +159,25 @@ def test_paper_qualitatively_chain_fails_near_35_tricot_smoother(library: Any) -
     gap_chain = np.abs(chain.torque(g) + chain.torque(-g))[g < chain.failure_angle]
     gap_tricot = np.abs(tricot.torque(g) + tricot.torque(-g))
     assert gap_tricot.max() < 0.1 * gap_chain.max()
+
+
+def test_patch_radius_matches_the_closed_form_of_a_rectangle() -> None:
+    """The loop patch's mean radius against the woven law's closed form (a separate derivation) for a
+    crossover parallelogram, which at γ = 0 is the same rectangle."""
+    from preform.plugins.warpknit.stitch_law import rectangle_mean_radius
+    from preform.plugins.woven.shear import contact_mean_radius
+
+    for length, width in ((2.5e-3, 5.08e-3), (1e-3, 1e-3), (4e-3, 0.5e-3)):
+        closed = float(contact_mean_radius(length, width, 0.0))
+        assert rectangle_mean_radius(length, width) == pytest.approx(closed, rel=1e-9)
+
+
+def test_a_thread_without_its_strain_at_break_is_a_located_error(library: Any) -> None:
+    data = library.fabric("E-BX-318").model_dump(exclude_none=True)
+    data["shear_law"] = params()
+    del data["threads"][0]["failure_strain"]
+    fabric = WarpKnitFabric.model_validate(data)
+    ((where, message),) = fabric.errors()
+    assert where == ("threads", 0, "failure_strain") and "strain at break" in message
+    data["shear_law"] = params(yarn_failure_strain=0.2)  # given in the law instead
+    assert WarpKnitFabric.model_validate(data).errors() == []
