@@ -293,7 +293,7 @@ class FrictionCompactionLaw(SignedShearLaw):
         packing = min(packs)
         #: Angle [rad] where the tows reach the guarded packing cap (before any jamming force).
         self.tows_packed_angle: float = packing
-        jam = self._force_jamming_angle(params.jamming_force_N_per_mm * 1000.0, min(locks), packing)
+        jam = self._force_jamming_angle(params.jamming_force_N_per_mm * 1000.0, packing)
         #: Jamming angle [rad]: packing cap or jamming force, whichever comes first.
         first = min(packing, jam)
         self.packing_angle: float | None = None if first >= MAX_SHEAR - 1e-12 else first
@@ -311,24 +311,21 @@ class FrictionCompactionLaw(SignedShearLaw):
             total = total + part.torque_per_area(u)
         return total
 
-    def _force_jamming_angle(self, force_N_per_m: float, start: float, stop: float) -> float:
+    def _force_jamming_angle(self, force_N_per_m: float, stop: float) -> float:
         """First angle [rad] in [0, stop] where C/cos γ reaches ``force_N_per_m``; MAX_SHEAR if
-        none. A grid finds the first crossing, bisection refines it."""
-        grid = np.linspace(0.0, stop, 2049)
-        force = self._free_torque(grid) / np.cos(grid)
-        above = np.nonzero(force >= force_N_per_m)[0]
-        if above.size == 0:
-            return MAX_SHEAR
-        k = int(above[0])
-        if k == 0:
-            return 0.0
-        lo, hi = float(grid[k - 1]), float(grid[k])
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            if float(self._free_torque(np.asarray(mid))) / math.cos(mid) >= force_N_per_m:
-                hi = mid
-            else:
-                lo = mid
+        none. A grid finds the first crossing (the force rises monotonically past locking);
+        four finer grids inside the bracket refine it to ~1e-12 rad, one vector call each."""
+        lo, hi = 0.0, stop
+        for level in range(5):
+            grid = np.linspace(lo, hi, 257)
+            force = self._free_torque(grid) / np.cos(grid)
+            above = np.nonzero(force >= force_N_per_m)[0]
+            if above.size == 0:
+                return MAX_SHEAR if level == 0 else hi
+            k = int(above[0])
+            if k == 0:
+                return float(grid[0])
+            lo, hi = float(grid[k - 1]), float(grid[k])
         return hi
 
     def torque_magnitude(self, u: FloatArray) -> FloatArray:
