@@ -90,6 +90,20 @@ STITCH_LINEAR_DENSITY = Plausible(
     "a stitching-yarn linear density",
     "stitch yarns are 2–30 tex (76 dtex polyester = 7.6 tex), glass stitching up to ≈ 70 tex",
 )
+YARN_FAILURE_STRAIN = Plausible(
+    0.005,
+    1.0,
+    "",
+    "a stitching yarn's strain at break",
+    "polyester filament yarns break at ≈ 0.10–0.35 strain, glass at ≈ 0.03–0.05",
+)
+YARN_MODULUS = Plausible(
+    0.1,
+    300.0,
+    "GPa",
+    "a stitching yarn's tensile modulus",
+    "polyester filament ≈ 5–15 GPa, aramid ≈ 60–120 GPa, glass ≈ 72 GPa",
+)
 AREAL_DENSITY = Plausible(
     5.0,
     20000.0,
@@ -178,6 +192,18 @@ class ThreadLevelEntry(_Part):
     )
     fibre: str | None = Field(
         default=None, description="Fibre of the stitching yarn (default polyester)."
+    )
+    failure_strain: Annotated[float | None, YARN_FAILURE_STRAIN] = Field(
+        default=None,
+        gt=0.0,
+        description="Tensile strain at break of the stitching yarn [-] (the stitch_yarn law "
+        "breaks the stitch there); none: the law needs it in its own block.",
+    )
+    yarn_modulus_GPa: Annotated[float | None, YARN_MODULUS] = Field(
+        default=None,
+        gt=0.0,
+        description="Tensile modulus of the stitching yarn [GPa], linear to break; default the "
+        "fibre's modulus (polyester 10 GPa).",
     )
 
     @field_validator("knitting_sequence")
@@ -323,8 +349,24 @@ class WarpKnitFabric(FabricBase):
         }
 
     def errors(self) -> list[tuple[Location, str]]:
-        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors."""
-        return self.geometry.problems()
+        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors;
+        a thread without the strain at break the ``stitch_yarn`` law needs."""
+        problems = list(self.geometry.problems())
+        law = self.shear_law
+        if getattr(law, "law", None) == "stitch_yarn" and (
+            getattr(law, "yarn_failure_strain", None) is None
+        ):
+            problems += [
+                (
+                    ("threads", k, "failure_strain"),
+                    "the stitch_yarn shear law needs the stitching yarn's strain at break: give "
+                    "failure_strain here (regular polyester filament ≈ 0.2–0.3) or "
+                    "yarn_failure_strain in the shear_law",
+                )
+                for k, thread in enumerate(self.threads)
+                if thread.failure_strain is None
+            ]
+        return problems
 
     def check(self) -> list[tuple[Location, str]]:
         """Warnings: tows no stitch crosses, cells that fit poorly, wide overlaps, and a
