@@ -261,13 +261,17 @@ class DaskEngine(Engine):
         threads = sum(self._client.nthreads().values()) or 1
         self.capacity = max(1, threads)
         self._running: dict[Future[Any], Any] = {}
-        # each worker imports and loads what the cases need while this process goes on: a
-        # task pinned to each worker, not waited for (its cases queue behind it; one that
-        # fails costs nothing but the imports its first case then pays)
-        self._warming = [
+        # each worker imports and loads what the cases need, all at once, in a task pinned to
+        # it; waited for (a failure only costs the first case its imports): cases submitted
+        # behind a busy worker's warm-up could queue two to a worker, and a case that kills
+        # its worker would take the other one with it (KilledWorker)
+        from distributed import wait as dask_wait
+
+        warming = [
             self._client.submit(warm_dask_worker, preload, warm_up, workers=[address], pure=False)
             for address in self._client.nthreads()
         ]
+        dask_wait(warming)
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
         remote = self._client.submit(fn, *args, pure=False)
