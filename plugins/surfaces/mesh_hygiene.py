@@ -23,17 +23,24 @@ this order, each step working on the previous one's result:
    out of the solid (positive enclosed volume) and an open piece so that its area-weighted
    mean normal points up (+z, the side the fabric lies on), the convention of
    ``preform.plugins.surfaces.mesh``.
-7. **Slivers** (smallest angle below :data:`SLIVER_ANGLE_DEG`) are counted and located, not
+7. **Long edges** (only when a largest edge length is given): triangles are split (an edge
+   at its midpoint, or a triangle into four) until no edge is longer. New vertices lie on the
+   old facets, so the surface is exactly what it was; only its triangles are smaller. A CAD
+   tessellation covers a large flat face with a few long triangles, and closest-point
+   queries, which bound their search by the largest triangle, slow down by the number of
+   triangles there.
+8. **Slivers** (smallest angle below :data:`SLIVER_ANGLE_DEG`) are counted and located, not
    changed: they are real surface, and removing them would open holes.
 
 The :class:`HygieneReport` counts each of these, and says in words what was repaired
-(:meth:`HygieneReport.repairs`) for the case's console and summary.
+(:meth:`HygieneReport.repairs`, for the case's console and summary) and what was left as it
+is (:meth:`HygieneReport.remarks`: slivers, for the summary).
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,6 +56,8 @@ DEFAULT_WELD_TOLERANCE_REL = 1e-6
 #: at 1° the longest edge is about 57 × the triangle's height, where closest-point and
 #: circle-intersection arithmetic loses about two digits).
 SLIVER_ANGLE_DEG = 1.0
+#: Rounds of long-edge splitting before giving up (each halves the longest edges).
+_MAX_REFINE_ROUNDS = 64
 #: Rounds of T-junction splitting before giving up (each round splits every open edge at all
 #: the vertices lying on it, so one round normally suffices; the second confirms).
 _MAX_SPLIT_ROUNDS = 8
@@ -74,6 +83,10 @@ class HygieneReport:
     flipped_triangles: int = 0
     #: Pieces turned over whole (normals pointed into the solid, or down on an open tool).
     pieces_turned: int = 0
+    #: Largest edge length asked for [m] (None: triangles kept as large as they came).
+    max_edge_m: float | None = None
+    #: Triangles added by splitting long edges (step 7).
+    refined_triangles: int = 0
     slivers: int = 0
     #: Where the thinnest sliver is [m] and its smallest angle [deg] (None without slivers).
     worst_sliver_at_m: tuple[float, float, float] | None = None
@@ -82,10 +95,9 @@ class HygieneReport:
     open_edges: int = 0
     triangles: int = 0
     vertices: int = 0
-    notes: list[str] = field(default_factory=list)
 
     def repairs(self) -> list[str]:
-        """What was repaired or is worth knowing, in words (empty for a clean mesh)."""
+        """What was repaired, in words (empty for a clean mesh)."""
         out = []
         tol = f"{self.weld_tolerance_m / MM:.3g} mm"
         if self.cracks_welded:
@@ -115,6 +127,18 @@ class HygieneReport:
                 f"turned {self.pieces_turned} piece(s) over so the normals point out of the "
                 "tool (up for an open surface, outward for a closed one)"
             )
+        return out
+
+    def remarks(self) -> list[str]:
+        """What is worth knowing about the mesh but was left as it is (slivers, separate pieces),
+        in words."""
+        out = []
+        if self.refined_triangles:
+            assert self.max_edge_m is not None
+            out.append(
+                f"split long triangles into {self.refined_triangles} more so no edge exceeds "
+                f"{self.max_edge_m / MM:.3g} mm (the surface is unchanged)"
+            )
         if self.slivers:
             assert self.worst_sliver_at_m is not None and self.worst_sliver_angle_deg is not None
             x, y, z = (c / MM for c in self.worst_sliver_at_m)
@@ -123,7 +147,11 @@ class HygieneReport:
                 f"thinnest {self.worst_sliver_angle_deg:.2g}° at ({x:.4g}, {y:.4g}, {z:.4g}) "
                 "mm) kept as they are; a finer or cleaner tessellation avoids them"
             )
-        out.extend(self.notes)
+        if self.pieces > 1:
+            out.append(
+                f"the tool is {self.pieces} separate pieces (no shared edge between them); a "
+                "net cannot cross a gap between pieces"
+            )
         return out
 
     def summary(self) -> dict[str, float | int | str]:
@@ -140,10 +168,13 @@ class HygieneReport:
             "mesh_t_junctions_split": self.t_junctions_split,
             "mesh_flipped_triangles": self.flipped_triangles,
             "mesh_pieces_turned": self.pieces_turned,
+            "mesh_max_edge_mm": float("nan") if self.max_edge_m is None else self.max_edge_m / MM,
+            "mesh_refined_triangles": self.refined_triangles,
             "mesh_slivers": self.slivers,
             "mesh_pieces": self.pieces,
             "mesh_open_edges": self.open_edges,
             "mesh_repairs": "; ".join(self.repairs()) or "none",
+            "mesh_remarks": "; ".join(self.remarks()) or "none",
         }
 
 
@@ -168,9 +199,12 @@ def repair(
     vertices: FloatArray,
     faces: IntArray,
     weld_tolerance_m: float | None = None,
+    *,
+    max_edge_m: float | None = None,
 ) -> RepairedMesh:
     """Repair a triangle mesh (module docstring); ``weld_tolerance_m`` [m] defaults to
-    :data:`DEFAULT_WELD_TOLERANCE_REL` × the bounding-box diagonal.
+    :data:`DEFAULT_WELD_TOLERANCE_REL` × the bounding-box diagonal; ``max_edge_m`` [m], if
+    given, is the longest edge left (step 7).
 
     Raises :class:`MeshRefused` for what cannot be repaired (non-manifold edges, a surface
     that cannot be wound consistently, nothing left with area), saying where in mm and which
@@ -193,10 +227,13 @@ def repair(
         weld_tolerance_m = DEFAULT_WELD_TOLERANCE_REL * diagonal
     if not weld_tolerance_m >= 0.0:
         raise ValueError(f"weld tolerance must be ≥ 0 m, got {weld_tolerance_m!r}")
+    if max_edge_m is not None and not (np.isfinite(max_edge_m) and max_edge_m > 0.0):
+        raise ValueError(f"largest edge must be a positive length [m], got {max_edge_m!r}")
     report = HygieneReport(
         triangles_read=int(faces.shape[0]),
         vertices_read=int(vertices.shape[0]),
         weld_tolerance_m=float(weld_tolerance_m),
+        max_edge_m=None if max_edge_m is None else float(max_edge_m),
     )
     origin = np.arange(faces.shape[0], dtype=np.int64)
 
@@ -229,6 +266,10 @@ def repair(
         )
     report.open_edges = int(np.count_nonzero(count == 1))
     faces = _orient(vertices, faces, edges, edge_of_face, count, origin, report)
+    if max_edge_m is not None:
+        before = faces.shape[0]
+        vertices, faces, origin = _split_long_edges(vertices, faces, origin, max_edge_m)
+        report.refined_triangles = int(faces.shape[0] - before)
     _slivers(vertices, faces, report)
     vertices, faces = _drop_unused(vertices, faces)
     report.triangles, report.vertices = int(faces.shape[0]), int(vertices.shape[0])
@@ -428,6 +469,56 @@ def _orient(
     out = faces.copy()
     out[final] = out[final][:, ::-1]
     return out
+
+
+def _split_long_edges(
+    vertices: FloatArray, faces: IntArray, origin: IntArray, max_edge: float
+) -> tuple[FloatArray, IntArray, IntArray]:
+    """Split triangles until no edge is longer than ``max_edge`` [m] (module docstring, 7).
+
+    Each round marks the long edges, then also the third edge of every triangle with two
+    marked (until none has two), puts a vertex at each marked edge's midpoint, and splits a
+    triangle with one marked edge in two (through the opposite corner) and one with three in
+    four. Neighbours split the shared edge at the same midpoint, so the mesh stays conforming;
+    windings are kept."""
+    for _ in range(_MAX_REFINE_ROUNDS):
+        edges, edge_of_face = _edges(faces)
+        length = np.linalg.norm(vertices[edges[:, 1]] - vertices[edges[:, 0]], axis=1)
+        marked = length > max_edge
+        if not marked.any():
+            break
+        while True:
+            two = np.count_nonzero(marked[edge_of_face], axis=1) == 2
+            if not two.any():
+                break
+            marked[edge_of_face[two]] = True
+        midpoint = np.full(edges.shape[0], -1, dtype=np.int64)
+        midpoint[marked] = vertices.shape[0] + np.arange(np.count_nonzero(marked))
+        vertices = np.vstack(
+            [vertices, 0.5 * (vertices[edges[marked, 0]] + vertices[edges[marked, 1]])]
+        )
+        mid = midpoint[edge_of_face]  # (F, 3): midpoint of edge k = corner k → k + 1, or -1
+        n_marked = np.count_nonzero(mid >= 0, axis=1)
+        keep = n_marked == 0
+        pieces, owners = [faces[keep]], [origin[keep]]
+        one = np.flatnonzero(n_marked == 1)
+        k = np.argmax(mid[one] >= 0, axis=1)
+        a = faces[one, k]
+        b = faces[one, (k + 1) % 3]
+        c = faces[one, (k + 2) % 3]
+        m = mid[one, k]
+        pieces += [np.stack([a, m, c], axis=1), np.stack([m, b, c], axis=1)]
+        owners += [origin[one], origin[one]]
+        all3 = np.flatnonzero(n_marked == 3)
+        a, b, c = faces[all3, 0], faces[all3, 1], faces[all3, 2]
+        ab, bc, ca = mid[all3, 0], mid[all3, 1], mid[all3, 2]
+        pieces += [
+            np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))
+        ]
+        owners += [origin[all3]] * 4
+        faces = np.concatenate(pieces).astype(np.int64)
+        origin = np.concatenate(owners).astype(np.int64)
+    return vertices, faces, origin
 
 
 def _slivers(vertices: FloatArray, faces: IntArray, report: HygieneReport) -> None:

@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane
 from preform.plugins.surfaces.cad import (
+    DEFAULT_MAX_EDGE_REL,
     DEFAULT_TESSELLATION_ANGLE_DEG,
     DEFAULT_TESSELLATION_TOLERANCE_MM,
     cad_format,
@@ -194,11 +195,19 @@ class MeshTool(BaseModel):
         description="Vertices closer than this [mm] are welded into one, closing cracks "
         "(default: 1e-6 × the mesh's bounding-box diagonal; 0: exact copies only).",
     )
-    tessellation_tolerance_mm: float | None = Field(
+    max_edge_mm: float | None = Field(
         default=None,
         gt=0,
+        description="Split triangles until no edge is longer than this [mm]; the surface stays "
+        "the same, closest-point queries get faster (default: none for STL/OBJ, 1/20 of the "
+        "bounding-box diagonal for STEP/IGES).",
+    )
+    tessellation_tolerance_mm: float | None = Field(
+        default=None,
+        ge=0.001,
         description="STEP/IGES only: largest distance between the facets and the CAD surface "
-        f"[mm] (default {DEFAULT_TESSELLATION_TOLERANCE_MM:g}).",
+        f"[mm] (default {DEFAULT_TESSELLATION_TOLERANCE_MM:g}; at least 0.001: the triangle "
+        "count grows as 1/tolerance).",
     )
     tessellation_angle_deg: float | None = Field(
         default=None,
@@ -223,6 +232,13 @@ class MeshTool(BaseModel):
                         "tessellated"
                     )
         return self
+
+    def tessellation_tolerance_in_force_mm(self) -> float | None:
+        """The tessellation tolerance [mm] a STEP or IGES file is read with (the scene's or
+        the default); None for an STL or OBJ file, which comes tessellated."""
+        if cad_format(self.file) is None:
+            return None
+        return self.tessellation_tolerance_mm or DEFAULT_TESSELLATION_TOLERANCE_MM
 
     def preflight(self, base_dir: str, limits: Any = None) -> tuple[Any, list[Problem]]:
         """No surface (reading waits for the step) and the problems of the mesh file."""
@@ -300,11 +316,12 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
     path = resolve_tool_file(p.file, base_dir)
     max_bytes = _max_bytes(limits)
     weld = None if p.weld_tolerance_mm is None else p.weld_tolerance_mm * MM
+    max_edge = None if p.max_edge_mm is None else p.max_edge_mm * MM
     kind = cad_format(path)
     labels: Any = None
     names: dict[int, str] = {}
     if kind is not None:
-        tolerance = p.tessellation_tolerance_mm or DEFAULT_TESSELLATION_TOLERANCE_MM
+        tolerance = p.tessellation_tolerance_in_force_mm() or DEFAULT_TESSELLATION_TOLERANCE_MM
         angle = p.tessellation_angle_deg or DEFAULT_TESSELLATION_ANGLE_DEG
         cad = read_cad(path, tolerance * MM, float(np.radians(angle)), max_bytes=max_bytes)
         vertices, faces, labels, names = (
@@ -319,6 +336,10 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
             else ("mm", f"not declared in the {kind} file: OpenCASCADE's default")
         )
         source = ToolSource(str(p.file), kind, unit, unit_from, tolerance * MM, np.radians(angle))
+        if max_edge is None:
+            extent = vertices[np.unique(faces)]
+            diagonal = float(np.linalg.norm(extent.max(axis=0) - extent.min(axis=0)))
+            max_edge = DEFAULT_MAX_EDGE_REL * diagonal
     else:
         unit = p.units or "mm"
         unit_from = "scene tool.units" if p.units else "default (scene gives no tool.units)"
@@ -335,7 +356,7 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
             vertices, faces = stl_triangles(path, scale, max_bytes=max_bytes)
         source = ToolSource(str(p.file), kind, unit, unit_from)
     try:
-        repaired = repair(vertices, faces, weld)
+        repaired = repair(vertices, faces, weld, max_edge_m=max_edge)
     except MeshRefused as error:
         raise MeshRefused(f"{path}: {error}") from None
     return ToolMesh(repaired, labels, names, source)

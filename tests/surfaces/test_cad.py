@@ -121,28 +121,63 @@ def test_step_and_stl_of_one_tool_drape_alike_within_the_tessellation(cad_dir):
     assert gaps[1] < 0.5e-3
 
 
-def test_bundled_hat_stiffener_step_and_stl_are_one_surface():
-    step = build_mesh(MeshTool(surface="mesh", file="hat_stiffener.step"), ".")
-    stl = build_mesh(MeshTool(surface="mesh", file="hat_stiffener.stl"), ".")
-    assert step.source.unit == "mm" and step.source.unit_from == "declared in the STEP file"
-    assert step.n_faces == 6
-    for s in (step, stl):
-        assert s.hygiene.open_edges == 4 and s.hygiene.pieces == 1
-    probe = np.random.default_rng(1).uniform([-0.2, -0.1], [0.2, 0.1], (200, 2))
-    a, over_a = step.point_at_plan(probe)
-    b, over_b = stl.point_at_plan(probe)
-    assert over_a.all() and over_b.all()
-    np.testing.assert_allclose(a, b, atol=1e-6)  # float32 STL
+@pytest.fixture(scope="module")
+def hat():
+    return build_mesh(MeshTool(surface="mesh", file="hat_stiffener.step"), ".")
 
 
-def test_faces_select_the_part(cad_dir):
-    tool = build_mesh(MeshTool(surface="mesh", file="hat_stiffener.step"), ".")
-    crown = tool.face_part([2])
-    assert crown.area_m2 == pytest.approx(0.2 * 0.04)
-    level = crown.level(np.array([[0.0, 0.0, 0.03], [0.0, 0.05, 0.0], [0.09, 0.0, 0.03]]))
-    assert level[0] == pytest.approx(0.02) and level[1] < 0 and level[2] == pytest.approx(0.01)
-    with pytest.raises(ValueError, match="no face 9"):
-        tool.face_part([9])
+def test_bundled_hat_stiffener_is_the_tool_its_script_describes(hat):
+    assert hat.source.unit == "mm" and hat.source.unit_from == "declared in the STEP file"
+    # One closed solid once its faces' shared edges are joined (OpenCASCADE leaves T-junctions
+    # where a fillet meets a plane: hygiene splits them).
+    assert hat.hygiene.open_edges == 0 and hat.hygiene.pieces == 1
+    assert hat.hygiene.t_junctions_split > 0
+    # Heights over the flat faces, from the script's dimensions: crown z = 30 mm, plate z = 0,
+    # webs rising at 60° from the foot |y| = 20 + 30/tan 60° (away from the rounded corners).
+    foot_y = 20 + 30 / np.tan(np.radians(60))
+    rng = np.random.default_rng(1)
+    crown = np.column_stack([rng.uniform(-95, 95, 50), rng.uniform(-19, 19, 50)])
+    plate = np.column_stack([rng.uniform(-190, 190, 50), rng.choice([-1, 1], 50) * 80])
+    web = np.column_stack([rng.uniform(-80, 80, 50), rng.uniform(21, foot_y - 1, 50)])
+    points, over = hat.point_at_plan(np.vstack([crown, plate, web]) * 1e-3)
+    assert over.all()
+    expected = np.concatenate(
+        [np.full(50, 30.0), np.zeros(50), (foot_y - web[:, 1]) * np.tan(np.radians(60))]
+    )
+    np.testing.assert_allclose(points[:, 2] * 1e3, expected, atol=1e-6)
+    # Splitting long edges left the surface as it was: the same area as tessellated.
+    unsplit = build_mesh(MeshTool(surface="mesh", file="hat_stiffener.step", max_edge_mm=1e3), ".")
+    assert unsplit.hygiene.refined_triangles == 0 < hat.hygiene.refined_triangles
+
+    def area(mesh):
+        c = mesh.vertices[mesh.faces]
+        return 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
+
+    assert area(hat) == pytest.approx(area(unsplit), rel=1e-12)
+
+
+def test_the_hat_stiffener_faces_are_numbered_as_its_scene_says(hat):
+    tool = hat
+    assert tool.n_faces == 15
+    corners = tool.vertices[tool.faces]
+    for number in range(1, 16):
+        z = corners[tool.face_label == number][..., 2]
+        on_hat = z.max() > 1e-3 and z.min() > -1e-9
+        assert on_hat == (number >= 7), number  # 1-6 the plate, 7-15 the hat
+    crown = corners[tool.face_label == 15]
+    assert np.allclose(crown[..., 2], 0.03)
+
+
+def test_faces_select_the_part(hat):
+    tool = hat
+    crown = tool.face_part([15])
+    level = crown.level(np.array([[0.0, 0.015, 0.03], [0.0, 0.06, 0.0], [0.09, 0.0, 0.03]]))
+    # φ is the distance to the crown's edge: 5 mm from its long edge, 10 mm from its end.
+    assert level[0] == pytest.approx(0.005, abs=1e-9)
+    assert level[2] == pytest.approx(0.01, abs=1e-9)
+    assert level[1] < 0  # on the plate
+    with pytest.raises(ValueError, match="no face 99"):
+        tool.face_part([99])
     obj = build_mesh(MeshTool(surface="mesh", file="hat_mould.obj"), ".")
     block = obj.face_part(["block"])
     assert block.area_m2 == pytest.approx(0.1 * 0.06 + 2 * 0.1 * 0.04 + 2 * 0.06 * 0.04)

@@ -154,7 +154,7 @@ def test_slivers_are_counted_located_and_kept():
     fixed = repair(v, np.array([[0, 1, 2], [0, 2, 3], [2, 1, 3]]), weld_tolerance_m=1e-9)
     assert fixed.report.slivers == 1 and fixed.faces.shape[0] == 3
     assert fixed.report.worst_sliver_at_m == pytest.approx((0.5, 0.001 / 3, 0.0))
-    assert "sliver" in " ".join(fixed.report.repairs())
+    assert "sliver" in " ".join(fixed.report.remarks()) and fixed.report.repairs() == []
 
 
 def _tool(vertices, faces, weld=None):
@@ -195,3 +195,29 @@ def test_broken_versions_of_a_mesh_drape_as_the_clean_mesh():
     duplicated = _drape(_tool(*soup(mesh.vertices, mesh.faces)))
     assert np.array_equal(duplicated.status, clean.status)
     np.testing.assert_allclose(duplicated.nodes[placed], clean.nodes[placed], atol=1e-12)
+
+
+def test_long_edges_are_split_without_changing_the_surface():
+    # A flat sliver-prone strip: 1 × 0.1 in two triangles, no edge over 0.05 afterwards.
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 0.1, 0], [0, 0.1, 0]], dtype=float)
+    fixed = repair(v, np.array([[0, 1, 2], [0, 2, 3]]), max_edge_m=0.05)
+    corners = fixed.vertices[fixed.faces]
+    edges = np.roll(corners, -1, axis=1) - corners
+    assert np.linalg.norm(edges, axis=2).max() <= 0.05
+    normals = np.cross(edges[:, 0], -edges[:, 2])
+    assert np.all(normals[:, 2] > 0)  # winding kept
+    assert 0.5 * normals[:, 2].sum() == pytest.approx(0.1, rel=1e-12)  # area kept
+    count = edge_use(fixed.faces)
+    assert count.max() == 2  # conforming: no edge hangs
+    # The open edges are the strip's outline, cut into pieces no longer than 0.05.
+    outline = 2 * (1 + 0.1)
+    open_length = sum(
+        np.linalg.norm(fixed.vertices[a] - fixed.vertices[b])
+        for a, b in np.unique(
+            np.sort(np.stack([fixed.faces, np.roll(fixed.faces, -1, 1)], 2).reshape(-1, 2), 1),
+            axis=0,
+        )[count == 1]
+    )
+    assert open_length == pytest.approx(outline)
+    assert fixed.report.refined_triangles == fixed.faces.shape[0] - 2
+    assert fixed.report.open_edges == 4  # counted before the split: the input's outline
