@@ -155,8 +155,8 @@ class HygieneReport:
         return out
 
     def summary(self) -> dict[str, float | int | str]:
-        """Scalars for a case's summary (``mesh_*``)."""
-        return {
+        """Scalars for a case's summary (``mesh_*``; the largest edge only when one was asked)."""
+        out: dict[str, float | int | str] = {
             "mesh_triangles_read": self.triangles_read,
             "mesh_triangles": self.triangles,
             "mesh_vertices": self.vertices,
@@ -168,7 +168,6 @@ class HygieneReport:
             "mesh_t_junctions_split": self.t_junctions_split,
             "mesh_flipped_triangles": self.flipped_triangles,
             "mesh_pieces_turned": self.pieces_turned,
-            "mesh_max_edge_mm": float("nan") if self.max_edge_m is None else self.max_edge_m / MM,
             "mesh_refined_triangles": self.refined_triangles,
             "mesh_slivers": self.slivers,
             "mesh_pieces": self.pieces,
@@ -176,6 +175,9 @@ class HygieneReport:
             "mesh_repairs": "; ".join(self.repairs()) or "none",
             "mesh_remarks": "; ".join(self.remarks()) or "none",
         }
+        if self.max_edge_m is not None:
+            out["mesh_max_edge_mm"] = self.max_edge_m / MM
+        return out
 
 
 @dataclass(frozen=True)
