@@ -245,7 +245,8 @@ def repair(
     faces, origin = faces[keep], origin[keep]
     if faces.shape[0] == 0:
         raise MeshRefused(
-            f"no triangle has area beyond the weld tolerance {weld_tolerance_m / MM:.3g} mm"
+            "the mesh has no triangle of non-zero area (none beyond the weld tolerance "
+            f"{weld_tolerance_m / MM:.3g} mm)"
         )
     _, first = np.unique(np.sort(faces, axis=1), axis=0, return_index=True)
     first = np.sort(first)
