@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -248,8 +249,8 @@ def repair(
             "the mesh has no triangle of non-zero area (none beyond the weld tolerance "
             f"{weld_tolerance_m / MM:.3g} mm)"
         )
-    _, first = np.unique(np.sort(faces, axis=1), axis=0, return_index=True)
-    first = np.sort(first)
+    _, which = _unique_rows(np.sort(faces, axis=1))
+    first = np.sort(np.unique(which, return_index=True)[1])
     report.duplicate_triangles_dropped = int(faces.shape[0] - first.size)
     faces, origin = faces[first], origin[first]
     faces, origin = _split_t_junctions(vertices, faces, origin, weld_tolerance_m, report)
@@ -287,8 +288,7 @@ def _weld(
     used, faces = np.unique(faces, return_inverse=True)
     faces = faces.reshape(-1, 3).astype(np.int64)
     vertices = vertices[used]
-    exact, exact_label = np.unique(vertices, axis=0, return_inverse=True)
-    exact_label = exact_label.ravel()
+    exact, exact_label = _unique_rows(vertices)
     report.duplicate_vertices = int(vertices.shape[0] - exact.shape[0])
     label = np.arange(exact.shape[0])
     if tolerance > 0.0:
@@ -309,6 +309,18 @@ def _weld(
     return merged, label[exact_label][faces]
 
 
+def _unique_rows(rows: NDArray[Any]) -> tuple[NDArray[Any], IntArray]:
+    """The distinct rows of a 2-D array (sorted) and each row's index among them: what
+    ``np.unique(rows, axis=0, return_inverse=True)`` gives, by a lexicographic sort of the
+    columns (many times faster than its sort of whole rows as opaque bytes)."""
+    order = np.lexsort(rows.T[::-1])
+    ordered = rows[order]
+    starts = np.concatenate([[True], np.any(ordered[1:] != ordered[:-1], axis=1)])
+    inverse = np.empty(rows.shape[0], dtype=np.int64)
+    inverse[order] = np.cumsum(starts) - 1
+    return ordered[starts], inverse
+
+
 def _degenerate(vertices: FloatArray, faces: IntArray, tolerance: float) -> NDArray[np.bool_]:
     """Triangles with a repeated vertex, or whose height over their longest edge is within
     ``tolerance`` [m] (or zero to rounding)."""
@@ -327,8 +339,8 @@ def _degenerate(vertices: FloatArray, faces: IntArray, tolerance: float) -> NDAr
 def _edges(faces: IntArray) -> tuple[IntArray, IntArray]:
     """Unique undirected edges (k, 2) and, per face, the index of its edges (i→i+1)."""
     directed = np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2)
-    edges, inverse = np.unique(np.sort(directed, axis=1), axis=0, return_inverse=True)
-    return edges, inverse.reshape(-1, 3).astype(np.int64)
+    edges, inverse = _unique_rows(np.sort(directed, axis=1))
+    return edges, inverse.reshape(-1, 3)
 
 
 def _split_t_junctions(
