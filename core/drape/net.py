@@ -7,6 +7,8 @@ nodes of the two previous anti-diagonals |i − i0| + |j − j0| = k − 1, k �
 a front (all four quadrants stacked) is placed in one vectorised step:
 
 - in closed form when the surface offers it (:class:`ClosedFormPlacement`, e.g. the sphere);
+- exactly on a faceted tool that walks from the parents' facets (:class:`WalkingPlacement`,
+  triangle meshes): each node's facet is kept as the hint for its children;
 - otherwise on the circle where the two distance spheres meet: P(φ) = M + r(cos φ·a1 +
   sin φ·a2), a1 the surface normal seen from the chord A→B, a2 pointing away from the opposite
   node. Both distance constraints then hold exactly for every φ and only the signed distance
@@ -21,7 +23,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any, Protocol, cast, runtime_checkable
+from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,6 +42,7 @@ from preform.drape.surface import Surface
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 StatusArray = NDArray[np.int8]
+IntArray = NDArray[np.int64]
 
 _PLACED = np.int8(NodeStatus.PLACED)
 _NOT_REACHED = np.int8(NodeStatus.NOT_REACHED)
@@ -59,6 +62,41 @@ class ClosedFormPlacement(Protocol):
         """Points (m, 3) [m] on the tool at chord ``spacing`` [m] from both ``a`` and ``b``
         (m, 3), the root on the far side from ``opposite`` (m, 3); and NodeStatus codes (m,):
         PLACED, NO_INTERSECTION (no such point), OFF_TOOL (it lies past the tool's edge)."""
+        ...
+
+
+class FacePlacement(NamedTuple):
+    """Nodes placed on a faceted tool, with what the engine would otherwise search for."""
+
+    #: Positions (m, 3) [m], NaN where not placed.
+    points: FloatArray
+    #: NodeStatus codes (m,): PLACED, NO_INTERSECTION, OFF_TOOL, FOLDED (parents coincide).
+    status: StatusArray
+    #: The facet each node lies on (m,), −1 where not placed; the hint for its children.
+    faces: IntArray
+    #: Unit outward normals (m, 3) there, and the distance (m,) [m] to the facet.
+    normals: FloatArray
+    distance: FloatArray
+
+
+@runtime_checkable
+class WalkingPlacement(Protocol):
+    """Optional surface methods: exact placement walking from the parents' facets (meshes)."""
+
+    def locate_faces(self, points: FloatArray) -> IntArray:
+        """The facet (n,) each surface point (n, 3) [m] lies on."""
+        ...
+
+    def place_nodes_from_faces(
+        self,
+        a: FloatArray,
+        b: FloatArray,
+        opposite: FloatArray,
+        spacing: float,
+        face_a: IntArray,
+        face_b: IntArray,
+    ) -> FacePlacement:
+        """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b."""
         ...
 
 
@@ -413,6 +451,11 @@ def drape(
 
     # The wavefronts.
     closed_form = use_closed_form and isinstance(surface, ClosedFormPlacement)
+    walking = use_closed_form and isinstance(surface, WalkingPlacement)
+    face = np.full(n_nodes, -1, dtype=np.int64)
+    if walking:
+        seeded = np.flatnonzero(status == _PLACED)
+        face[seeded] = cast(WalkingPlacement, surface).locate_faces(pos[seeded])
     (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
     lo_bound = np.array([bx0, by0, bz0]) - tol_m
     hi_bound = np.array([bx1, by1, bz1]) + tol_m
@@ -457,7 +500,15 @@ def drape(
         node, ia, ib, ic = node[ready], ia[ready], ib[ready], ic[ready]
         orient = np.sign(da[ready]) * db[ready]
         a, b, c = pos[ia], pos[ib], pos[ic]
-        if closed_form:
+        at_p: FacePlacement | None = None
+        if walking:
+            # an exact placement that walks from the parents' facets (meshes)
+            at_p = cast(WalkingPlacement, surface).place_nodes_from_faces(
+                a, b, c, d, face[ia], face[ib]
+            )
+            p, st = at_p.points, at_p.status.copy()
+            face[node] = at_p.faces
+        elif closed_form:
             # closed_form: the surface has its own exact placement (the sphere)
             p, st = cast(Any, surface).place_nodes(a, b, c, d)
             st = np.asarray(st, dtype=np.int8).copy()
@@ -470,14 +521,15 @@ def drape(
             past = np.any((p_ok < lo_bound) | (p_ok > hi_bound), axis=1)
             # The cell this node completes, oriented +u × +v whatever the quadrant.
             cell_normal = orient[ok][:, None] * _cross(p_ok - c[ok], a[ok] - b[ok])
-            folded = _dot(cell_normal, surface.normal(p_ok)) <= 0
+            n_ok = surface.normal(p_ok) if at_p is None else at_p.normals[ok]
+            folded = _dot(cell_normal, n_ok) <= 0
             sub = st[ok]
             sub[folded] = NodeStatus.FOLDED
             sub[past] = NodeStatus.OFF_TOOL
             st[ok] = sub
             ok = st == _PLACED
             p_ok = p[ok]
-            dist = surface.closest_point(p_ok)[1]
+            dist = surface.closest_point(p_ok)[1] if at_p is None else at_p.distance[ok]
             res = np.maximum.reduce(
                 [
                     np.abs(_norm(p_ok - a[ok]) - d),
@@ -494,7 +546,11 @@ def drape(
     fields = cell_fields(nodes, node_status, trim=trim)
     placed = status == _PLACED
     info: dict[str, object] = {
-        "placement": "closed form" if closed_form else "newton on the constraint circle",
+        "placement": "walking exact"
+        if walking
+        else "closed form"
+        if closed_form
+        else "newton on the constraint circle",
         "generators": generators if isinstance(generators, str) else "plan polylines",
         "tolerance_m": tol_m,
         "max_residual_m": float(residual[placed].max()) if placed.any() else 0.0,

@@ -263,6 +263,8 @@ def judge_drape(
     ctx.summary["complete"] = cover.complete
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
+    elif cover.fold_zones:
+        ctx.warn(cover.fold_warning())
     law = ctx.products["shear_law"]
     block = getattr(ctx.fabric, "shear_law", None)
     if block is None and hasattr(ctx.fabric, "default_shear_law"):

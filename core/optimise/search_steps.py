@@ -245,6 +245,8 @@ def _judge_optimum_drape(
     ctx.summary["optimum_covered_fraction"] = cover.covered_fraction
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
+    elif cover.fold_zones:
+        ctx.warn(cover.fold_warning())
 
 
 def run_optimum(ctx: CaseContext) -> dict[str, Any]:

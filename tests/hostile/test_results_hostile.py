@@ -326,9 +326,9 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
 
     # Independent count: the mould's plan is the 300 × 200 mm plate; a node's undeformed plan
     # position is the start plus its flat offsets along the generators. Every unplaced node of
-    # the ply over the plate is missing (the net never reaches a true edge of this tool: it
-    # stops on the walls' foot and folds at the block's corners), and a cell is asked for when
-    # it is valid or has such a corner.
+    # the ply over the plate is missing (inside the plate's outline the net meets no true edge
+    # of this tool: it folds at the block's four corners, and their shadows are lost), and a
+    # cell is asked for when it is valid or has such a corner.
     ni, nj = result.shape
     i0, j0 = result.start_index
     a = math.radians(alpha)
@@ -342,16 +342,20 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
     expected = np.count_nonzero(valid) / np.count_nonzero(valid | corner)
 
     assert ctx.summary["covered_fraction"] == pytest.approx(expected, abs=1e-12)
-    assert ctx.summary["covered_fraction"] < 0.5
+    # the cross-shaped band over the block and down its walls is placed; the corners' shadows
+    # are not
+    assert 0.3 < ctx.summary["covered_fraction"] < 0.8
     assert reason.startswith(f"the net covers {100 * expected:.1f} % of the ply's fabric area")
-    assert "stopped on the tool" in reason
+    assert "folded" in reason and "stopped on the tool" not in reason
     assert ctx.summary["nodes_missing"] == np.count_nonzero(missing)
     assert ctx.summary["complete"] is False
     # The uncovered fabric area by cause sums to the missing cells' d² each.
     by_cause = [v for k, v in ctx.summary.items() if k.startswith("uncovered_area_m2_")]
     lost_cells = np.count_nonzero((valid | corner) & ~valid)
     assert sum(by_cause) == pytest.approx(lost_cells * (spacing * 1e-3) ** 2, rel=1e-12)
-    assert ctx.summary["uncovered_area_m2_stopped_on_tool"] > 0
+    # nothing is lost to numerics: what is missing lies behind a fold
+    assert ctx.summary["uncovered_area_m2_stopped_on_tool"] == 0
+    assert ctx.summary["uncovered_area_m2_folded"] > 0
 
 
 def test_the_hat_moulds_reason_names_the_folds(
@@ -575,8 +579,8 @@ def test_a_search_on_the_hat_mould_is_partial_without_a_drape_step(
     text += "search: {generator_angle_deg: {min: 70, max: 110}, scan_step_deg: 10}\n"
     ctx = run(context(sandbox, bundled, "plain-weave-150", write(tmp_path / "hs.yaml", text)))
     (reason,) = ctx.partial_reasons
-    assert reason.startswith("the net covers ") and "stopped on the tool" in reason
-    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.5
+    assert reason.startswith("the net covers ") and "folded" in reason
+    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.8
 
 
 TABULATED = (
