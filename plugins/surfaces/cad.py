@@ -58,8 +58,9 @@ _OCC_UNIT_M = 1e-3
 #: Longest triangle edge of a CAD tessellation when a scene gives none, as a fraction of the
 #: tool's bounding-box diagonal [-] (a choice: OpenCASCADE covers a flat face with a few long
 #: triangles, and closest-point queries bound their search by the largest triangle; measured
-#: on the bundled hat stiffener at 22 mm node spacing: one drape 15 s with the triangles as
-#: tessellated, 0.7 s with no edge over 1/20 of the diagonal, the surface being the same).
+#: on the bundled hat stiffener at 22 mm node spacing: one drape 0.84 s with the triangles as
+#: tessellated, 0.03 s with no edge over 1/20 of the diagonal, the surface being the same;
+#: ``benchmarks/bench_tool_mesh.py``).
 DEFAULT_MAX_EDGE_REL = 1 / 20
 #: STEP prefixes of SI_UNIT(prefix, .METRE.) and the unit they make.
 _STEP_PREFIX = {
