@@ -113,12 +113,14 @@ class ThicknessModel:
 
 def cell_table(fabric: Any) -> PreformResponse | None:
     """The fabric's sheared-cell table (``PreformResponse.from_fabric``), kept for the last
-    ``CACHE_SIZE`` fabrics by their full data, so a run tabulates each fabric once per process.
+    ``CACHE_SIZE`` library fabrics by their full data, so a run tabulates each fabric once per
+    process.
     None when the architecture has no sheared cell; a cell that cannot be sheared raises its
     ValueError (not kept)."""
-    key = f"{type(fabric).__module__}.{type(fabric).__qualname__}:"
     dump = getattr(fabric, "model_dump_json", None)
-    key += dump() if callable(dump) else repr(id(fabric))
+    if not callable(dump):  # not a library entry: nothing to key it by (an id is reused)
+        return PreformResponse.from_fabric(fabric)
+    key = f"{type(fabric).__module__}.{type(fabric).__qualname__}:{dump()}"
     if key in _TABLES:
         _TABLES.move_to_end(key)
         return _TABLES[key]
