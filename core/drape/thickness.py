@@ -162,5 +162,6 @@ def derived_thickness_mm(fabric: Any) -> float | None:
         value = dict(fabric.derived()).get("thickness_mm")
     except Exception:  # a fabric whose derivation fails still drapes, without a t0
         return None
-    ok = isinstance(value, (int, float)) and math.isfinite(value) and value > 0
-    return float(value) if ok else None
+    if isinstance(value, (int, float)) and math.isfinite(value) and value > 0:
+        return float(value)
+    return None

@@ -226,3 +226,62 @@ def test_the_pipeline_states_the_model_and_every_output_agrees(tmp_path) -> None
     assert run.summary["thickness_ratio_max"] == pytest.approx(
         float(cells.thickness_ratio[valid & cells.in_part].max()), rel=1e-12
     )
+
+
+def step_context(fabric, shear_deg: float, nominal_mm: float | None = None):  # type: ignore[no-untyped-def]
+    """A case context holding a flat net whose 16 cells are all at ``shear_deg``."""
+    from preform.step import CaseContext
+
+    shape = (4, 4)
+    net = SimpleNamespace(
+        valid=np.ones(shape, bool),
+        in_part=np.ones(shape, bool),
+        shear=np.full(shape, math.radians(shear_deg)),
+    )
+    scene = SimpleNamespace(
+        outputs=["cells_csv"], export=SimpleNamespace(nominal_thickness_mm=nominal_mm)
+    )
+    return CaseContext(
+        fabric=fabric,
+        scene=scene,  # type: ignore[arg-type]
+        registry=None,  # type: ignore[arg-type]
+        case_dir=None,  # type: ignore[arg-type]
+        products={"drape": SimpleNamespace(result=net)},
+    )
+
+
+def test_the_step_says_the_model_t0_and_what_differs() -> None:
+    from preform.drape.preform_steps import run_thickness
+
+    fabric = api.fabric("plain-weave-600")
+    quiet = step_context(fabric, 20.0)
+    model = run_thickness(quiet)["thickness"]
+    assert quiet.warnings == []
+    assert quiet.summary["thickness_model"] == SHEARED_CELL
+    assert quiet.summary["thickness_reference_mm"] == pytest.approx(0.64, rel=1e-12)
+    assert quiet.summary["thickness_ratio_max"] == 1.0  # 20° < locking 39.2°
+    # a scene t0 other than the cell's: used, and said
+    told = step_context(fabric, 20.0, nominal_mm=1.0)
+    assert run_thickness(told)["thickness"].reference_mm == 1.0
+    assert told.summary["thickness_reference"] == "the scene's export.nominal_thickness_mm"
+    assert any("1 mm is not the sheared unit cell's 0.64 mm" in w for w in told.warnings)
+    # past the table's end: held at 89°, said
+    far = step_context(fabric, 89.5)
+    run_thickness(far)
+    end = fabric.sheared_cell(math.radians(89.0)).thickness / fabric.sheared_cell(0.0).thickness
+    assert far.summary["thickness_ratio_max"] == pytest.approx(end, rel=1e-12)
+    assert any("16 cell(s) are sheared past 89°" in w for w in far.warnings)
+    assert model.name == SHEARED_CELL
+
+
+def test_a_cell_that_cannot_be_sheared_is_a_warning_not_a_silent_fallback() -> None:
+    from preform.drape.preform_steps import run_thickness
+
+    def refuse(_g: float) -> None:
+        raise ValueError("the tows are wider than their spacing")
+
+    odd = SimpleNamespace(name="odd", architecture="woven", sheared_cell=refuse, derived=dict)
+    ctx = step_context(odd, 10.0)
+    assert run_thickness(ctx)["thickness"].name == CONSTANT_FIBRE_VOLUME
+    assert ctx.summary["thickness_model"] == CONSTANT_FIBRE_VOLUME
+    assert any("wider than their spacing" in w and "1/cos γ" in w for w in ctx.warnings)
