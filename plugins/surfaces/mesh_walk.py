@@ -8,6 +8,7 @@ Lengths in metres.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,8 +28,13 @@ StatusArray = NDArray[np.int8]
 class MeshWalker:
     """Walking queries on one mesh's topology, with the scratch buffers they share."""
 
-    def __init__(self, topology: MeshTopology) -> None:
+    def __init__(self, topology: MeshTopology, feature_angle_deg: float) -> None:
         self.topology = topology
+        self.feature_angle_deg = feature_angle_deg
+        # Node spacing is the surface length, not the chord, where the surface turns by more
+        # than ``feature_angle_deg`` [°] between a node's triangle and its parent's
+        # (TriangleMesh, docs/physics.md).
+        self.feature_cos = math.cos(math.radians(self.feature_angle_deg))
         m = topology.n_triangles
         # Scratch shared by every call: the kernels hold the GIL (no nogil) and leave it as
         # they found it, so threads sharing one mesh never see it mid-query.
@@ -66,6 +72,7 @@ class MeshWalker:
             np.ascontiguousarray(b, dtype=np.float64),
             np.ascontiguousarray(opposite, dtype=np.float64),
             float(spacing),
+            self.feature_cos,
             np.ascontiguousarray(face_a, dtype=np.int64),
             np.ascontiguousarray(face_b, dtype=np.int64),
             self._visited,
@@ -101,10 +108,12 @@ class MeshWalker:
             topo.normals,
             topo.neighbours,
             topo.edge_normals,
+            topo.centroids,
             np.ascontiguousarray(start, dtype=np.float64),
             np.ascontiguousarray(start_face, dtype=np.int64),
             np.ascontiguousarray(direction, dtype=np.float64),
             float(spacing),
+            self.feature_cos,
             int(count),
             points,
             status,
