@@ -95,8 +95,10 @@ class WalkingPlacement(Protocol):
         spacing: float,
         face_a: IntArray,
         face_b: IntArray,
+        face_opposite: IntArray,
     ) -> FacePlacement:
-        """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b."""
+        """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b
+        (the opposite node's facet says on which side of a crease it lies)."""
         ...
 
 
@@ -504,7 +506,7 @@ def drape(
         if walking:
             # an exact placement that walks from the parents' facets (meshes)
             at_p = cast(WalkingPlacement, surface).place_nodes_from_faces(
-                a, b, c, d, face[ia], face[ib]
+                a, b, c, d, face[ia], face[ib], face[ic]
             )
             p, st = at_p.points, at_p.status.copy()
             face[node] = at_p.faces

@@ -335,18 +335,26 @@ class TriangleMesh:
         spacing: float,
         face_a: IntArray,
         face_b: IntArray,
+        face_opposite: IntArray,
     ) -> FacePlacement:
         """Net nodes at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) [m], on the far side
         from ``opposite``, found exactly on the triangles met walking from the parents'
-        triangles ``face_a``/``face_b`` (``preform.plugins.surfaces.mesh_kernels``)."""
-        return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b)
+        triangles ``face_a``/``face_b`` (``preform.plugins.surfaces.mesh_kernels``); the
+        opposite node's triangle ``face_opposite`` places it across a crease."""
+        return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b, face_opposite)
 
     def place_nodes(
         self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
     ) -> tuple[FloatArray, NDArray[np.int8]]:
         """As :meth:`place_nodes_from_faces`, locating the parents' triangles first."""
         placed = self.place_nodes_from_faces(
-            a, b, opposite, spacing, self.locate_faces(a), self.locate_faces(b)
+            a,
+            b,
+            opposite,
+            spacing,
+            self.locate_faces(a),
+            self.locate_faces(b),
+            self.locate_faces(opposite),
         )
         return placed.points, placed.status
 

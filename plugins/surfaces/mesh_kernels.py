@@ -112,6 +112,7 @@ def place_nodes_kernel(
     feature_cos,
     face_a,
     face_b,
+    face_c,
     visited,
     queue,
     out_points,
@@ -149,7 +150,9 @@ def place_nodes_kernel(
             continue
         r = math.sqrt(r2)
         e0, e1, e2 = e0 / chord, e1 / chord, e2 / chord
-        fa, fb = face_a[i], face_b[i]
+        fa, fb, fc = face_a[i], face_b[i], face_c[i]
+        if fc < 0:
+            fc = fa  # (opposite node's triangle unknown: taken as a parent's)
         s0 = normals[fa, 0] + normals[fb, 0]
         s1 = normals[fa, 1] + normals[fb, 1]
         s2 = normals[fa, 2] + normals[fb, 2]
@@ -207,9 +210,13 @@ def place_nodes_kernel(
             tb0, tb1, tb2, ub = _unfolded(
                 b[i, 0], b[i, 1], b[i, 2], fb, t, normals, corners, centroids, feature_cos
             )
+            tc0, tc1, tc2, uc = _unfolded(
+                c[i, 0], c[i, 1], c[i, 2], fc, t, normals, corners, centroids, feature_cos
+            )
+            over = ua or ub or uc
             cm0, cm1, cm2, cr = m0, m1, m2, r
             cx0, cx1, cx2, cy0, cy1, cy2 = x0, x1, x2, y0, y1, y2
-            if ua or ub:
+            if over:
                 cm0, cm1, cm2 = 0.5 * (ta0 + tb0), 0.5 * (ta1 + tb1), 0.5 * (ta2 + tb2)
                 f0, f1, f2 = tb0 - ta0, tb1 - ta1, tb2 - ta2
                 fl = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
@@ -218,15 +225,21 @@ def place_nodes_kernel(
                     continue
                 cr = math.sqrt(cr2)
                 f0, f1, f2 = f0 / fl, f1 / fl, f2 / fl
-                # Any frame of the circle's plane will do: roots are ranked by the chord
-                # circle's angle φ below, so all triangles are compared on one scale.
-                fx = _dot3(x0, x1, x2, f0, f1, f2)
-                cx0, cx1, cx2 = x0 - fx * f0, x1 - fx * f1, x2 - fx * f2
+                # The circle's own frame: from t's outward normal, turning away from the
+                # opposite node as seen in t's plane (unfolded too if across a feature), so
+                # the far half is 0 < φ < π as for the chord circle; past a fold sharper than
+                # 90° the node can lie behind the parents' chord in space, so the chord
+                # circle's half cannot say it.
+                nt0, nt1, nt2 = normals[t, 0], normals[t, 1], normals[t, 2]
+                fx = _dot3(nt0, nt1, nt2, f0, f1, f2)
+                cx0, cx1, cx2 = nt0 - fx * f0, nt1 - fx * f1, nt2 - fx * f2
                 cl = math.sqrt(cx0 * cx0 + cx1 * cx1 + cx2 * cx2)
                 if cl < 1e-12:
                     continue
                 cx0, cx1, cx2 = cx0 / cl, cx1 / cl, cx2 / cl
                 cy0, cy1, cy2 = f1 * cx2 - f2 * cx1, f2 * cx0 - f0 * cx2, f0 * cx1 - f1 * cx0
+                if _dot3(cy0, cy1, cy2, tc0 - cm0, tc1 - cm1, tc2 - cm2) > 0.0:
+                    cy0, cy1, cy2 = -cy0, -cy1, -cy2
             n0, n1, n2 = normals[t, 0], normals[t, 1], normals[t, 2]
             al = _dot3(n0, n1, n2, cx0, cx1, cx2)
             be = _dot3(n0, n1, n2, cy0, cy1, cy2)
@@ -244,17 +257,22 @@ def place_nodes_kernel(
                 p0 = cm0 + cp * cx0 + sp * cy0
                 p1 = cm1 + cp * cx1 + sp * cy1
                 p2 = cm2 + cp * cx2 + sp * cy2
-                if ua or ub:
-                    # the root's angle about the parents' chord, as for a chord-circle root
+                if phi > math.pi:
+                    phi -= 2.0 * math.pi
+                elif phi <= -math.pi:
+                    phi += 2.0 * math.pi
+                if not (0.0 < phi < math.pi):
+                    continue
+                if over:
+                    # Ranked with the chord-circle roots by its angle about the parents' chord,
+                    # taken in (0, 2π): all triangles compared on one scale.
                     phi = math.atan2(
                         _dot3(p0 - m0, p1 - m1, p2 - m2, y0, y1, y2),
                         _dot3(p0 - m0, p1 - m1, p2 - m2, x0, x1, x2),
                     )
-                elif phi > math.pi:
-                    phi -= 2.0 * math.pi
-                elif phi <= -math.pi:
-                    phi += 2.0 * math.pi
-                if not (0.0 < phi < math.pi) or phi >= best_phi:
+                    if phi <= 0.0:
+                        phi += 2.0 * math.pi
+                if phi >= best_phi:
                     continue
                 inside = True
                 for k in range(3):
@@ -271,7 +289,7 @@ def place_nodes_kernel(
                         break
                 if inside:
                     best_phi, best_face = phi, t
-                    best_over_feature = ua or ub
+                    best_over_feature = over
                     bp0, bp1, bp2 = p0, p1, p2
         for j in range(tail):
             visited[queue[j]] = False
@@ -284,10 +302,10 @@ def place_nodes_kernel(
             if best_over_feature:
                 # The cell wraps over the crease: past a 90° fold its chord-built normal faces
                 # away from the node's facet though nothing folded, so the engine's fold test
-                # compares it with the mean of the node's and the parents' facet normals.
-                w0 = normals[best_face, 0] + normals[fa, 0] + normals[fb, 0]
-                w1 = normals[best_face, 1] + normals[fa, 1] + normals[fb, 1]
-                w2 = normals[best_face, 2] + normals[fa, 2] + normals[fb, 2]
+                # compares it with the mean normal of its four corners' facets.
+                w0 = normals[best_face, 0] + normals[fa, 0] + normals[fb, 0] + normals[fc, 0]
+                w1 = normals[best_face, 1] + normals[fa, 1] + normals[fb, 1] + normals[fc, 1]
+                w2 = normals[best_face, 2] + normals[fa, 2] + normals[fb, 2] + normals[fc, 2]
                 wl = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
                 if wl > 1e-12:
                     out_normals[i, 0], out_normals[i, 1] = w0 / wl, w1 / wl

@@ -49,9 +49,11 @@ class MeshWalker:
         spacing: float,
         face_a: IntArray,
         face_b: IntArray,
+        face_opposite: IntArray,
     ) -> FacePlacement:
         """Nodes at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) [m] on the mesh, on the
-        far side from ``opposite``, walking from the parents' triangles ``face_a``/``face_b``."""
+        far side from ``opposite``, walking from the parents' triangles ``face_a``/``face_b``
+        (``face_opposite``: the opposite node's)."""
         from preform.plugins.surfaces.mesh_kernels import place_nodes_kernel
 
         topo = self.topology
@@ -75,6 +77,7 @@ class MeshWalker:
             self.feature_cos,
             np.ascontiguousarray(face_a, dtype=np.int64),
             np.ascontiguousarray(face_b, dtype=np.int64),
+            np.ascontiguousarray(face_opposite, dtype=np.int64),
             self._visited,
             self._queue,
             points,

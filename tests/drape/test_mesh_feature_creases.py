@@ -81,7 +81,7 @@ def drape_across(
     return result, flat
 
 
-@pytest.mark.parametrize("fold_deg", [90.0, 45.0, -90.0])
+@pytest.mark.parametrize("fold_deg", [90.0, 45.0, 135.0, -90.0])
 @pytest.mark.parametrize("alpha_deg", [90.0, 70.0])
 @pytest.mark.parametrize("crease_to_u_deg", [30.0, 60.0])
 def test_a_plate_folded_across_the_fibres_drapes_to_its_flat_pattern(

@@ -60,7 +60,13 @@ def test_on_a_plane_a_node_completes_the_rhombus(
     c = 0.01 * ex - 0.02 * ey
     a, b = c + spacing * e1, c + spacing * e2
     placed = mesh.place_nodes_from_faces(
-        a[None], b[None], c[None], spacing, mesh.locate_faces(a[None]), mesh.locate_faces(b[None])
+        a[None],
+        b[None],
+        c[None],
+        spacing,
+        mesh.locate_faces(a[None]),
+        mesh.locate_faces(b[None]),
+        mesh.locate_faces(c[None]),
     )
     assert placed.status[0] == NodeStatus.PLACED
     np.testing.assert_allclose(placed.points[0], a + b - c, atol=1e-12)
