@@ -405,6 +405,9 @@ def geodesic_kernel(
                 if disc < 0.0:
                     break
                 s_node = -bb + math.sqrt(disc)
+                if -1e-9 * spacing < s_node < 0.0:
+                    # The node fell on the edge just crossed, a rounding error behind.
+                    s_node = 0.0
                 if s_node < 0.0 or s_node > s_exit:
                     break
                 x0, x1, x2 = x0 + s_node * t0, x1 + s_node * t1, x2 + s_node * t2

@@ -12,13 +12,16 @@ length and every angle at once (zero shear everywhere). The chord model fails it
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from preform.drape import PlyOutline, drape
 from preform.drape.result import NodeStatus
-from preform.plugins.surfaces.mesh import TriangleMesh
+from preform.plugins.surfaces.mesh import TriangleMesh, read_obj
+
+HAT = Path(__file__).resolve().parents[2] / "materials" / "tools" / "hat_mould.obj"
 
 D = 0.01  # node spacing [m]
 
@@ -118,3 +121,20 @@ def test_the_chord_model_shears_the_net_at_a_crease_crossed_at_an_angle() -> Non
 def test_a_feature_angle_outside_0_to_180_degrees_is_refused() -> None:
     with pytest.raises(ValueError, match=r"feature_angle_deg must be an angle in \[0, 180\]"):
         folded_plate(90.0, feature_angle_deg=-1.0)
+
+
+def test_a_generator_node_falling_on_a_crease_is_kept() -> None:
+    """On the bundled hat mould (block 100 × 60 × 40 mm on a plate), a generator from the top's
+    centre along −x at d = 10 mm has its 5th node on the block's top edge and its 9th on the
+    wall's foot, each within a rounding error of the crease: every node is placed, d apart
+    along the unfolded line (top, wall, plate). They once stopped at the top edge."""
+    mesh = read_obj(HAT, 0.001)
+    start = np.array([[0.0, 0.0, 0.04]])
+    points, status = mesh.geodesic_nodes(start, np.array([[-1.0, 0.0, 0.0]]), D, 12)
+    assert np.all(status == NodeStatus.PLACED)
+    p = points[0]
+    # unfolded along the path: top (x), then down the wall (z), then out over the plate (x)
+    along = np.where(p[:, 2] >= 0.04 - 1e-12, -p[:, 0], 0.05 + (0.04 - p[:, 2]))
+    along = np.where(p[:, 0] < -0.05 - 1e-12, 0.09 + (-0.05 - p[:, 0]), along)
+    np.testing.assert_allclose(along, D * np.arange(1, 13), atol=1e-12)
+    np.testing.assert_allclose(p[:, 1], 0.0, atol=1e-12)
