@@ -215,6 +215,10 @@ def energy_field(
         counted & (np.abs(gamma) > locking) if locking is not None else np.zeros_like(counted)
     )
     past_failure = counted & (gamma > failure) if failure is not None else np.zeros_like(counted)
+    # A law whose stitch also breaks shearing the other way says so (stitch_yarn).
+    failure_negative = getattr(law, "failure_angle_negative", None)
+    if failure_negative is not None:
+        past_failure = past_failure | (counted & (gamma < -failure_negative))
     weight = np.where(counted, result.part_weight, 0.0)
     total = float((density * weight).sum() * result.node_spacing**2)
     return EnergyField(

@@ -476,7 +476,9 @@ class LawRange:
 
     locking: float | None = None
     failure: float | None = None
-    #: Physical limit of the model (tows packed solid), past which it continues artificially.
+    #: Stitch-failure angle magnitude in the perpendicular sense (γ < 0), if the law has one.
+    failure_negative: float | None = None
+    #: Physical limit of the model (fabric jammed), past which it holds its torque artificially.
     packing: float | None = None
     #: End of the measured/fitted data in the positive and negative senses, and what the law
     #: does past it ("hold", "linear", "extrapolate").
@@ -536,6 +538,7 @@ def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
     return LawRange(
         locking=law.locking_angle,
         failure=law.failure_angle,
+        failure_negative=getattr(law, "failure_angle_negative", None),
         packing=None if packing is None else float(packing),
         data_positive=positive,
         data_negative=negative,
@@ -576,13 +579,21 @@ def shear_limit_warnings(
                 f"{_share(past, area, counted)} are sheared past the locking angle "
                 f"{math.degrees(limits.locking):.1f}°: the fabric would wrinkle there"
             )
-    if limits.failure is not None:
+    if limits.failure is not None or limits.failure_negative is not None:
         past = np.asarray(energy.past_failure, dtype=bool) & counted
         counts["cells_past_failure"] = int(np.count_nonzero(past))
+        senses = []
+        if limits.failure is not None:
+            senses.append(f"{math.degrees(limits.failure):.1f}° (parallel to the stitch)")
+        if limits.failure_negative is not None:
+            senses.append(
+                f"−{math.degrees(limits.failure_negative):.1f}° (perpendicular to the stitch)"
+            )
+        where = " or ".join(senses)
         if past.any():
             messages.append(
                 f"{_share(past, area, counted)} are sheared past the stitch-failure angle "
-                f"{math.degrees(limits.failure):.1f}° (parallel to the stitch): the stitching "
+                f"{where}: the stitching "
                 "would break there"
             )
     if limits.packing is not None:
@@ -592,9 +603,9 @@ def shear_limit_warnings(
             share = float(cell_energy[past].sum()) / total if total > 0 else 0.0
             messages.append(
                 f"{_share(past, area, counted)} are sheared past "
-                f"{math.degrees(limits.packing):.1f}°, where the law's tows are packed solid "
-                "(fibre volume fraction at its maximum): the law only continues its stress "
-                f"along a tangent there, so their energy, {100 * share:.3g} % of the total "
+                f"{math.degrees(limits.packing):.1f}°, where the law's fabric is jammed (tows "
+                "packed solid or at the jamming force; it would wrinkle): the law only holds "
+                f"its jammed torque there, so their energy, {100 * share:.3g} % of the total "
                 f"{total:.3g} J, is not a physical energy"
             )
     beyond_pos = (

@@ -188,7 +188,7 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
             ctx.warn(
                 f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
                 f"the drape shears cells past {math.degrees(limits.packing):.1f}°, where the "
-                "law's tows are packed solid: E(α) there (up to "
+                "law's fabric is jammed: E(α) there (up to "
                 f"{worst:.3g} J) is the law's continuation past that physical limit, not a "
                 "physical energy"
             )
