@@ -343,6 +343,14 @@ class TriangleMesh:
         opposite node's triangle ``face_opposite`` places it across a crease."""
         return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b, face_opposite)
 
+    def spacings(
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray
+    ) -> FloatArray:
+        """Node-to-parent spacings (m,) [m] from ``a`` (m, 3) on triangles ``face_a`` to ``b``
+        on ``face_b`` under this mesh's rule: the chord, or the length along the surface where
+        a feature crease lies between (``feature_angle_deg``)."""
+        return self.walker.spacings(a, b, face_a, face_b)
+
     def place_nodes(
         self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
     ) -> tuple[FloatArray, NDArray[np.int8]]:

@@ -98,6 +98,25 @@ def _unfolded(q0, q1, q2, f, t, normals, corners, centroids, feature_cos):
 
 
 @numba.njit(cache=True)
+def spacing_kernel(corners, normals, centroids, a, b, face_a, face_b, feature_cos, out_length):
+    """The spacing [m] from a[i] on triangle face_a[i] to b[i] on face_b[i] under the placement's
+    rule: the distance from b to a unfolded into b's plane over a feature, else the chord."""
+    for i in range(a.shape[0]):
+        u0, u1, u2, _ = _unfolded(
+            a[i, 0],
+            a[i, 1],
+            a[i, 2],
+            face_a[i],
+            face_b[i],
+            normals,
+            corners,
+            centroids,
+            feature_cos,
+        )
+        out_length[i] = math.sqrt((b[i, 0] - u0) ** 2 + (b[i, 1] - u1) ** 2 + (b[i, 2] - u2) ** 2)
+
+
+@numba.njit(cache=True)
 def place_nodes_kernel(
     corners,
     normals,
@@ -119,13 +138,14 @@ def place_nodes_kernel(
     out_status,
     out_faces,
     out_normals,
-    out_distance,
+    out_residual,
 ):
     """Nodes at chord ``spacing`` from a[i] and b[i] on the mesh, away from c[i] (module doc).
 
     ``face_a``/``face_b``: the parents' triangles. ``visited`` (m,) bool all False and ``queue``
     (m,) int64 are scratch (left all False). Writes points, NodeStatus codes, the node's
-    triangle, its normal and its distance to that triangle's plane [m]."""
+    triangle, its normal and its residual [m]: the largest of its distance to that triangle's
+    plane and the errors of its two spacings (chord, or surface length over a feature)."""
     n = a.shape[0]
     inside_tol = 1e-9 * spacing
     for i in range(n):
@@ -133,7 +153,7 @@ def place_nodes_kernel(
             out_points[i, k] = np.nan
             out_normals[i, k] = np.nan
         out_faces[i] = -1
-        out_distance[i] = np.nan
+        out_residual[i] = np.nan
         m0 = 0.5 * (a[i, 0] + b[i, 0])
         m1 = 0.5 * (a[i, 1] + b[i, 1])
         m2 = 0.5 * (a[i, 2] + b[i, 2])
@@ -178,6 +198,7 @@ def place_nodes_kernel(
         best_phi = np.inf
         best_face = -1
         best_over_feature = False
+        ba0, ba1, ba2, bb0, bb1, bb2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         bp0, bp1, bp2 = 0.0, 0.0, 0.0
         boundary = False
         mid = np.empty(3)
@@ -290,6 +311,7 @@ def place_nodes_kernel(
                 if inside:
                     best_phi, best_face = phi, t
                     best_over_feature = over
+                    ba0, ba1, ba2, bb0, bb1, bb2 = ta0, ta1, ta2, tb0, tb1, tb2
                     bp0, bp1, bp2 = p0, p1, p2
         for j in range(tail):
             visited[queue[j]] = False
@@ -310,7 +332,10 @@ def place_nodes_kernel(
                 if wl > 1e-12:
                     out_normals[i, 0], out_normals[i, 1] = w0 / wl, w1 / wl
                     out_normals[i, 2] = w2 / wl
-            out_distance[i] = abs(
+            # The residual of the constraint placed by (the chord, or the length along the
+            # surface over a feature: the distance to the unfolded parent) and of lying on the
+            # facet.
+            plane = abs(
                 _dot3(
                     normals[best_face, 0],
                     normals[best_face, 1],
@@ -320,6 +345,9 @@ def place_nodes_kernel(
                     bp2 - corners[best_face, 0, 2],
                 )
             )
+            to_a = math.sqrt((bp0 - ba0) ** 2 + (bp1 - ba1) ** 2 + (bp2 - ba2) ** 2)
+            to_b = math.sqrt((bp0 - bb0) ** 2 + (bp1 - bb1) ** 2 + (bp2 - bb2) ** 2)
+            out_residual[i] = max(plane, abs(to_a - spacing), abs(to_b - spacing))
         elif boundary:
             out_status[i] = _OFF_TOOL
         else:

@@ -62,7 +62,7 @@ class MeshWalker:
         status = np.empty(m, dtype=np.int8)
         faces = np.empty(m, dtype=np.int64)
         normals = np.empty((m, 3))
-        distance = np.empty(m)
+        residual = np.empty(m)
         place_nodes_kernel(
             topo.corners,
             topo.normals,
@@ -84,9 +84,32 @@ class MeshWalker:
             status,
             faces,
             normals,
-            distance,
+            residual,
         )
-        return FacePlacement(points, status, faces, normals, distance)
+        return FacePlacement(points, status, faces, normals, residual)
+
+    def spacings(
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray
+    ) -> FloatArray:
+        """The spacing (m,) [m] from ``a`` on triangles ``face_a`` to ``b`` on ``face_b``
+        (m, 3) [m] under the placement's rule (chord, or length along the surface over a
+        feature crease)."""
+        from preform.plugins.surfaces.mesh_kernels import spacing_kernel
+
+        topo = self.topology
+        length = np.empty(len(a))
+        spacing_kernel(
+            topo.corners,
+            topo.normals,
+            topo.centroids,
+            np.ascontiguousarray(a, dtype=np.float64),
+            np.ascontiguousarray(b, dtype=np.float64),
+            np.ascontiguousarray(face_a, dtype=np.int64),
+            np.ascontiguousarray(face_b, dtype=np.int64),
+            self.feature_cos,
+            length,
+        )
+        return length
 
     def geodesic_nodes(
         self,
