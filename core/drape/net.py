@@ -473,11 +473,13 @@ def drape(
         face[seeded] = cast(WalkingPlacement, surface).locate_faces(pos[seeded])
         # The mesh spaces its generators by its own rule (the length along the surface over a
         # feature crease), so their spacing residual is measured by that rule too.
-        k, kp = np.concatenate(gen_nodes), np.concatenate(gen_prev)
-        if k.size:
-            along = cast(WalkingPlacement, surface).spacings(pos[kp], pos[k], face[kp], face[k])
-            dist = surface.closest_point(pos[k])[1]
-            residual[k] = np.maximum(np.abs(along - d), dist)
+        on_gen, before = np.concatenate(gen_nodes), np.concatenate(gen_prev)
+        if on_gen.size:
+            along = cast(WalkingPlacement, surface).spacings(
+                pos[before], pos[on_gen], face[before], face[on_gen]
+            )
+            dist = surface.closest_point(pos[on_gen])[1]
+            residual[on_gen] = np.maximum(np.abs(along - d), dist)
     (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
     lo_bound = np.array([bx0, by0, bz0]) - tol_m
     hi_bound = np.array([bx1, by1, bz1]) + tol_m
