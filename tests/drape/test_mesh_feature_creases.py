@@ -97,6 +97,8 @@ def test_a_plate_folded_across_the_fibres_drapes_to_its_flat_pattern(
     beyond = np.abs(nodes[:, 2]) > 1e-12
     assert beyond.sum() > 20 and (~beyond).sum() > 20  # the net is on both flanks
     np.testing.assert_allclose(unfolded(nodes, fold_deg), flat[inside], atol=1e-9)
+    # and the residual reported says so: each spacing is d under the surface-length rule
+    assert np.all(result.residual[inside] <= 1e-9 * D)
     # so every cell keeps the flat net's angle α (zero shear), as result.shear measures it on
     # the cells lying wholly on one flank
     near = np.abs(result.nodes[..., 2]) <= 1e-12
