@@ -90,7 +90,7 @@ class WalkingPlacement(Protocol):
         ...
 
     def spacings(
-        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float
     ) -> FloatArray:
         """Spacings (m,) [m] from ``a`` on facets ``face_a`` to ``b`` on ``face_b`` under the
         surface's own rule (the chord, or the length along the surface over a crease)."""
@@ -476,7 +476,7 @@ def drape(
         on_gen, before = np.concatenate(gen_nodes), np.concatenate(gen_prev)
         if on_gen.size:
             along = cast(WalkingPlacement, surface).spacings(
-                pos[before], pos[on_gen], face[before], face[on_gen]
+                pos[before], pos[on_gen], face[before], face[on_gen], d
             )
             dist = surface.closest_point(pos[on_gen])[1]
             residual[on_gen] = np.maximum(np.abs(along - d), dist)

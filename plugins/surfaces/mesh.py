@@ -96,9 +96,10 @@ def _closest_on_triangles(p: FloatArray, a: FloatArray, b: FloatArray, c: FloatA
 
 #: The turn [°] of the surface normal, from a net node's parent's triangle to the node's, above
 #: which the node spacing is the length along the surface over the crease instead of the chord
-#: (a sharp CAD edge, not the facets of a smooth surface); the default's reasons and measured
-#: effect are in docs/physics.md ("Sharp creases: surface length over a feature").
-DEFAULT_FEATURE_ANGLE_DEG = 30.0
+#: (a sharp CAD edge, not the facets of a smooth surface). Off (180°, the chord everywhere) by
+#: default until the bundled hat stiffener drapes completely with it; 20° is the value for
+#: tools with isolated sharp creases (docs/physics.md, "Sharp creases").
+DEFAULT_FEATURE_ANGLE_DEG = 180.0
 
 
 class TriangleMesh:
@@ -346,12 +347,12 @@ class TriangleMesh:
         return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b, face_opposite)
 
     def spacings(
-        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float
     ) -> FloatArray:
         """Node-to-parent spacings (m,) [m] from ``a`` (m, 3) on triangles ``face_a`` to ``b``
         on ``face_b`` under this mesh's rule: the chord, or the length along the surface where
-        a feature crease lies between (``feature_angle_deg``)."""
-        return self.walker.spacings(a, b, face_a, face_b)
+        a feature crease lies between (``feature_angle_deg``) within ``spacing`` [m] of ``a``."""
+        return self.walker.spacings(a, b, face_a, face_b, spacing)
 
     def place_nodes(
         self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float

@@ -61,7 +61,7 @@ def _segment_distance(p, q0, q1):
 
 
 @numba.njit(cache=True)
-def _unfolded(q0, q1, q2, f, t, normals, corners, centroids, feature_cos):
+def _unfolded(q0, q1, q2, f, t, normals, corners, centroids, feature_cos, spacing):
     """Point q on triangle f as seen from triangle t: q itself (the chord model) unless the
     surface turns between them by more than the feature angle (cos of f's and t's normals below
     ``feature_cos``); then q rotated about the crease into t's plane, beyond the crease from t,
@@ -90,6 +90,10 @@ def _unfolded(q0, q1, q2, f, t, normals, corners, centroids, feature_cos):
     s = _dot3(w0, w1, w2, u0, u1, u2)
     h0, h1, h2 = w0 - s * u0, w1 - s * u1, w2 - s * u2
     h = math.sqrt(h0 * h0 + h1 * h1 + h2 * h2)
+    if h > spacing:
+        # The planes meet farther than one spacing from q: no single crease lies between q and
+        # a node of t (two features within one spacing, or a smooth turn): the chord.
+        return q0, q1, q2, False
     # In t's plane, across the crease: v ⟂ u, pointing away from t's side.
     v0, v1, v2 = nt1 * u2 - nt2 * u1, nt2 * u0 - nt0 * u2, nt0 * u1 - nt1 * u0
     if _dot3(v0, v1, v2, centroids[t, 0] - x0, centroids[t, 1] - x1, centroids[t, 2] - x2) > 0.0:
@@ -98,7 +102,9 @@ def _unfolded(q0, q1, q2, f, t, normals, corners, centroids, feature_cos):
 
 
 @numba.njit(cache=True)
-def spacing_kernel(corners, normals, centroids, a, b, face_a, face_b, feature_cos, out_length):
+def spacing_kernel(
+    corners, normals, centroids, a, b, face_a, face_b, feature_cos, spacing, out_length
+):
     """The spacing [m] from a[i] on triangle face_a[i] to b[i] on face_b[i] under the placement's
     rule: the distance from b to a unfolded into b's plane over a feature, else the chord."""
     for i in range(a.shape[0]):
@@ -112,6 +118,7 @@ def spacing_kernel(corners, normals, centroids, a, b, face_a, face_b, feature_co
             corners,
             centroids,
             feature_cos,
+            spacing,
         )
         out_length[i] = math.sqrt((b[i, 0] - u0) ** 2 + (b[i, 1] - u1) ** 2 + (b[i, 2] - u2) ** 2)
 
@@ -226,13 +233,22 @@ def place_nodes_kernel(
             # more than the feature angle between a parent's triangle and t, the circle about
             # that parent unfolded into t's plane (surface length over the crease, module doc).
             ta0, ta1, ta2, ua = _unfolded(
-                a[i, 0], a[i, 1], a[i, 2], fa, t, normals, corners, centroids, feature_cos
+                a[i, 0], a[i, 1], a[i, 2], fa, t, normals, corners, centroids, feature_cos, spacing
             )
             tb0, tb1, tb2, ub = _unfolded(
-                b[i, 0], b[i, 1], b[i, 2], fb, t, normals, corners, centroids, feature_cos
+                b[i, 0], b[i, 1], b[i, 2], fb, t, normals, corners, centroids, feature_cos, spacing
             )
             tc0, tc1, tc2, uc = _unfolded(
-                c[i, 0], c[i, 1], c[i, 2], fc, t, normals, corners, centroids, feature_cos
+                c[i, 0],
+                c[i, 1],
+                c[i, 2],
+                fc,
+                t,
+                normals,
+                corners,
+                centroids,
+                feature_cos,
+                2.0 * spacing,  # (a cell's diagonal is under 2 d)
             )
             over = ua or ub or uc
             cm0, cm1, cm2, cr = m0, m1, m2, r
@@ -424,7 +440,7 @@ def geodesic_kernel(
             # into this triangle's plane if a feature lies between (surface length, module doc).
             while found < count:
                 uq0, uq1, uq2, _ = _unfolded(
-                    q0, q1, q2, q_face, f, normals, corners, centroids, feature_cos
+                    q0, q1, q2, q_face, f, normals, corners, centroids, feature_cos, spacing
                 )
                 w0, w1, w2 = x0 - uq0, x1 - uq1, x2 - uq2
                 bb = _dot3(t0, t1, t2, w0, w1, w2)

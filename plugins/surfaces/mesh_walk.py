@@ -89,7 +89,7 @@ class MeshWalker:
         return FacePlacement(points, status, faces, normals, residual)
 
     def spacings(
-        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float
     ) -> FloatArray:
         """The spacing (m,) [m] from ``a`` on triangles ``face_a`` to ``b`` on ``face_b``
         (m, 3) [m] under the placement's rule (chord, or length along the surface over a
@@ -107,6 +107,7 @@ class MeshWalker:
             np.ascontiguousarray(face_a, dtype=np.int64),
             np.ascontiguousarray(face_b, dtype=np.int64),
             self.feature_cos,
+            float(spacing),
             length,
         )
         return length

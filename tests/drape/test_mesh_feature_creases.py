@@ -24,9 +24,10 @@ from preform.plugins.surfaces.mesh import TriangleMesh, read_obj
 HAT = Path(__file__).resolve().parents[2] / "materials" / "tools" / "hat_mould.obj"
 
 D = 0.01  # node spacing [m]
+FEATURE = 20.0  # the feature angle [°] recommended for tools with sharp creases (physics.md)
 
 
-def folded_plate(fold_deg: float, feature_angle_deg: float = 30.0) -> TriangleMesh:
+def folded_plate(fold_deg: float, feature_angle_deg: float = FEATURE) -> TriangleMesh:
     """The plate z = 0, x < 0, folded at the crease x = z = 0 (along y) by ``fold_deg``: the
     far flank leaves the crease along (cos θ, 0, −sin θ); θ > 0 convex (bends down), θ < 0
     concave (bends up). Grid vertices 2.5 cm apart, so many facets meet the crease."""
@@ -60,7 +61,10 @@ def unfolded(nodes: np.ndarray, fold_deg: float) -> np.ndarray:
 
 
 def drape_across(
-    fold_deg: float, alpha_deg: float, crease_to_u_deg: float, feature_angle_deg: float = 30.0
+    fold_deg: float,
+    alpha_deg: float,
+    crease_to_u_deg: float,
+    feature_angle_deg: float = FEATURE,
 ):
     """Drape with the first fibre at ``crease_to_u_deg`` to the crease, started 2.5 d before
     it; returns the result and the flat net's node positions (…, 2) [m]."""
@@ -130,7 +134,7 @@ def test_a_generator_node_falling_on_a_crease_is_kept() -> None:
     centre along −x at d = 10 mm has its 5th node on the block's top edge and its 9th on the
     wall's foot, each within a rounding error of the crease: every node is placed, d apart
     along the unfolded line (top, wall, plate). They once stopped at the top edge."""
-    mesh = read_obj(HAT, 0.001)
+    mesh = read_obj(HAT, 0.001, feature_angle_deg=FEATURE)
     start = np.array([[0.0, 0.0, 0.04]])
     points, status = mesh.geodesic_nodes(start, np.array([[-1.0, 0.0, 0.0]]), D, 12)
     assert np.all(status == NodeStatus.PLACED)

@@ -343,9 +343,8 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
 
     assert ctx.summary["covered_fraction"] == pytest.approx(expected, abs=1e-12)
     # the cross-shaped band over the block and down its walls is placed; the corners' shadows
-    # are not (at α = 70° 0.82: crossing the block's creases obliquely no longer shears the net,
-    # the node spacing there being the length along the surface)
-    assert 0.3 < ctx.summary["covered_fraction"] < 0.9
+    # are not
+    assert 0.3 < ctx.summary["covered_fraction"] < 0.8
     assert reason.startswith(f"the net covers {100 * expected:.1f} % of the ply's fabric area")
     assert "folded" in reason and "stopped on the tool" not in reason
     assert ctx.summary["nodes_missing"] == np.count_nonzero(missing)
@@ -582,7 +581,7 @@ def test_a_search_on_the_hat_mould_is_partial_without_a_drape_step(
     ctx = run(context(sandbox, bundled, "plain-weave-150", write(tmp_path / "hs.yaml", text)))
     (reason,) = ctx.partial_reasons
     assert reason.startswith("the net covers ") and "folded" in reason
-    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.9
+    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.8
 
 
 TABULATED = (

@@ -120,7 +120,7 @@ def test_across_a_crease_a_geodesic_is_the_unfolded_straight_line() -> None:
             for j in range(n - 1):
                 k = base + i * n + j
                 faces += [[k, k + n, k + n + 1], [k, k + n + 1, k + 1]]
-    mesh = TriangleMesh(np.array(top + wall), np.array(faces))
+    mesh = TriangleMesh(np.array(top + wall), np.array(faces), feature_angle_deg=20.0)
     d, theta = 0.0123, math.radians(35.0)
     start = np.array([-0.05, -0.04, 0.0])
     t = np.array([math.cos(theta), math.sin(theta), 0.0])
