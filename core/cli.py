@@ -44,9 +44,62 @@ def _host() -> Any:
     return default_host()
 
 
+#: preform's own commands whose modules load only when the command is used (their imports,
+#: scenes, laws, tables, would slow every other command): name -> (module:attribute, the
+#: command's short help as ``--help`` lists it; a test checks it against the command's own).
+LAZY_COMMANDS: dict[str, tuple[str, str]] = {
+    "scenes": (
+        "preform.commands.scenes:scenes",
+        "The bundled scenes and the outputs a scene may ask for.",
+    ),
+    "export": (
+        "preform.pipeline.export_command:export_command",
+        "Drape fabric NAME as the scene says and write TARGETS (abaqus, lsdyna, ansys, table, "
+        "vtu, flat-pattern).",
+    ),
+    "shear": (
+        "preform.shear.commands:shear_command",
+        "Print the shear force and energy curves of fabric NAME, both senses.",
+    ),
+    "fit": (
+        "preform.shear.commands:fit_command",
+        "Normalise a shear test (DATA.csv: displacement_mm, force_N[, sense]) and fit a law.",
+    ),
+    "bench": (
+        "preform.bench.tradeoff:bench",
+        "Measure preform: speed, and the speed/accuracy trade of the fidelity knobs.",
+    ),
+}
+
+
+class LazyCommand(click.Command):
+    """Stands for one of ``LAZY_COMMANDS`` until it is used: it lists with the command's
+    short help, holds its name against plugins, and ``PreformGroup`` swaps in the real command
+    when the name is looked up."""
+
+    def __init__(self, name: str, target: str, short_help: str) -> None:
+        super().__init__(name, help=short_help)
+        self.target = target
+
+    def load(self) -> click.Command:
+        import importlib
+
+        module, attribute = self.target.split(":")
+        command: click.Command = getattr(importlib.import_module(module), attribute)
+        return command
+
+
 class PreformGroup(click.Group):
     """The root group: an unexpected exception in any command ends in one line on stderr and
-    exit code 3, never a traceback, unless ``--debug`` (or ``PREFORM_DEBUG=1``) asks for it."""
+    exit code 3, never a traceback, unless ``--debug`` (or ``PREFORM_DEBUG=1``) asks for it.
+
+    Start-up stays light: the commands of ``LAZY_COMMANDS`` are imported when used, and
+    plugins add their commands (``preform_register_commands``) only when a command name is not
+    preform's own, when the commands are listed (``--help``) or when ``plugins list`` asks.
+    """
+
+    #: Whether the plugins' commands still have to be added to this group.
+    plugin_commands_pending = False
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
@@ -65,6 +118,36 @@ class PreformGroup(click.Group):
                 err=True,
             )
             ctx.exit(EXIT_INTERNAL)
+
+    def load_plugin_commands(self) -> None:
+        """Let each plugin add its commands to this group, once."""
+        if self.plugin_commands_pending:
+            self.plugin_commands_pending = False
+            _host().register_commands(self)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        command = self.commands.get(cmd_name)
+        if isinstance(command, LazyCommand):
+            command = self.commands[cmd_name] = command.load()
+        if command is None and self.plugin_commands_pending:
+            self.load_plugin_commands()
+            command = self.commands.get(cmd_name)
+        return command
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        self.load_plugin_commands()
+        return sorted(self.commands)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """As click's, without loading a lazy command to read its short help."""
+        rows = []
+        for name in self.list_commands(ctx):
+            command = self.commands[name]
+            if not command.hidden:
+                rows.append((name, command.get_short_help_str(formatter.width - 6 - len(name))))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
 
 @click.group(
@@ -98,6 +181,9 @@ def plugins() -> None:
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def plugins_list(as_json: bool) -> None:
     """Each plugin, its version, what it registered, and its error if it failed."""
+    root = click.get_current_context().find_root().command
+    if isinstance(root, PreformGroup):  # a plugin's commands can fail it: show that too
+        root.load_plugin_commands()
     host = _host()
     records = [r.as_json() for r in host.records.values()]
     if as_json:
@@ -589,38 +675,30 @@ def run_report_lines(report: Any) -> list[str]:
     return lines
 
 
-def _add_physics_commands() -> None:
-    from preform.bench.tradeoff import bench
-    from preform.commands.scenes import scenes
-    from preform.pipeline.export_command import export_command
-    from preform.shear.commands import fit_command, shear_command
-
-    cli.add_command(scenes, "scenes")
-    cli.add_command(export_command, "export")
-    cli.add_command(shear_command, "shear")
-    cli.add_command(fit_command, "fit")
-    cli.add_command(bench, "bench")
+for _name, (_target, _short_help) in LAZY_COMMANDS.items():
+    cli.add_command(LazyCommand(_name, _target, _short_help))
 
 
-_add_physics_commands()
-
-
-def build_cli() -> click.Group:
-    """The command group with every plugin's commands added.
+def build_cli(*, lazy: bool = False) -> PreformGroup:
+    """The command group with every plugin's commands added (``lazy``: added when first
+    needed, see ``PreformGroup``).
 
     Plugins add to a copy of ``cli``: the module's group keeps only preform's own commands, so
     building twice (tests, embedding) never stacks plugin commands, and the host can tell a
     plugin replacing a built-in command (refused) from one adding a new command.
     """
     group = copy.copy(cli)
+    assert isinstance(group, PreformGroup)
     group.commands = dict(cli.commands)
-    _host().register_commands(group)
+    group.plugin_commands_pending = True
+    if not lazy:
+        group.load_plugin_commands()
     return group
 
 
 def main() -> None:
     try:
-        group = build_cli()
+        group = build_cli(lazy=True)
     except KeyboardInterrupt:
         # Ctrl-C while plugins load (a slow import): stop, as click does inside a command
         click.echo("Aborted!", err=True)

@@ -92,7 +92,10 @@ COMMANDS: dict[str, dict[str, object]] = {
 
 def leaf_commands(group: click.Group, prefix: str = "") -> dict[str, click.Command]:
     out: dict[str, click.Command] = {}
-    for name, command in group.commands.items():
+    ctx = click.Context(group)
+    for name in group.list_commands(ctx):  # click's API: lazy commands are loaded here
+        command = group.get_command(ctx, name)
+        assert command is not None, name
         path = f"{prefix} {name}".strip()
         if isinstance(command, click.Group):
             out.update(leaf_commands(command, path))

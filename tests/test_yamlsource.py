@@ -292,9 +292,11 @@ def billion_laughs(levels: int = 9) -> str:
 
 
 def test_billion_laughs_fails_fast_at_the_alias_that_breaks_the_budget() -> None:
-    started = time.perf_counter()
+    # CPU time of this process, not wall time (which a loaded machine inflates): the guard is
+    # against expanding the aliases first (minutes, gigabytes), not a speed target.
+    started = time.process_time()
     errors = errors_of(billion_laughs())
-    assert time.perf_counter() - started < 0.2
+    assert time.process_time() - started < 1.0
     # l5 holds 1 + 9 * (1 + 9 * (...)) = 597871 values; the lines before hold 672609 values with
     # keys, so the file passes 1 000 000 values at the first *l5 in line 7.
     assert where(errors) == [(7, 10, "")]
@@ -324,9 +326,9 @@ def test_node_limit_counts_plain_values_too() -> None:
 def test_deep_nesting_fails_fast_without_recursion_error(
     text: str, position: tuple[int, int]
 ) -> None:
-    started = time.perf_counter()
+    started = time.process_time()  # CPU time, as above
     errors = errors_of(text)
-    assert time.perf_counter() - started < 1.0
+    assert time.process_time() - started < 2.0
     assert where(errors) == [(*position, "")]
     assert errors[0].message == "nesting deeper than 64 levels"
 

@@ -11,6 +11,13 @@ runner, which cancels the case and restarts its worker, and by the case itself b
 Every engine gives back ``concurrent.futures.Future`` objects, and :meth:`Engine.stop` ends
 everything at once (Ctrl-C). Worker processes watch their parent and exit when it is gone, so a
 ``kill -9`` of the main process does not leave them computing into the results directory.
+
+Worker start-up is paid once per pool, not once per worker: where the platform has it, the
+process pool forks its workers from a ``forkserver`` that imported preform, the plugins' step
+modules and the libraries the planned steps import lazily (``Engine`` ``preload``) before the
+first case; each worker then takes the parent's current ``sys.path`` and environment and runs
+the runner's warm-up (building its plugin host) once. Elsewhere (Windows) workers are spawned
+and each pays its imports itself.
 """
 
 from __future__ import annotations
@@ -100,30 +107,96 @@ class SerialEngine(Engine):
             signal.signal(signal.SIGALRM, previous)
 
 
-def watch_parent(parent_pid: int) -> None:
-    """Worker initializer: exit at once when the parent process is gone (kill -9, crash).
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else (pid reused): not our parent
+        return False
+    return True
 
-    A daemon thread polls the parent pid; when the worker is re-parented, its results would go
-    nowhere and it might still write into the results directory, so it ends itself.
+
+def watch_parent(parent_pid: int) -> None:
+    """Worker initializer: exit at once when the main process is gone (kill -9, crash).
+
+    A daemon thread polls; when the worker is re-parented (its parent, the main process or the
+    fork server, died) or the main process no longer exists, its results would go nowhere and it
+    might still write into the results directory, so it ends itself.
     """
+    own_parent = os.getppid()
 
     def watch() -> None:
         while True:
-            if os.getppid() != parent_pid:
+            if os.getppid() != own_parent or not _alive(parent_pid):
                 os._exit(1)
             time.sleep(PARENT_POLL_S)
 
     threading.Thread(target=watch, name="preform-parent-watch", daemon=True).start()
 
 
+#: A worker's warm-up: ``"module:function"`` and its (picklable) arguments, run once when the
+#: worker starts, before its first case. By name, so it is imported only after the worker took
+#: the parent's ``sys.path``.
+WarmUp = tuple[str, tuple[Any, ...]]
+
+
+def run_warm_up(warm_up: WarmUp | None) -> None:
+    """Import the warm-up's function and call it."""
+    if warm_up is None:
+        return
+    import importlib
+
+    target, args = warm_up
+    module, function = target.split(":")
+    getattr(importlib.import_module(module), function)(*args)
+
+
+def start_worker(
+    parent_pid: int,
+    environ: dict[str, str],
+    sys_path: list[str],
+    warm_up: WarmUp | None = None,
+) -> None:
+    """Process-pool initializer: watch the parent, take its current environment and
+    ``sys.path`` (a fork server started earlier holds older ones), then warm up."""
+    import sys
+
+    watch_parent(parent_pid)
+    os.environ.clear()
+    os.environ.update(environ)
+    sys.path[:] = sys_path
+    run_warm_up(warm_up)
+
+
+def pool_context(preload: tuple[str, ...] = ()) -> Any:
+    """The multiprocessing context of the process pool: ``forkserver`` importing ``preload``
+    once (only the first pool of a process sets it: the server then lives as long as the
+    process), or ``spawn`` where there is no fork server."""
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    # not '__main__': the main module may be a test runner or a script without a guard
+    context.set_forkserver_preload(sorted(set(preload)))
+    return context
+
+
 class ProcessEngine(Engine):
-    """A pebble process pool (spawn start method: safe with threads in the parent, and each
-    worker sees the parent's current sys.path and environment)."""
+    """A pebble process pool of ``workers`` processes, forked from a fork server that imported
+    ``preload`` (see the module docstring); ``warm_up`` runs once in each worker."""
 
     enforces_timeout = True
 
-    def __init__(self, workers: int | None = None) -> None:
-        import multiprocessing
+    def __init__(
+        self,
+        workers: int | None = None,
+        *,
+        preload: tuple[str, ...] = (),
+        warm_up: WarmUp | None = None,
+    ) -> None:
+        import sys
 
         from pebble import ProcessPool
 
@@ -131,9 +204,9 @@ class ProcessEngine(Engine):
         self.capacity = 2 * n  # one running and one queued per worker keeps them busy
         self._pool = ProcessPool(
             max_workers=n,
-            initializer=watch_parent,
-            initargs=(os.getpid(),),
-            context=multiprocessing.get_context("spawn"),
+            initializer=start_worker,
+            initargs=(os.getpid(), dict(os.environ), list(sys.path), warm_up),
+            context=pool_context(preload),
         )
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
@@ -158,7 +231,14 @@ class DaskEngine(Engine):
     too; a remote scheduler keeps its own setting.
     """
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+    def __init__(
+        self,
+        workers: int | None = None,
+        scheduler: str | None = None,
+        *,
+        preload: tuple[str, ...] = (),
+        warm_up: WarmUp | None = None,
+    ) -> None:
         try:
             import dask
             from distributed import Client, LocalCluster
@@ -181,6 +261,17 @@ class DaskEngine(Engine):
         threads = sum(self._client.nthreads().values()) or 1
         self.capacity = max(1, threads)
         self._running: dict[Future[Any], Any] = {}
+        # each worker imports and loads what the cases need, all at once, in a task pinned to
+        # it; waited for (a failure only costs the first case its imports): cases submitted
+        # behind a busy worker's warm-up could queue two to a worker, and a case that kills
+        # its worker would take the other one with it (KilledWorker)
+        from distributed import wait as dask_wait
+
+        warming = [
+            self._client.submit(warm_dask_worker, preload, warm_up, workers=[address], pure=False)
+            for address in self._client.nthreads()
+        ]
+        dask_wait(warming)
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
         remote = self._client.submit(fn, *args, pure=False)
@@ -219,12 +310,33 @@ class DaskEngine(Engine):
             self._cluster.close()
 
 
-def open_engine(engine: str, *, workers: int | None = None, scheduler: str | None = None) -> Engine:
-    """The engine named ``engine``; the caller closes (or stops) it."""
+def warm_dask_worker(preload: tuple[str, ...], warm_up: WarmUp | None) -> None:
+    """Run on each Dask worker when the engine opens: import ``preload`` (what is not installed
+    is skipped) and run the warm-up, so the worker's first case costs what its next ones do."""
+    import importlib
+
+    for module in preload:
+        try:
+            importlib.import_module(module)
+        except ImportError:
+            continue
+    run_warm_up(warm_up)
+
+
+def open_engine(
+    engine: str,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    preload: tuple[str, ...] = (),
+    warm_up: WarmUp | None = None,
+) -> Engine:
+    """The engine named ``engine``; the caller closes (or stops) it. ``preload`` (modules) and
+    ``warm_up`` (run once per worker) make a worker's first case as fast as its next ones."""
     if engine == "serial":
         return SerialEngine()
     if engine == "process":
-        return ProcessEngine(workers)
+        return ProcessEngine(workers, preload=preload, warm_up=warm_up)
     if engine == "dask":
-        return DaskEngine(workers, scheduler)
+        return DaskEngine(workers, scheduler, preload=preload, warm_up=warm_up)
     raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")

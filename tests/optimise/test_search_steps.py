@@ -33,7 +33,7 @@ start:
   orientation_deg: 0
 search:
   generator_angle_deg: {min: 30, max: 150}
-outputs: [energy_vs_angle, optimum, fibre_pattern_png, energy_plot_png, cells_csv]
+outputs: [energy_vs_angle, optimum, fibre_pattern_png, library_energy_png, cells_csv]
 """
 
 
@@ -112,7 +112,11 @@ def test_knob_defaults_and_overrides():
 
 def test_run_writes_curves_optima_and_the_library_figure(sandbox, tmp_path):
     lib = sandbox.library(bundled=True)
-    scene = load_scene(coarse_scene(tmp_path), sandbox.registry)
+    path = coarse_scene(tmp_path)
+    data = yaml.safe_load(path.read_text())
+    data["outputs"].append("energy_plot_png")
+    path.write_text(yaml.safe_dump(data))
+    scene = load_scene(path, sandbox.registry)
     out = tmp_path / "out"
     report = run_cases(
         make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-*"),
@@ -157,6 +161,36 @@ def test_a_sweep_draws_no_figure_its_scene_does_not_name(sandbox, tmp_path):
     assert [r.status for r in report.results] == ["ok", "ok"], [r.error for r in report.results]
     assert list(out.rglob("*.png")) == []
     assert len(list(out.rglob("cells.csv"))) == 2
+
+
+@pytest.mark.parametrize(
+    ("figure", "per_case", "run_level"),
+    [("energy_plot_png", True, False), ("library_energy_png", False, True)],
+)
+def test_the_run_level_figure_is_named_apart_from_the_per_case_one(
+    sandbox, tmp_path, figure, per_case, run_level
+):
+    # issue 15: Fig. 10 (every fabric on one figure) no longer rides on the per-case figure
+    lib = sandbox.library(bundled=True)
+    path = coarse_scene(tmp_path)
+    data = yaml.safe_load(path.read_text())
+    data["outputs"] = ["optimum", figure]
+    path.write_text(yaml.safe_dump(data))
+    scene = load_scene(path, sandbox.registry)
+    out = tmp_path / "out"
+    report = run_cases(
+        make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-*"),
+        out,
+        sandbox.host,
+        engine="serial",
+    )
+    assert [r.status for r in report.results] == ["ok", "ok"], [r.error for r in report.results]
+    folder = out / "hemisphere-min-energy"
+    cases = sorted(folder / r.material / "energy_vs_angle.png" for r in report.results)
+    assert [p.is_file() for p in cases] == [per_case, per_case]
+    assert (folder / "energy_vs_angle.png").is_file() == run_level
+    summaries = [json.loads((p.parent / "summary.json").read_text()) for p in cases]
+    assert all(("energy_vs_angle.png" in s["files"]) == per_case for s in summaries)
 
 
 def test_library_figure_skips_cases_without_a_curve(tmp_path):

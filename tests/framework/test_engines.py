@@ -1,0 +1,117 @@
+"""The process pool pays worker start-up once and still behaves like fresh workers.
+
+Workers are forked from a fork server that imported preform before the first case (issue 15);
+a fork server started by an earlier run holds that moment's environment and ``sys.path``, so
+each worker takes the parent's current ones. The warm-up runs once per worker, before its
+first case.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from preform.pipeline import engines, runner
+from preform.pipeline.engines import ProcessEngine, open_engine
+
+# Test modules are imported by path (--import-mode=importlib): what workers run lives in a
+# module written to a folder that only this test puts on sys.path.
+PROBE = """
+import os, sys
+
+WARMED = []
+
+
+def note_warm_up(tag):
+    WARMED.append(os.getpid())
+    os.environ["PREFORM_TEST_WARMED"] = tag
+
+
+def worker_view(_):
+    return {
+        "pid": os.getpid(),
+        "value": os.environ.get("PREFORM_TEST_ENGINE"),
+        "path": sys.path[:1],
+        "warmed": list(WARMED),
+        "tag": os.environ.get("PREFORM_TEST_WARMED"),
+        "runner_loaded": "preform.pipeline.runner" in sys.modules,
+    }
+"""
+
+
+@pytest.fixture
+def probe(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
+    folder = tmp_path / "probe_site"
+    folder.mkdir()
+    (folder / "preform_engine_probe.py").write_text(textwrap.dedent(PROBE))
+    monkeypatch.syspath_prepend(str(folder))
+    import importlib
+
+    return importlib.import_module("preform_engine_probe"), str(folder)
+
+
+def run_on_pool(module: Any, n: int) -> list[dict[str, Any]]:
+    engine = ProcessEngine(
+        2,
+        preload=("preform.pipeline.runner",),
+        warm_up=("preform_engine_probe:note_warm_up", ("w",)),
+    )
+    try:
+        futures = [engine.submit(module.worker_view, i) for i in range(n)]
+        return [f.result(timeout=120) for f in futures]
+    finally:
+        engine.close()
+
+
+def test_workers_see_the_parents_current_environment_and_path(probe, monkeypatch):
+    module, folder = probe
+    first = run_on_pool(module, 2)
+    monkeypatch.setenv("PREFORM_TEST_ENGINE", "second")
+    second = run_on_pool(module, 4)
+    assert all(v["value"] is None for v in first)
+    assert all(v["value"] == "second" for v in second)
+    assert all(v["path"] == [folder] for v in first + second)
+
+
+def test_the_warm_up_runs_once_per_worker_before_its_first_case(probe):
+    module, _ = probe
+    views = run_on_pool(module, 6)
+    for view in views:
+        # the warm-up ran in this very process, once, and set what the case then sees
+        assert view["warmed"] == [view["pid"]]
+        assert view["tag"] == "w"
+        assert view["runner_loaded"]
+    assert 1 <= len({v["pid"] for v in views}) <= 2
+
+
+def test_the_runner_asks_for_its_own_modules_and_the_lazy_libraries():
+    preload = runner.worker_preload()
+    assert "preform.pipeline.runner" in preload
+    own = preload[: -len(runner.WORKER_PRELOAD)]
+    assert preload[len(own) :] == runner.WORKER_PRELOAD
+    assert all(m == "preform" or m.startswith("preform.") for m in own)
+
+
+@pytest.mark.skipif(
+    "forkserver" not in multiprocessing.get_all_start_methods(),
+    reason="no fork server on this platform",
+)
+def test_the_pool_forks_from_a_fork_server():
+    assert engines.pool_context().get_start_method() == "forkserver"
+
+
+def test_a_warm_up_that_fails_fails_the_case_not_the_caller(probe):
+    module, _ = probe
+    engine = open_engine("process", workers=1, warm_up=("builtins:int", ("not a number",)))
+    try:
+        future = engine.submit(module.worker_view, 0)
+        with pytest.raises(Exception):  # noqa: B017 - pebble's word for a broken initializer
+            future.result(timeout=120)
+    finally:
+        engine.stop()
+    assert sys.modules.get("preform_engine_probe") is module
