@@ -15,6 +15,7 @@ Best of ``--repeat`` runs, one core (pinned before numpy loads); the numba kerne
 compiled (or loaded from the cache) before any timing.
 
     python benchmarks/bench_mesh.py [--repeat 3] [--divisions 80 160] [--large]
+        [--feature-angle 180]
 """
 
 from __future__ import annotations
@@ -40,7 +41,12 @@ from preform.drape.ply import PlyOutline  # noqa: E402
 from preform.library import load_library  # noqa: E402
 from preform.optimise.search import DrapeObjective, search_generator_angle  # noqa: E402
 from preform.plugins.surfaces.basic import Hemisphere  # noqa: E402
-from preform.plugins.surfaces.mesh import read_obj, tessellate_hemisphere  # noqa: E402
+from preform.plugins.surfaces.mesh import (  # noqa: E402
+    DEFAULT_FEATURE_ANGLE_DEG,
+    TriangleMesh,
+    read_obj,
+    tessellate_hemisphere,
+)
 
 RADIUS = 0.1
 ALPHA = math.radians(80.0)
@@ -67,7 +73,9 @@ def drape_on(surface: Any, spacing: float) -> Any:
     )
 
 
-def drape_speed(repeat: int, divisions: list[int], spacings: list[float]) -> None:
+def drape_speed(
+    repeat: int, divisions: list[int], spacings: list[float], feature_angle_deg: float
+) -> None:
     sphere = Hemisphere(RADIUS)
     print("\n(1) Drape speed: mesh hemisphere vs analytic hemisphere, same net, one core")
     print(
@@ -77,6 +85,7 @@ def drape_speed(repeat: int, divisions: list[int], spacings: list[float]) -> Non
     for n in divisions:
         clock = time.perf_counter()
         mesh = tessellate_hemisphere(RADIUS, n)
+        mesh = TriangleMesh(mesh.vertices, mesh.faces, feature_angle_deg=feature_angle_deg)
         _ = mesh.walker
         build = time.perf_counter() - clock
         drape_on(mesh, 0.02)  # compile or load the kernels, outside the timing
@@ -93,9 +102,9 @@ def drape_speed(repeat: int, divisions: list[int], spacings: list[float]) -> Non
             )
 
 
-def study(repeat: int, spacing: float) -> None:
+def study(repeat: int, spacing: float, feature_angle_deg: float) -> None:
     law = load_library().shear_law("plain-weave-600")
-    hat = read_obj(HAT)
+    hat = read_obj(HAT, feature_angle_deg=feature_angle_deg)
     sphere = Hemisphere(RADIUS, run_off_m=RADIUS / 4)
     ply = PlyOutline.rectangle((0.36, 0.36))
     print(
@@ -126,10 +135,16 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--divisions", type=int, nargs="+", default=[80, 160])
     parser.add_argument("--large", action="store_true", help="also d giving ~1e6 nodes")
+    parser.add_argument(
+        "--feature-angle",
+        type=float,
+        default=DEFAULT_FEATURE_ANGLE_DEG,
+        help="the meshes' feature_angle_deg [deg] (docs/physics.md, 'Sharp creases')",
+    )
     args = parser.parse_args()
     spacings = [7.6e-4] + ([2.4e-4] if args.large else [])
-    drape_speed(args.repeat, args.divisions, spacings)
-    study(args.repeat, 2.5e-3)
+    drape_speed(args.repeat, args.divisions, spacings, args.feature_angle)
+    study(args.repeat, 2.5e-3, args.feature_angle)
 
 
 if __name__ == "__main__":

@@ -74,9 +74,11 @@ class FacePlacement(NamedTuple):
     status: StatusArray
     #: The facet each node lies on (m,), −1 where not placed; the hint for its children.
     faces: IntArray
-    #: Unit outward normals (m, 3) there, and the distance (m,) [m] to the facet.
+    #: Unit outward normals (m, 3) there (for the fold test), and the residual (m,) [m] of the
+    #: placement's own constraints: spacing (chord, or length along the surface over a feature
+    #: crease) and distance to the facet.
     normals: FloatArray
-    distance: FloatArray
+    residual: FloatArray
 
 
 @runtime_checkable
@@ -87,6 +89,13 @@ class WalkingPlacement(Protocol):
         """The facet (n,) each surface point (n, 3) [m] lies on."""
         ...
 
+    def spacings(
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float
+    ) -> FloatArray:
+        """Spacings (m,) [m] from ``a`` on facets ``face_a`` to ``b`` on ``face_b`` under the
+        surface's own rule (the chord, or the length along the surface over a crease)."""
+        ...
+
     def place_nodes_from_faces(
         self,
         a: FloatArray,
@@ -95,8 +104,10 @@ class WalkingPlacement(Protocol):
         spacing: float,
         face_a: IntArray,
         face_b: IntArray,
+        face_opposite: IntArray,
     ) -> FacePlacement:
-        """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b."""
+        """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b
+        (the opposite node's facet says on which side of a crease it lies)."""
         ...
 
 
@@ -433,6 +444,8 @@ def drape(
         polyline_halves,
     )
     steps = ((nj, 0), (-nj, 0), (1, 1), (-1, 1))
+    gen_nodes: list[IntArray] = [np.zeros(0, dtype=np.int64)]
+    gen_prev: list[IntArray] = [np.zeros(0, dtype=np.int64)]
     for row, (count, (stride, _)) in enumerate(zip(counts, steps, strict=True)):
         if count == 0:
             continue
@@ -448,6 +461,8 @@ def drape(
         status[flat] = new
         pos[flat[alive]] = gen.points[row, :count][alive]
         residual[flat[alive]] = gen.residual[row, :count][alive]
+        gen_nodes.append(flat[alive])
+        gen_prev.append(flat[alive] - stride)
 
     # The wavefronts.
     closed_form = use_closed_form and isinstance(surface, ClosedFormPlacement)
@@ -456,6 +471,15 @@ def drape(
     if walking:
         seeded = np.flatnonzero(status == _PLACED)
         face[seeded] = cast(WalkingPlacement, surface).locate_faces(pos[seeded])
+        # The mesh spaces its generators by its own rule (the length along the surface over a
+        # feature crease), so their spacing residual is measured by that rule too.
+        on_gen, before = np.concatenate(gen_nodes), np.concatenate(gen_prev)
+        if on_gen.size:
+            along = cast(WalkingPlacement, surface).spacings(
+                pos[before], pos[on_gen], face[before], face[on_gen], d
+            )
+            dist = surface.closest_point(pos[on_gen])[1]
+            residual[on_gen] = np.maximum(np.abs(along - d), dist)
     (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
     lo_bound = np.array([bx0, by0, bz0]) - tol_m
     hi_bound = np.array([bx1, by1, bz1]) + tol_m
@@ -504,7 +528,7 @@ def drape(
         if walking:
             # an exact placement that walks from the parents' facets (meshes)
             at_p = cast(WalkingPlacement, surface).place_nodes_from_faces(
-                a, b, c, d, face[ia], face[ib]
+                a, b, c, d, face[ia], face[ib], face[ic]
             )
             p, st = at_p.points, at_p.status.copy()
             face[node] = at_p.faces
@@ -529,14 +553,16 @@ def drape(
             st[ok] = sub
             ok = st == _PLACED
             p_ok = p[ok]
-            dist = surface.closest_point(p_ok)[1] if at_p is None else at_p.distance[ok]
-            res = np.maximum.reduce(
-                [
-                    np.abs(_norm(p_ok - a[ok]) - d),
-                    np.abs(_norm(p_ok - b[ok]) - d),
-                    dist,
-                ]
-            )
+            if at_p is None:
+                res = np.maximum.reduce(
+                    [
+                        np.abs(_norm(p_ok - a[ok]) - d),
+                        np.abs(_norm(p_ok - b[ok]) - d),
+                        surface.closest_point(p_ok)[1],
+                    ]
+                )
+            else:
+                res = at_p.residual[ok]
             pos[node[ok]] = p_ok
             residual[node[ok]] = res
         status[node] = st

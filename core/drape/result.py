@@ -65,7 +65,8 @@ class DrapeResult:
     #: NodeStatus codes (ni, nj).
     status: IntArray
     #: Constraint residual of each placed node (ni, nj) [m]: max of | |P−A| − d | and the
-    #: distance to the surface.
+    #: distance to the surface (on a mesh, |P−A| is the length along the surface where a
+    #: feature crease lies between, docs/physics.md).
     residual: FloatArray
     #: Index of the start node.
     start_index: tuple[int, int]

@@ -94,6 +94,14 @@ def _closest_on_triangles(p: FloatArray, a: FloatArray, b: FloatArray, c: FloatA
     return np.where(inside[..., None], foot, nearest_edge)
 
 
+#: The turn [°] of the surface normal, from a net node's parent's triangle to the node's, above
+#: which the node spacing is the length along the surface over the crease instead of the chord
+#: (a sharp CAD edge, not the facets of a smooth surface). Off (180°, the chord everywhere) by
+#: default until the bundled hat stiffener drapes completely with it; 20° is the value for
+#: tools with isolated sharp creases (docs/physics.md, "Sharp creases").
+DEFAULT_FEATURE_ANGLE_DEG = 180.0
+
+
 class TriangleMesh:
     """A tool surface made of triangles; vertices (n, 3) [m], faces (m, 3) vertex indices.
 
@@ -111,6 +119,10 @@ class TriangleMesh:
     distance) of it, so no unexamined triangle is nearer than d_k − r_max. Points whose best
     distance exceeds that bound are re-queried with twice as many candidates.
 
+    ``feature_angle_deg`` [°]: where the surface turns by more than this between a net node's
+    triangle and its parent's, the node is spaced by the length along the surface over the
+    crease, elsewhere by the chord (:data:`DEFAULT_FEATURE_ANGLE_DEG`, docs/physics.md).
+
     ``point_at_plan`` casts vertical rays downward. For a ray along −z the Möller–Trumbore test
     reduces to the barycentric coordinates of the plan position in the triangle's plan
     projection, and the hit height to the barycentric blend of the corner heights; vertical
@@ -126,6 +138,7 @@ class TriangleMesh:
         merge_tolerance_rel: float = 1e-6,
         smooth_normals: bool = False,
         initial_candidates: int = 16,
+        feature_angle_deg: float = DEFAULT_FEATURE_ANGLE_DEG,
     ) -> None:
         vertex_array = np.asarray(vertices, dtype=np.float64)
         face_array = np.asarray(faces)
@@ -149,6 +162,11 @@ class TriangleMesh:
             raise ValueError(f"merge_tolerance_rel must be ≥ 0, got {merge_tolerance_rel!r}")
         if initial_candidates < 1:
             raise ValueError(f"initial_candidates must be ≥ 1, got {initial_candidates!r}")
+        if not 0.0 <= feature_angle_deg <= 180.0:
+            raise ValueError(
+                f"feature_angle_deg must be an angle in [0, 180] degrees, got {feature_angle_deg!r}"
+            )
+        self.feature_angle_deg = float(feature_angle_deg)
 
         used = vertex_array[np.unique(face_array)]
         diagonal = float(np.linalg.norm(used.max(axis=0) - used.min(axis=0)))
@@ -301,7 +319,10 @@ class TriangleMesh:
             from preform.plugins.surfaces.mesh_topology import build_topology
             from preform.plugins.surfaces.mesh_walk import MeshWalker
 
-            walker = MeshWalker(build_topology(self.vertices, self.faces, self.face_normals))
+            walker = MeshWalker(
+                build_topology(self.vertices, self.faces, self.face_normals),
+                self.feature_angle_deg,
+            )
             self._walker = walker
         return walker
 
@@ -317,18 +338,34 @@ class TriangleMesh:
         spacing: float,
         face_a: IntArray,
         face_b: IntArray,
+        face_opposite: IntArray,
     ) -> FacePlacement:
         """Net nodes at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) [m], on the far side
         from ``opposite``, found exactly on the triangles met walking from the parents'
-        triangles ``face_a``/``face_b`` (``preform.plugins.surfaces.mesh_kernels``)."""
-        return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b)
+        triangles ``face_a``/``face_b`` (``preform.plugins.surfaces.mesh_kernels``); the
+        opposite node's triangle ``face_opposite`` places it across a crease."""
+        return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b, face_opposite)
+
+    def spacings(
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float
+    ) -> FloatArray:
+        """Node-to-parent spacings (m,) [m] from ``a`` (m, 3) on triangles ``face_a`` to ``b``
+        on ``face_b`` under this mesh's rule: the chord, or the length along the surface where
+        a feature crease lies between (``feature_angle_deg``) within ``spacing`` [m] of ``a``."""
+        return self.walker.spacings(a, b, face_a, face_b, spacing)
 
     def place_nodes(
         self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
     ) -> tuple[FloatArray, NDArray[np.int8]]:
         """As :meth:`place_nodes_from_faces`, locating the parents' triangles first."""
         placed = self.place_nodes_from_faces(
-            a, b, opposite, spacing, self.locate_faces(a), self.locate_faces(b)
+            a,
+            b,
+            opposite,
+            spacing,
+            self.locate_faces(a),
+            self.locate_faces(b),
+            self.locate_faces(opposite),
         )
         return placed.points, placed.status
 

@@ -61,6 +61,69 @@ def _segment_distance(p, q0, q1):
 
 
 @numba.njit(cache=True)
+def _unfolded(q0, q1, q2, f, t, normals, corners, centroids, feature_cos, spacing):
+    """Point q on triangle f as seen from triangle t: q itself (the chord model) unless the
+    surface turns between them by more than the feature angle (cos of f's and t's normals below
+    ``feature_cos``); then q rotated about the crease into t's plane, beyond the crease from t,
+    so that its straight distance to a point of t is the length along the surface, over the
+    crease. The crease is the line where f's and t's planes meet: for one sharp edge between
+    them that is the edge itself."""
+    nf0, nf1, nf2 = normals[f, 0], normals[f, 1], normals[f, 2]
+    nt0, nt1, nt2 = normals[t, 0], normals[t, 1], normals[t, 2]
+    if f == t or _dot3(nf0, nf1, nf2, nt0, nt1, nt2) >= feature_cos:
+        return q0, q1, q2, False
+    # u along the crease; its length² is sin² of the turn.
+    u0, u1, u2 = nf1 * nt2 - nf2 * nt1, nf2 * nt0 - nf0 * nt2, nf0 * nt1 - nf1 * nt0
+    uu = u0 * u0 + u1 * u1 + u2 * u2
+    if uu < 1e-24:
+        # Facets facing opposite ways (a knife edge): no crease line to unfold about.
+        return q0, q1, q2, False
+    hf = _dot3(nf0, nf1, nf2, corners[f, 0, 0], corners[f, 0, 1], corners[f, 0, 2])
+    ht = _dot3(nt0, nt1, nt2, corners[t, 0, 0], corners[t, 0, 1], corners[t, 0, 2])
+    # The point of the crease nearest the origin: (hf·(nt × u) + ht·(u × nf)) / |u|².
+    x0 = (hf * (nt1 * u2 - nt2 * u1) + ht * (u1 * nf2 - u2 * nf1)) / uu
+    x1 = (hf * (nt2 * u0 - nt0 * u2) + ht * (u2 * nf0 - u0 * nf2)) / uu
+    x2 = (hf * (nt0 * u1 - nt1 * u0) + ht * (u0 * nf1 - u1 * nf0)) / uu
+    ul = math.sqrt(uu)
+    u0, u1, u2 = u0 / ul, u1 / ul, u2 / ul
+    w0, w1, w2 = q0 - x0, q1 - x1, q2 - x2
+    s = _dot3(w0, w1, w2, u0, u1, u2)
+    h0, h1, h2 = w0 - s * u0, w1 - s * u1, w2 - s * u2
+    h = math.sqrt(h0 * h0 + h1 * h1 + h2 * h2)
+    if h > spacing:
+        # The planes meet farther than one spacing from q: no single crease lies between q and
+        # a node of t (two features within one spacing, or a smooth turn): the chord.
+        return q0, q1, q2, False
+    # In t's plane, across the crease: v ⟂ u, pointing away from t's side.
+    v0, v1, v2 = nt1 * u2 - nt2 * u1, nt2 * u0 - nt0 * u2, nt0 * u1 - nt1 * u0
+    if _dot3(v0, v1, v2, centroids[t, 0] - x0, centroids[t, 1] - x1, centroids[t, 2] - x2) > 0.0:
+        v0, v1, v2 = -v0, -v1, -v2
+    return x0 + s * u0 + h * v0, x1 + s * u1 + h * v1, x2 + s * u2 + h * v2, True
+
+
+@numba.njit(cache=True)
+def spacing_kernel(
+    corners, normals, centroids, a, b, face_a, face_b, feature_cos, spacing, out_length
+):
+    """The spacing [m] from a[i] on triangle face_a[i] to b[i] on face_b[i] under the placement's
+    rule: the distance from b to a unfolded into b's plane over a feature, else the chord."""
+    for i in range(a.shape[0]):
+        u0, u1, u2, _ = _unfolded(
+            a[i, 0],
+            a[i, 1],
+            a[i, 2],
+            face_a[i],
+            face_b[i],
+            normals,
+            corners,
+            centroids,
+            feature_cos,
+            spacing,
+        )
+        out_length[i] = math.sqrt((b[i, 0] - u0) ** 2 + (b[i, 1] - u1) ** 2 + (b[i, 2] - u2) ** 2)
+
+
+@numba.njit(cache=True)
 def place_nodes_kernel(
     corners,
     normals,
@@ -72,21 +135,24 @@ def place_nodes_kernel(
     b,
     c,
     spacing,
+    feature_cos,
     face_a,
     face_b,
+    face_c,
     visited,
     queue,
     out_points,
     out_status,
     out_faces,
     out_normals,
-    out_distance,
+    out_residual,
 ):
     """Nodes at chord ``spacing`` from a[i] and b[i] on the mesh, away from c[i] (module doc).
 
     ``face_a``/``face_b``: the parents' triangles. ``visited`` (m,) bool all False and ``queue``
     (m,) int64 are scratch (left all False). Writes points, NodeStatus codes, the node's
-    triangle, its normal and its distance to that triangle's plane [m]."""
+    triangle, its normal and its residual [m]: the largest of its distance to that triangle's
+    plane and the errors of its two spacings (chord, or surface length over a feature)."""
     n = a.shape[0]
     inside_tol = 1e-9 * spacing
     for i in range(n):
@@ -94,7 +160,7 @@ def place_nodes_kernel(
             out_points[i, k] = np.nan
             out_normals[i, k] = np.nan
         out_faces[i] = -1
-        out_distance[i] = np.nan
+        out_residual[i] = np.nan
         m0 = 0.5 * (a[i, 0] + b[i, 0])
         m1 = 0.5 * (a[i, 1] + b[i, 1])
         m2 = 0.5 * (a[i, 2] + b[i, 2])
@@ -111,7 +177,9 @@ def place_nodes_kernel(
             continue
         r = math.sqrt(r2)
         e0, e1, e2 = e0 / chord, e1 / chord, e2 / chord
-        fa, fb = face_a[i], face_b[i]
+        fa, fb, fc = face_a[i], face_b[i], face_c[i]
+        if fc < 0:
+            fc = fa  # (opposite node's triangle unknown: taken as a parent's)
         s0 = normals[fa, 0] + normals[fb, 0]
         s1 = normals[fa, 1] + normals[fb, 1]
         s2 = normals[fa, 2] + normals[fb, 2]
@@ -136,6 +204,8 @@ def place_nodes_kernel(
                 tail += 1
         best_phi = np.inf
         best_face = -1
+        best_over_feature = False
+        ba0, ba1, ba2, bb0, bb1, bb2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         bp0, bp1, bp2 = 0.0, 0.0, 0.0
         boundary = False
         mid = np.empty(3)
@@ -159,29 +229,88 @@ def place_nodes_kernel(
                     visited[nb] = True
                     queue[tail] = nb
                     tail += 1
+            # The circle this triangle sees: the chord circle, or, where the surface turns by
+            # more than the feature angle between a parent's triangle and t, the circle about
+            # that parent unfolded into t's plane (surface length over the crease, module doc).
+            ta0, ta1, ta2, ua = _unfolded(
+                a[i, 0], a[i, 1], a[i, 2], fa, t, normals, corners, centroids, feature_cos, spacing
+            )
+            tb0, tb1, tb2, ub = _unfolded(
+                b[i, 0], b[i, 1], b[i, 2], fb, t, normals, corners, centroids, feature_cos, spacing
+            )
+            tc0, tc1, tc2, uc = _unfolded(
+                c[i, 0],
+                c[i, 1],
+                c[i, 2],
+                fc,
+                t,
+                normals,
+                corners,
+                centroids,
+                feature_cos,
+                2.0 * spacing,  # (a cell's diagonal is under 2 d)
+            )
+            over = ua or ub or uc
+            cm0, cm1, cm2, cr = m0, m1, m2, r
+            cx0, cx1, cx2, cy0, cy1, cy2 = x0, x1, x2, y0, y1, y2
+            if over:
+                cm0, cm1, cm2 = 0.5 * (ta0 + tb0), 0.5 * (ta1 + tb1), 0.5 * (ta2 + tb2)
+                f0, f1, f2 = tb0 - ta0, tb1 - ta1, tb2 - ta2
+                fl = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+                cr2 = spacing * spacing - 0.25 * fl * fl
+                if not cr2 > 0.0 or fl <= 1e-9 * spacing:
+                    continue
+                cr = math.sqrt(cr2)
+                f0, f1, f2 = f0 / fl, f1 / fl, f2 / fl
+                # The circle's own frame: from t's outward normal, turning away from the
+                # opposite node as seen in t's plane (unfolded too if across a feature), so
+                # the far half is 0 < φ < π as for the chord circle; past a fold sharper than
+                # 90° the node can lie behind the parents' chord in space, so the chord
+                # circle's half cannot say it.
+                nt0, nt1, nt2 = normals[t, 0], normals[t, 1], normals[t, 2]
+                fx = _dot3(nt0, nt1, nt2, f0, f1, f2)
+                cx0, cx1, cx2 = nt0 - fx * f0, nt1 - fx * f1, nt2 - fx * f2
+                cl = math.sqrt(cx0 * cx0 + cx1 * cx1 + cx2 * cx2)
+                if cl < 1e-12:
+                    continue
+                cx0, cx1, cx2 = cx0 / cl, cx1 / cl, cx2 / cl
+                cy0, cy1, cy2 = f1 * cx2 - f2 * cx1, f2 * cx0 - f0 * cx2, f0 * cx1 - f1 * cx0
+                if _dot3(cy0, cy1, cy2, tc0 - cm0, tc1 - cm1, tc2 - cm2) > 0.0:
+                    cy0, cy1, cy2 = -cy0, -cy1, -cy2
             n0, n1, n2 = normals[t, 0], normals[t, 1], normals[t, 2]
-            al = _dot3(n0, n1, n2, x0, x1, x2)
-            be = _dot3(n0, n1, n2, y0, y1, y2)
+            al = _dot3(n0, n1, n2, cx0, cx1, cx2)
+            be = _dot3(n0, n1, n2, cy0, cy1, cy2)
             ga = _dot3(
-                n0, n1, n2, m0 - corners[t, 0, 0], m1 - corners[t, 0, 1], m2 - corners[t, 0, 2]
+                n0, n1, n2, cm0 - corners[t, 0, 0], cm1 - corners[t, 0, 1], cm2 - corners[t, 0, 2]
             )
             rho = math.sqrt(al * al + be * be)
-            if rho * r < abs(ga) or rho == 0.0:
+            if rho * cr < abs(ga) or rho == 0.0:
                 continue
             base = math.atan2(be, al)
-            half = math.acos(min(max(-ga / (r * rho), -1.0), 1.0))
+            half = math.acos(min(max(-ga / (cr * rho), -1.0), 1.0))
             for sign in (1.0, -1.0):
                 phi = base + sign * half
+                cp, sp = cr * math.cos(phi), cr * math.sin(phi)
+                p0 = cm0 + cp * cx0 + sp * cy0
+                p1 = cm1 + cp * cx1 + sp * cy1
+                p2 = cm2 + cp * cx2 + sp * cy2
                 if phi > math.pi:
                     phi -= 2.0 * math.pi
                 elif phi <= -math.pi:
                     phi += 2.0 * math.pi
-                if not (0.0 < phi < math.pi) or phi >= best_phi:
+                if not (0.0 < phi < math.pi):
                     continue
-                cp, sp = r * math.cos(phi), r * math.sin(phi)
-                p0 = m0 + cp * x0 + sp * y0
-                p1 = m1 + cp * x1 + sp * y1
-                p2 = m2 + cp * x2 + sp * y2
+                if over:
+                    # Ranked with the chord-circle roots by its angle about the parents' chord,
+                    # taken in (0, 2π): all triangles compared on one scale.
+                    phi = math.atan2(
+                        _dot3(p0 - m0, p1 - m1, p2 - m2, y0, y1, y2),
+                        _dot3(p0 - m0, p1 - m1, p2 - m2, x0, x1, x2),
+                    )
+                    if phi <= 0.0:
+                        phi += 2.0 * math.pi
+                if phi >= best_phi:
+                    continue
                 inside = True
                 for k in range(3):
                     w = _dot3(
@@ -197,6 +326,8 @@ def place_nodes_kernel(
                         break
                 if inside:
                     best_phi, best_face = phi, t
+                    best_over_feature = over
+                    ba0, ba1, ba2, bb0, bb1, bb2 = ta0, ta1, ta2, tb0, tb1, tb2
                     bp0, bp1, bp2 = p0, p1, p2
         for j in range(tail):
             visited[queue[j]] = False
@@ -206,7 +337,21 @@ def place_nodes_kernel(
             out_faces[i] = best_face
             for k in range(3):
                 out_normals[i, k] = normals[best_face, k]
-            out_distance[i] = abs(
+            if best_over_feature:
+                # The cell wraps over the crease: past a 90° fold its chord-built normal faces
+                # away from the node's facet though nothing folded, so the engine's fold test
+                # compares it with the mean normal of its four corners' facets.
+                w0 = normals[best_face, 0] + normals[fa, 0] + normals[fb, 0] + normals[fc, 0]
+                w1 = normals[best_face, 1] + normals[fa, 1] + normals[fb, 1] + normals[fc, 1]
+                w2 = normals[best_face, 2] + normals[fa, 2] + normals[fb, 2] + normals[fc, 2]
+                wl = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+                if wl > 1e-12:
+                    out_normals[i, 0], out_normals[i, 1] = w0 / wl, w1 / wl
+                    out_normals[i, 2] = w2 / wl
+            # The residual of the constraint placed by (the chord, or the length along the
+            # surface over a feature: the distance to the unfolded parent) and of lying on the
+            # facet.
+            plane = abs(
                 _dot3(
                     normals[best_face, 0],
                     normals[best_face, 1],
@@ -216,6 +361,9 @@ def place_nodes_kernel(
                     bp2 - corners[best_face, 0, 2],
                 )
             )
+            to_a = math.sqrt((bp0 - ba0) ** 2 + (bp1 - ba1) ** 2 + (bp2 - ba2) ** 2)
+            to_b = math.sqrt((bp0 - bb0) ** 2 + (bp1 - bb1) ** 2 + (bp2 - bb2) ** 2)
+            out_residual[i] = max(plane, abs(to_a - spacing), abs(to_b - spacing))
         elif boundary:
             out_status[i] = _OFF_TOOL
         else:
@@ -228,10 +376,12 @@ def geodesic_kernel(
     normals,
     neighbours,
     edge_normals,
+    centroids,
     start,
     start_face,
     direction,
     spacing,
+    feature_cos,
     count,
     out_points,
     out_status,
@@ -251,6 +401,7 @@ def geodesic_kernel(
         f = start_face[g]
         x0, x1, x2 = start[g, 0], start[g, 1], start[g, 2]
         q0, q1, q2 = x0, x1, x2
+        q_face = f
         n0, n1, n2 = normals[f, 0], normals[f, 1], normals[f, 2]
         t0, t1, t2 = direction[g, 0], direction[g, 1], direction[g, 2]
         tn = _dot3(t0, t1, t2, n0, n1, n2)
@@ -285,20 +436,28 @@ def geodesic_kernel(
                     s_exit, k_exit = s, k
             if k_exit < 0:
                 break
-            # Nodes on this straight piece: |x + s·t − q| = d, the root ahead.
+            # Nodes on this straight piece: |x + s·t − q| = d, the root ahead, with q unfolded
+            # into this triangle's plane if a feature lies between (surface length, module doc).
             while found < count:
-                w0, w1, w2 = x0 - q0, x1 - q1, x2 - q2
+                uq0, uq1, uq2, _ = _unfolded(
+                    q0, q1, q2, q_face, f, normals, corners, centroids, feature_cos, spacing
+                )
+                w0, w1, w2 = x0 - uq0, x1 - uq1, x2 - uq2
                 bb = _dot3(t0, t1, t2, w0, w1, w2)
                 cc = w0 * w0 + w1 * w1 + w2 * w2 - spacing * spacing
                 disc = bb * bb - cc
                 if disc < 0.0:
                     break
                 s_node = -bb + math.sqrt(disc)
+                if -1e-9 * spacing < s_node < 0.0:
+                    # The node fell on the edge just crossed, a rounding error behind.
+                    s_node = 0.0
                 if s_node < 0.0 or s_node > s_exit:
                     break
                 x0, x1, x2 = x0 + s_node * t0, x1 + s_node * t1, x2 + s_node * t2
                 s_exit -= s_node
                 q0, q1, q2 = x0, x1, x2
+                q_face = f
                 out_points[g, found, 0], out_points[g, found, 1] = x0, x1
                 out_points[g, found, 2] = x2
                 out_status[g, found] = _PLACED

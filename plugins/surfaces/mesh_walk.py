@@ -8,6 +8,7 @@ Lengths in metres.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,8 +28,13 @@ StatusArray = NDArray[np.int8]
 class MeshWalker:
     """Walking queries on one mesh's topology, with the scratch buffers they share."""
 
-    def __init__(self, topology: MeshTopology) -> None:
+    def __init__(self, topology: MeshTopology, feature_angle_deg: float) -> None:
         self.topology = topology
+        self.feature_angle_deg = feature_angle_deg
+        # Node spacing is the surface length, not the chord, where the surface turns by more
+        # than ``feature_angle_deg`` [°] between a node's triangle and its parent's
+        # (TriangleMesh, docs/physics.md).
+        self.feature_cos = math.cos(math.radians(self.feature_angle_deg))
         m = topology.n_triangles
         # Scratch shared by every call: the kernels hold the GIL (no nogil) and leave it as
         # they found it, so threads sharing one mesh never see it mid-query.
@@ -43,9 +49,11 @@ class MeshWalker:
         spacing: float,
         face_a: IntArray,
         face_b: IntArray,
+        face_opposite: IntArray,
     ) -> FacePlacement:
         """Nodes at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) [m] on the mesh, on the
-        far side from ``opposite``, walking from the parents' triangles ``face_a``/``face_b``."""
+        far side from ``opposite``, walking from the parents' triangles ``face_a``/``face_b``
+        (``face_opposite``: the opposite node's)."""
         from preform.plugins.surfaces.mesh_kernels import place_nodes_kernel
 
         topo = self.topology
@@ -54,7 +62,7 @@ class MeshWalker:
         status = np.empty(m, dtype=np.int8)
         faces = np.empty(m, dtype=np.int64)
         normals = np.empty((m, 3))
-        distance = np.empty(m)
+        residual = np.empty(m)
         place_nodes_kernel(
             topo.corners,
             topo.normals,
@@ -66,17 +74,43 @@ class MeshWalker:
             np.ascontiguousarray(b, dtype=np.float64),
             np.ascontiguousarray(opposite, dtype=np.float64),
             float(spacing),
+            self.feature_cos,
             np.ascontiguousarray(face_a, dtype=np.int64),
             np.ascontiguousarray(face_b, dtype=np.int64),
+            np.ascontiguousarray(face_opposite, dtype=np.int64),
             self._visited,
             self._queue,
             points,
             status,
             faces,
             normals,
-            distance,
+            residual,
         )
-        return FacePlacement(points, status, faces, normals, distance)
+        return FacePlacement(points, status, faces, normals, residual)
+
+    def spacings(
+        self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float
+    ) -> FloatArray:
+        """The spacing (m,) [m] from ``a`` on triangles ``face_a`` to ``b`` on ``face_b``
+        (m, 3) [m] under the placement's rule (chord, or length along the surface over a
+        feature crease)."""
+        from preform.plugins.surfaces.mesh_kernels import spacing_kernel
+
+        topo = self.topology
+        length = np.empty(len(a))
+        spacing_kernel(
+            topo.corners,
+            topo.normals,
+            topo.centroids,
+            np.ascontiguousarray(a, dtype=np.float64),
+            np.ascontiguousarray(b, dtype=np.float64),
+            np.ascontiguousarray(face_a, dtype=np.int64),
+            np.ascontiguousarray(face_b, dtype=np.int64),
+            self.feature_cos,
+            float(spacing),
+            length,
+        )
+        return length
 
     def geodesic_nodes(
         self,
@@ -101,10 +135,12 @@ class MeshWalker:
             topo.normals,
             topo.neighbours,
             topo.edge_normals,
+            topo.centroids,
             np.ascontiguousarray(start, dtype=np.float64),
             np.ascontiguousarray(start_face, dtype=np.int64),
             np.ascontiguousarray(direction, dtype=np.float64),
             float(spacing),
+            self.feature_cos,
             int(count),
             points,
             status,

@@ -60,7 +60,13 @@ def test_on_a_plane_a_node_completes_the_rhombus(
     c = 0.01 * ex - 0.02 * ey
     a, b = c + spacing * e1, c + spacing * e2
     placed = mesh.place_nodes_from_faces(
-        a[None], b[None], c[None], spacing, mesh.locate_faces(a[None]), mesh.locate_faces(b[None])
+        a[None],
+        b[None],
+        c[None],
+        spacing,
+        mesh.locate_faces(a[None]),
+        mesh.locate_faces(b[None]),
+        mesh.locate_faces(c[None]),
     )
     assert placed.status[0] == NodeStatus.PLACED
     np.testing.assert_allclose(placed.points[0], a + b - c, atol=1e-12)
@@ -101,7 +107,9 @@ def test_on_a_plane_a_geodesic_is_a_straight_line(
 def test_across_a_crease_a_geodesic_is_the_unfolded_straight_line() -> None:
     """A plate z = 0 (x < 0) folded down at x = 0: a geodesic leaving at 35° to the crease's
     normal continues down the wall along the straight line of the unfolded plate; its nodes
-    are successive chords d apart (the one straddling the crease too)."""
+    are d apart along it, the one straddling the crease too (the crease is a feature: the tow
+    bends over it, so the spacing there is the length along the surface, not the chord); with
+    the feature angle at 180° every spacing is the chord."""
     n, length = 9, 0.2
     s = np.linspace(0.0, 1.0, n)
     top = [(-length + length * a, -length / 2 + length * b, 0.0) for a in s for b in s]
@@ -112,7 +120,7 @@ def test_across_a_crease_a_geodesic_is_the_unfolded_straight_line() -> None:
             for j in range(n - 1):
                 k = base + i * n + j
                 faces += [[k, k + n, k + n + 1], [k, k + n + 1, k + 1]]
-    mesh = TriangleMesh(np.array(top + wall), np.array(faces))
+    mesh = TriangleMesh(np.array(top + wall), np.array(faces), feature_angle_deg=20.0)
     d, theta = 0.0123, math.radians(35.0)
     start = np.array([-0.05, -0.04, 0.0])
     t = np.array([math.cos(theta), math.sin(theta), 0.0])
@@ -125,8 +133,16 @@ def test_across_a_crease_a_geodesic_is_the_unfolded_straight_line() -> None:
     across = rel[:, 0] * t[1] - rel[:, 1] * t[0]
     np.testing.assert_allclose(across, 0.0, atol=1e-12)
     assert np.any(p[:, 2] < -0.05)  # well down the wall
-    chords = np.linalg.norm(np.diff(np.vstack([start, p]), axis=0), axis=1)
+    along = np.linalg.norm(np.diff(np.vstack([start[:2], flat]), axis=0), axis=1)
+    np.testing.assert_allclose(along, d, rtol=1e-12)
+    chord_mesh = TriangleMesh(mesh.vertices, mesh.faces, feature_angle_deg=180.0)
+    points, _ = chord_mesh.geodesic_nodes(start[None], t[None], d, 14)
+    chords = np.linalg.norm(np.diff(np.vstack([start, points[0]]), axis=0), axis=1)
     np.testing.assert_allclose(chords, d, rtol=1e-12)
+    # the chord cuts the corner, so the chord-spaced net runs further down the unfolded line
+    q = points[0]
+    q_flat = np.where(q[:, :1] > -1e-15, np.column_stack([-q[:, 2], q[:, 1]]), q[:, :2])
+    assert np.linalg.norm(q_flat[-1] - start[:2]) > 14 * d + 1e-4
 
 
 def test_the_topology_pairs_every_interior_edge() -> None:
