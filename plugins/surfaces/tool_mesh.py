@@ -70,10 +70,12 @@ class ToolMesh(TriangleMesh):
         face_of_input: IntArray | None,
         face_names: dict[int, str],
         source: ToolSource,
+        feature_angle_deg: float | None = None,
     ) -> None:
         # Hygiene has welded and dropped what TriangleMesh would: nothing is merged again, so
         # the triangles stay in step with their labels.
-        super().__init__(repaired.vertices, repaired.faces, merge_tolerance_rel=0.0)
+        options = {} if feature_angle_deg is None else {"feature_angle_deg": feature_angle_deg}
+        super().__init__(repaired.vertices, repaired.faces, merge_tolerance_rel=0.0, **options)
         if self.n_triangles != repaired.faces.shape[0]:
             raise ValueError(
                 f"{source.file}: the mesh lost {repaired.faces.shape[0] - self.n_triangles} "

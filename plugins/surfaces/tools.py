@@ -202,6 +202,16 @@ class MeshTool(BaseModel):
         "the same, closest-point queries get faster (default: none for STL/OBJ, 1/20 of the "
         "bounding-box diagonal for STEP/IGES).",
     )
+    feature_angle_deg: float | None = Field(
+        default=None,
+        ge=0,
+        le=180,
+        description="Where the tool turns by more than this angle [deg] between a net node's "
+        "triangle and its parent's (a sharp feature crease), node spacing is measured along the "
+        "surface instead of as a chord (docs/physics.md, 'Sharp creases'). Default 180: off, "
+        "every spacing a chord; 20 suits tools whose sharp creases lie more than a node "
+        "spacing apart.",
+    )
     tessellation_tolerance_mm: float | None = Field(
         default=None,
         ge=0.001,
@@ -359,7 +369,7 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
         repaired = repair(vertices, faces, weld, max_edge_m=max_edge)
     except MeshRefused as error:
         raise MeshRefused(f"{path}: {error}") from None
-    return ToolMesh(repaired, labels, names, source)
+    return ToolMesh(repaired, labels, names, source, feature_angle_deg=p.feature_angle_deg)
 
 
 _BUILDERS: dict[type, Any] = {

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 from click.testing import CliRunner
@@ -151,3 +152,45 @@ def test_the_bundled_stiffener_drapes_and_says_its_unit(tmp_path):
     assert summary["status"] in ("ok", "partial")
     if summary["status"] == "partial":
         assert summary["reasons"]  # said in words
+
+
+def test_the_scenes_feature_angle_reaches_the_mesh(tmp_path):
+    """`tool.feature_angle_deg` switches the surface-length rule on for that tool: a plate
+    folded 90° along y, crossed by fibres at 60° to the crease, keeps the flat net's angle α
+    in every cell lying on one flank only with the rule on (the chord over the crease shears
+    the cells beyond it by degrees)."""
+    # x < 0 flat, x > 0 going straight down: a grid 25 mm apart, the crease at x = 0
+    y = np.linspace(-0.3, 0.3, 25)
+    near = [(-a, b, 0.0) for a in np.linspace(0.3, 0.0, 13) for b in y]
+    far = [(0.0, b, -a) for a in np.linspace(0.025, 0.3, 12) for b in y]
+    cols = len(y)
+    faces = [
+        f
+        for i in range(24)
+        for j in range(cols - 1)
+        for f in (
+            [i * cols + j, (i + 1) * cols + j, (i + 1) * cols + j + 1],
+            [i * cols + j, (i + 1) * cols + j + 1, i * cols + j + 1],
+        )
+    ]
+    plate = TriangleMesh(np.array(near + far), np.array(faces))
+    write_stl(tmp_path / "fold.stl", plate, binary=True, units_to_m=1.0)
+    flank_shear = {}
+    for angle in (None, 20.0):
+        tool = {"file": "fold.stl", "units": "m"}
+        if angle is not None:
+            tool["feature_angle_deg"] = angle
+        scene = _scene(tool, spacing_mm=10.0)
+        scene["start"] = {"point_mm": [-25.0, 0.0], "orientation_deg": 30.0}
+        scene["start"]["generator_angle_deg"] = 80.0
+        scene["ply"]["size_mm"] = [120, 120]
+        code, output, _ = _run(tmp_path, scene, name=f"fold-{angle}")
+        assert code == 0, output
+        cells = pd.read_csv(next((tmp_path / f"out-fold-{angle}").glob("*/*/cells.csv")))
+        # cells whose centre lies more than a spacing from the crease sit on one flank
+        flank = (cells["x_mm"] < -10.0) | (cells["z_mm"] < -10.0)
+        assert flank.sum() > 40
+        flank_shear[angle] = np.abs(cells.loc[flank, "shear_deg"].to_numpy() + 10.0).max()
+    # α = 80°: a net that keeps its flat angle has γ = −10° in every flank cell
+    assert flank_shear[20.0] < 1e-6
+    assert flank_shear[None] > 1.0
