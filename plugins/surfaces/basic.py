@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.drape.compiled_surface import SPHERE, TRIMMED_SPHERE
 from preform.drape.part import HeightCut
 from preform.drape.result import NodeStatus
 
@@ -185,29 +186,23 @@ class Sphere:
         """Net nodes (m, 3) [m] at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the side
         away from ``opposite``, with NodeStatus codes (m,).
 
-        Closed form (PHYSICS §6): relative to the centre, P·A = P·B = R² − d²/2 and |P| = R. P
-        lies in the plane spanned by A + B and n = A × B; the root on the far side of the
-        plane (0, A, B) from the opposite node is the new node.
+        Closed form (PHYSICS §6), compiled (``preform.drape.net_kernels._sphere_node``): relative
+        to the centre, P·A = P·B = R² − d²/2 and |P| = R. P lies in the plane spanned by A + B
+        and n = A × B; the root on the far side of the plane (0, A, B) from the opposite node is
+        the new node. A node below a trimmed sphere's floor is OFF_TOOL.
         """
-        r = self.radius
-        pa, pb, pc = a - self.centre, b - self.centre, opposite - self.centre
-        along = pa + pb
-        along_len = np.sqrt(_dot(along, along))
-        n = _cross(pa, pb)
-        n_len = np.sqrt(_dot(n, n))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            height = (2.0 * r * r - spacing * spacing) / along_len
-            off2 = r * r - height * height
-            ok = (off2 >= 0) & (n_len > 1e-12 * r * spacing)
-            away = np.where(_dot(pc, n) > 0, -1.0, 1.0)
-            p = (height / along_len)[:, None] * along + (
-                away * np.sqrt(np.where(ok, off2, 0.0)) / n_len
-            )[:, None] * n
-        p += self.centre
-        status = np.where(ok, NodeStatus.PLACED, NodeStatus.NO_INTERSECTION).astype(np.int8)
-        status[ok & ~self._on_tool(p, spacing)] = NodeStatus.OFF_TOOL
-        p[status != NodeStatus.PLACED] = np.nan
-        return p, status
+        from preform.drape import net_kernels
+
+        kind, params = self.compiled_queries()
+        ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
+        points, status = net_kernels.sphere_place_nodes(
+            kind, params, ends[0], ends[1], ends[2], float(spacing)
+        )
+        return np.asarray(points), np.asarray(status, dtype=np.int8)
+
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The sphere for the compiled net kernels: (SPHERE, (centre x, y, z, radius)) [m]."""
+        return SPHERE, np.array([*self.centre, self.radius], dtype=float)
 
     def geodesic_nodes(
         self, start: FloatArray, direction: FloatArray, spacing: float, count: int
@@ -290,6 +285,12 @@ class Hemisphere(Sphere):
             radial[below, 2] = floor
         q = self.centre + self.radius * radial
         return q, np.sqrt(_dot(p - q, p - q))
+
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The tool for the compiled net kernels: (TRIMMED_SPHERE, (centre x, y, z, radius,
+        floor z)) [m]."""
+        floor = float(self.centre[2]) - self.run_off
+        return TRIMMED_SPHERE, np.array([*self.centre, self.radius, floor], dtype=float)
 
     def _on_tool(self, p: FloatArray, spacing: float) -> BoolArray:
         floor = self.centre[2] - self.run_off
