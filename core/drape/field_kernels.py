@@ -214,3 +214,60 @@ def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> 
                         total += omega
                         count += 1
             out[i, j] = total / count - _HALF_PI if count > 0 else np.nan
+
+
+@_jit
+def counted_values(values: FloatArray, counted: BoolArray) -> FloatArray:
+    """``values[counted]`` (flat, in row order) for a law evaluated on counted cells only."""
+    total = 0
+    for i in range(counted.shape[0]):
+        for j in range(counted.shape[1]):
+            if counted[i, j]:
+                total += 1
+    out = np.empty(total)
+    k = 0
+    for i in range(counted.shape[0]):
+        for j in range(counted.shape[1]):
+            if counted[i, j]:
+                out[k] = values[i, j]
+                k += 1
+    return out
+
+
+@_jit
+def energy_cells(
+    shear: FloatArray,
+    counted: BoolArray,
+    law_energy: FloatArray,
+    share: FloatArray,
+    locking: float,
+    failure: float,
+    density: FloatArray,
+    thickness_ratio: FloatArray,
+    past_locking: BoolArray,
+    past_failure: BoolArray,
+) -> float:
+    """Fill the energy field's cell arrays and return Σ W·s over the counted cells [J/m²·cell]
+    (``preform.drape.fields.energy_field``): W from ``law_energy`` (the law at the counted
+    cells' shear, in row order), s from ``share`` (the part weight), t/t0 = 1/cos γ, and the
+    cells past the locking (|γ| > locking) and failure (γ > failure) angles [rad] (inf for a
+    law without one). Cells not counted get W = 0, t/t0 = 1 and no flag."""
+    total = 0.0
+    k = 0
+    for i in range(shear.shape[0]):
+        for j in range(shear.shape[1]):
+            if not counted[i, j]:
+                density[i, j] = 0.0
+                thickness_ratio[i, j] = 1.0
+                past_locking[i, j] = False
+                past_failure[i, j] = False
+                continue
+            gamma = shear[i, j]
+            w = law_energy[k]
+            k += 1
+            density[i, j] = w
+            thickness_ratio[i, j] = 1.0 / max(math.cos(gamma), 1e-12)
+            past_locking[i, j] = abs(gamma) > locking
+            past_failure[i, j] = gamma > failure
+            total += w * share[i, j]
+    return total

@@ -133,20 +133,37 @@ def energy_field(
             if keep.shape != counted.shape:
                 raise ValueError(f"region mask shape {keep.shape} != cell shape {counted.shape}")
         counted = counted & keep
-    gamma = np.where(counted, result.shear, 0.0)
+    from preform.drape import field_kernels
+
+    counted = np.ascontiguousarray(counted)
+    shear = np.ascontiguousarray(result.shear, dtype=float)
     # the law is evaluated on the counted cells only (a mechanistic law is costly per angle)
-    density = np.zeros(counted.shape, dtype=float)
-    if counted.any():
-        density[counted] = np.asarray(law.energy(gamma[counted]), dtype=float)
-    thickness_ratio = np.where(counted, 1.0 / np.maximum(np.cos(gamma), 1e-12), 1.0)
-    locking = law.locking_angle
-    failure = law.failure_angle
-    past_locking = (
-        counted & (np.abs(gamma) > locking) if locking is not None else np.zeros_like(counted)
+    at_counted = field_kernels.counted_values(shear, counted)
+    law_energy = np.zeros(0)
+    if at_counted.size:
+        values = np.asarray(law.energy(at_counted), dtype=float)
+        law_energy = np.ascontiguousarray(np.broadcast_to(values, at_counted.shape))
+    share = np.ascontiguousarray(
+        counted if result.part_share is None else result.part_share, dtype=float
     )
-    past_failure = counted & (gamma > failure) if failure is not None else np.zeros_like(counted)
-    weight = np.where(counted, result.part_weight, 0.0)
-    total = float((density * weight).sum() * result.node_spacing**2)
+    density = np.empty(counted.shape)
+    thickness_ratio = np.empty(counted.shape)
+    past_locking = np.empty(counted.shape, dtype=bool)
+    past_failure = np.empty(counted.shape, dtype=bool)
+    locking, failure = law.locking_angle, law.failure_angle
+    weighted = field_kernels.energy_cells(
+        shear,
+        counted,
+        law_energy,
+        share,
+        np.inf if locking is None else float(locking),
+        np.inf if failure is None else float(failure),
+        density,
+        thickness_ratio,
+        past_locking,
+        past_failure,
+    )
+    total = float(weighted * result.node_spacing**2)
     return EnergyField(
         energy_density=density,
         thickness_ratio=thickness_ratio,

@@ -67,9 +67,9 @@ def _radial(kind: int, params: FloatArray, x: float, y: float, z: float):
 
 @_jit
 def _query(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """Closest surface point, the outward normal there and the distance [m] to (x, y, z)."""
+    """The closest surface point to (x, y, z), the unit outward normal there and the distance
+    [m] (the surface's ``closest_point`` and ``normal`` at once)."""
     ux, uy, uz = _radial(kind, params, x, y, z)
-    nx, ny, nz = ux, uy, uz
     radius = params[3]
     if kind == TRIMMED_SPHERE:
         floor = (params[4] - params[2]) / radius
@@ -86,7 +86,7 @@ def _query(kind: int, params: FloatArray, x: float, y: float, z: float):
     qy = params[1] + radius * uy
     qz = params[2] + radius * uz
     dx, dy, dz = x - qx, y - qy, z - qz
-    return qx, qy, qz, nx, ny, nz, math.sqrt(dx * dx + dy * dy + dz * dz)
+    return qx, qy, qz, ux, uy, uz, math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
 # --------------------------------------------------------------------------------------------
@@ -362,18 +362,16 @@ def _newton_node(
     work: FloatArray,
 ):
     """The general node for a surface with compiled queries: (x, y, z, status, iterations)."""
-    gx, gy, gz, _, _, _, _ = _query(
+    gx, gy, gz, n0x, n0y, n0z, _ = _query(
         kind, params, a[0] + b[0] - c[0], a[1] + b[1] - c[1], a[2] + b[2] - c[2]
     )
-    _, _, _, n0x, n0y, n0z, _ = _query(kind, params, gx, gy, gz)
     work[0], work[1], work[2], work[3], work[4], work[5] = gx, gy, gz, n0x, n0y, n0z
     phi = _circle_frame(a, b, c, work[0:3], work[3:6], spacing, frame)
     if math.isnan(phi):
         return np.nan, np.nan, np.nan, _NO_INTERSECTION, 0
     for used in range(1, max_iterations + 1):
         x, y, z = _on_circle(frame, phi)
-        fx, fy, fz, _, _, _, dist = _query(kind, params, x, y, z)
-        _, _, _, nx, ny, nz, _ = _query(kind, params, fx, fy, fz)
+        fx, fy, fz, nx, ny, nz, dist = _query(kind, params, x, y, z)
         phi, outcome = _newton_update(
             frame, phi, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m, used == max_iterations
         )

@@ -118,10 +118,14 @@ def test_compiled_loop_and_python_loop_give_the_same_net(closed_form: bool) -> N
     np.testing.assert_array_equal(compiled.status, python.status)
     assert {s for s in np.unique(compiled.status)} >= {NodeStatus.PLACED, NodeStatus.OFF_TOOL}
     placed = compiled.status == NodeStatus.PLACED
-    np.testing.assert_allclose(compiled.nodes[placed], python.nodes[placed], rtol=0, atol=1e-14)
-    np.testing.assert_allclose(compiled.residual, python.residual, rtol=0, atol=1e-15)
-    for key in ("fronts", "newton_iterations_max"):
-        assert compiled.info[key] == python.info[key], key
+    # the compiled queries take the normal from the radial direction they already have, the
+    # hemisphere's normal() recomputes it from the foot: the same to an ulp, so the nets agree
+    # to the solver's tolerance, and a node right at it may take one Newton step more
+    tol = 1e-9 * 0.06
+    np.testing.assert_allclose(compiled.nodes[placed], python.nodes[placed], rtol=0, atol=tol)
+    np.testing.assert_allclose(compiled.residual, python.residual, rtol=0, atol=tol)
+    assert compiled.info["fronts"] == python.info["fronts"]
+    assert abs(compiled.info["newton_iterations_max"] - python.info["newton_iterations_max"]) <= 1
 
 
 def test_sphere_place_nodes_reports_nan_exactly_where_not_placed() -> None:
