@@ -1,11 +1,11 @@
 """The compiled net kernels against the numpy path they replaced (issue 15), in one process.
 
-Three timings, each the best of ``--repeat`` runs of the compiled code and of the frozen numpy
+Three timings of processor time, each the best of ``--repeat`` runs of the compiled code and of the frozen numpy
 copy in ``numpy_baseline.py`` (the drape path as it was before the kernels), alternated so that
 load on a shared machine hits both alike; the ratio is what is reported:
 
 - closed-form sphere drape: a square ply of side 2R on the pole of a unit hemisphere, α = 90°,
-  n × n nodes (``--n``, default 1001); the wavefront fill alone (``info["fill_seconds"]``) and
+  n × n nodes (``--n``, default 1001); the wavefront fill alone (``info["fill_cpu_seconds"]``) and
   the whole ``drape`` call (generators and cell fields included);
 - general Newton placement: the same drape with ``use_closed_form=False`` (``--newton-n``):
   every node by Newton on the constraint circle, generators marched in sub-steps;
@@ -66,9 +66,11 @@ def step_context(n: int) -> CaseContext:
 
 
 def timed(call: Callable[[], Any]) -> tuple[float, Any]:
-    start = time.perf_counter()
+    """Processor time [s] of ``call`` (both paths are single-threaded; on a shared machine
+    processor time is far steadier than wall time) and its value."""
+    start = time.process_time()
     value = call()
-    return time.perf_counter() - start, value
+    return time.process_time() - start, value
 
 
 def peak_bytes(call: Callable[[], Any]) -> int:
@@ -91,7 +93,7 @@ def compare_drapes(n: int, closed_form: bool, repeat: int) -> None:
     for _ in range(repeat):
         for name, run in (("compiled", drape), ("numpy", numpy_drape)):
             seconds, result = timed(lambda run=run: sphere_drape(run, n, closed_form))
-            fill = float(result.info["fill_seconds"])
+            fill = float(result.info["fill_cpu_seconds"])
             best[name] = (min(best[name][0], fill), min(best[name][1], seconds))
             results[name] = result
     a, b = results["compiled"], results["numpy"]

@@ -44,6 +44,34 @@ def _cross_norm(ax: float, ay: float, az: float, bx: float, by: float, bz: float
 
 
 @_jit
+def _pair_deviation(
+    ax: float,
+    ay: float,
+    az: float,
+    bx: float,
+    by: float,
+    bz: float,
+    cx: float,
+    cy: float,
+    cz: float,
+    dx: float,
+    dy: float,
+    dz: float,
+) -> float:
+    """(ω_ab − 90°) + (ω_cd − 90°) [rad] for the angles ω between a and b and between c and d.
+
+    ω − 90° is the argument of |a×b| − i(a·b), a number in [−90°, 90°] read accurately near
+    0 as near ±90° (as atan2 reads ω itself); two such arguments add up to the argument of the
+    product of the two numbers, which lies in [−180°, 180°], so one atan2 gives the sum. Half
+    the atan2 calls of summing four corner angles one by one, the cell kernel's largest cost."""
+    re1 = _cross_norm(ax, ay, az, bx, by, bz)
+    im1 = -(ax * bx + ay * by + az * bz)
+    re2 = _cross_norm(cx, cy, cz, dx, dy, dz)
+    im2 = -(cx * dx + cy * dy + cz * dz)
+    return math.atan2(re1 * im2 + im1 * re2, re1 * re2 - im1 * im2)
+
+
+@_jit
 def cell_geometry(
     nodes: FloatArray,
     valid: BoolArray,
@@ -73,13 +101,12 @@ def cell_geometry(
             uhx, uhy, uhz = x11[0] - x01[0], x11[1] - x01[1], x11[2] - x01[2]
             vlx, vly, vlz = x01[0] - x00[0], x01[1] - x00[1], x01[2] - x00[2]
             vrx, vry, vrz = x11[0] - x10[0], x11[1] - x10[1], x11[2] - x10[2]
-            omega = 0.25 * (
-                _angle(ulx, uly, ulz, vlx, vly, vlz)
-                + _angle(ulx, uly, ulz, vrx, vry, vrz)
-                + _angle(uhx, uhy, uhz, vlx, vly, vlz)
-                + _angle(uhx, uhy, uhz, vrx, vry, vrz)
+            # γ = mean of the four corner angles ω − 90°, paired across the diagonals so two
+            # atan2 serve four corners (``_pair_deviation``)
+            shear[i, j] = 0.25 * (
+                _pair_deviation(ulx, uly, ulz, vlx, vly, vlz, uhx, uhy, uhz, vrx, vry, vrz)
+                + _pair_deviation(ulx, uly, ulz, vrx, vry, vrz, uhx, uhy, uhz, vlx, vly, vlz)
             )
-            shear[i, j] = omega - _HALF_PI
             for k in range(3):
                 centroid[i, j, k] = 0.25 * (x00[k] + x10[k] + x01[k] + x11[k])
             dx, dy, dz = x11[0] - x00[0], x11[1] - x00[1], x11[2] - x00[2]

@@ -451,6 +451,7 @@ def drape(
 
     # The wavefronts.
     fill_clock = time.perf_counter()
+    fill_cpu = time.process_time()
     from preform.drape import net_kernels as kernels
 
     compiled = isinstance(surface, CompiledQueries)
@@ -485,6 +486,7 @@ def drape(
         )  # fmt: skip
 
     fill_seconds = time.perf_counter() - fill_clock
+    fill_cpu_seconds = time.process_time() - fill_cpu
     nodes = pos.reshape(ni, nj, 3)
     node_status = status.reshape(ni, nj)
     fields = cell_fields(nodes, node_status, trim=trim)
@@ -498,6 +500,7 @@ def drape(
         "fronts": fronts,
         "seconds": time.perf_counter() - clock,
         "fill_seconds": fill_seconds,
+        "fill_cpu_seconds": fill_cpu_seconds,
     }
     return DrapeResult(
         nodes=nodes,
