@@ -636,3 +636,24 @@ def fill_fronts(
     # the vectorised loop makes one more pass over a front to find no node left, unless capped
     newton_max = 0 if closed_form or fronts == 0 else min(most_used + 1, max_iterations)
     return fronts, newton_max
+
+
+@_jit
+def query_points(kind: int, params: FloatArray, points: FloatArray):
+    """Closest surface points (m, 3) [m], unit normals there (m, 3) and distances (m,) [m] of a
+    surface with compiled queries, for the vectorised callers (generator marching)."""
+    m = points.shape[0]
+    foot = np.empty((m, 3))
+    normal = np.empty((m, 3))
+    dist = np.empty(m)
+    for i in range(m):
+        (
+            foot[i, 0],
+            foot[i, 1],
+            foot[i, 2],
+            normal[i, 0],
+            normal[i, 1],
+            normal[i, 2],
+            dist[i],
+        ) = _query(kind, params, points[i, 0], points[i, 1], points[i, 2])
+    return foot, normal, dist
