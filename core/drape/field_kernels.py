@@ -228,6 +228,24 @@ def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> 
             if have_v[1]:
                 for k in range(3):
                     v[1, k] = nodes[i, j, k] - nodes[i, j - 1, k]
+            if have_u[0] and have_u[1] and have_v[0] and have_v[1]:
+                interior = True
+                for k in range(3):
+                    interior = interior and math.isfinite(u[0, k]) and math.isfinite(u[1, k])
+                    interior = interior and math.isfinite(v[0, k]) and math.isfinite(v[1, k])
+                if interior:
+                    # all four corners: two atan2 for the four angles, as for a cell
+                    out[i, j] = 0.25 * (
+                        _pair_deviation(
+                            u[0, 0], u[0, 1], u[0, 2], v[0, 0], v[0, 1], v[0, 2],
+                            u[1, 0], u[1, 1], u[1, 2], v[1, 0], v[1, 1], v[1, 2],
+                        )
+                        + _pair_deviation(
+                            u[0, 0], u[0, 1], u[0, 2], v[1, 0], v[1, 1], v[1, 2],
+                            u[1, 0], u[1, 1], u[1, 2], v[0, 0], v[0, 1], v[0, 2],
+                        )
+                    )  # fmt: skip
+                    continue
             total = 0.0
             count = 0
             for p in range(2):
