@@ -12,7 +12,18 @@ import sys
 
 import pytest
 
-HEAVY = ("scipy", "matplotlib", "pandas", "pyarrow", "dask", "distributed", "shapely", "meshio", "numba", "gmsh")
+HEAVY = (
+    "scipy",
+    "matplotlib",
+    "pandas",
+    "pyarrow",
+    "dask",
+    "distributed",
+    "shapely",
+    "meshio",
+    "numba",
+    "gmsh",
+)
 
 PROBE = """
 import contextlib, io, json, sys
