@@ -21,11 +21,19 @@ from numpy.typing import ArrayLike, NDArray
 from preform.drape import fields as fields_module
 from preform.drape import steps as steps_module
 from preform.drape.fields import cell_status
+from preform.drape.generators import (
+    ClosedFormGeodesics,
+    GeneratorNodes,
+    _across_crease,
+    _chord_on_bent_path,
+    _finish,
+    _residual,
+    plan_generators,
+)
 from preform.drape.net import (
     ClosedFormPlacement,
     DrapeError,
     PlanPolylines,
-    _generators,
     _lift_to_tangent,
     _split_polyline,
 )
@@ -33,7 +41,7 @@ from preform.drape.part import Part
 from preform.drape.ply import PlyOutline
 from preform.drape.result import CellStatus, DrapeResult, NodeStatus
 from preform.drape.surface import Surface
-from preform.plugins.surfaces.basic import Sphere
+from preform.plugins.surfaces.basic import Hemisphere, Sphere
 from preform.shear import surrogate as surrogate_module
 
 FloatArray = NDArray[np.float64]
@@ -174,6 +182,7 @@ def drape(
     runs off the tool, comes back as node statuses.
     """
     clock = time.perf_counter()
+    surface = as_numpy_tool(surface)
     d = float(node_spacing_m)
     if not (np.isfinite(d) and d > 0):
         raise DrapeError(f"node spacing must be a positive length, got {node_spacing_m!r} m")
@@ -261,7 +270,7 @@ def drape(
 
     # Generators: +u, −u, +v, −v.
     counts = (ni - 1 - i0, i0, nj - 1 - j0, j0)
-    gen = _generators(
+    gen = _old_generators(
         surface,
         start,
         start_xy,
@@ -635,6 +644,246 @@ def _sense_energy(self: Any, u: FloatArray) -> FloatArray:
     )
     # energy of a non-negative law never decreases: a cubic overshoot must not say so
     return np.maximum(w, np.minimum(self.energy[k], self.energy[k + 1]))
+
+
+# ---------------------------------------------------------------------------------------------
+# Generators and the hemisphere's queries, as they were
+
+
+def _gdot(a: FloatArray, b: FloatArray) -> FloatArray:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _gunit(a: FloatArray) -> FloatArray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / np.sqrt(_gdot(a, a))[..., None]
+
+
+def geodesic_generators(
+    surface: Surface,
+    start: FloatArray,
+    directions: FloatArray,
+    spacing: float,
+    count: int,
+    *,
+    substeps: int = 16,
+    tolerance: float = 1e-9,
+    use_closed_form: bool = True,
+) -> GeneratorNodes:
+    """Nodes along geodesics from ``start`` (3,) [m] in unit tangent ``directions`` (m, 3).
+
+    ``count`` nodes per half-line at chord ``spacing`` [m]. The closed form of the surface is
+    used when it has one and ``use_closed_form``; otherwise the geodesic is marched in
+    ``substeps`` sub-steps per node spacing and each node is put at chord d from the previous
+    one to ``tolerance``·d.
+    """
+    m = len(directions)
+    starts = np.broadcast_to(start, (m, 3)).copy()
+    if count == 0:
+        return GeneratorNodes(np.zeros((m, 0, 3)), np.zeros((m, 0), np.int8), np.zeros((m, 0)))
+    if use_closed_form and isinstance(surface, ClosedFormGeodesics):
+        points, status = surface.geodesic_nodes(starts, directions, spacing, count)
+        on_tool = status == NodeStatus.PLACED
+        points = np.where(on_tool[..., None], points, np.nan)
+        return _finish(points, on_tool, _residual(surface, points, start, spacing))
+    return _march_geodesics(surface, starts, directions, spacing, count, substeps, tolerance)
+
+
+def _march_geodesics(
+    surface: Surface,
+    starts: FloatArray,
+    directions: FloatArray,
+    spacing: float,
+    count: int,
+    substeps: int,
+    tolerance: float,
+) -> GeneratorNodes:
+    m = len(starts)
+    h = spacing / max(int(substeps), 1)
+    points = np.full((m, count, 3), np.nan)
+    on_tool = np.zeros((m, count), dtype=bool)
+    found = np.zeros(m, dtype=int)
+    running = np.ones(m, dtype=bool)
+    x = starts.copy()
+    t = _gunit(np.asarray(directions, dtype=float))
+    normal = surface.normal(starts)
+    last = starts.copy()
+    # A generator that keeps turning back (a closed geodesic shorter than d) must still stop.
+    for _ in range(4 * count * max(int(substeps), 1) + 16):
+        act = np.flatnonzero(running & (found < count))
+        if act.size == 0:
+            break
+        xa, ta, na = x[act], t[act], normal[act]
+        # Straight continuation, brought back to the tool along the normal at x_k (the
+        # discrete geodesic equation): projecting along the normal at the new point instead
+        # would leave an O(h³) sideways error per step, i.e. an O(h) drift overall.
+        ahead = xa + h * ta
+        foot, _ = surface.closest_point(ahead)
+        n_foot = surface.normal(foot)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = _gdot(foot - ahead, n_foot) / _gdot(na, n_foot)
+        # A sharp crease (a mesh edge onto a vertical wall): the tangent plane turns by more
+        # than 60° within one sub-step, and the correction along the old normal is undefined.
+        crease = np.abs(_gdot(na, n_foot)) < 0.5
+        lam = np.where(crease, 0.0, lam)
+        x_new, dist = surface.closest_point(ahead + lam[:, None] * na)
+        if crease.any():
+            x_new[crease], dist[crease] = _across_crease(
+                surface, ta[crease], na[crease], foot[crease], n_foot[crease], h
+            )
+        step = x_new - xa
+        # across a crease the path bends, so progress is the step's length, not its projection
+        progress = np.where(crease, np.linalg.norm(step, axis=-1), _gdot(step, ta))
+        # Past the edge the closest point sticks to the boundary: no progress, or far away.
+        off = ~np.isfinite(progress) | (progress < 0.5 * h) | (dist > 0.5 * h)
+        running[act[off]] = False
+        keep = ~off
+        act, xa, x_new, step = act[keep], xa[keep], x_new[keep], step[keep]
+        n_new, via, bent = n_foot[keep], foot[keep], crease[keep]
+        w = xa - last[act]
+        reach = _gdot(x_new - last[act], x_new - last[act]) >= spacing * spacing
+        if reach.any():
+            idx = act[reach]
+            s, wr = step[reach], w[reach]
+            ss, ws = _gdot(s, s), _gdot(wr, s)
+            tau = (-ws + np.sqrt(np.maximum(ws * ws - ss * (_gdot(wr, wr) - spacing**2), 0))) / ss
+            node = xa[reach] + tau[:, None] * s
+            node = _slide_to_chord(surface, last[idx], node, spacing, tolerance)
+            folded = bent[reach]
+            if folded.any():
+                # across a crease the straight chord cuts through the tool: find the node on
+                # the two flat pieces of the path (start -> crease -> new point) instead
+                node[folded] = _chord_on_bent_path(
+                    last[idx][folded],
+                    xa[reach][folded],
+                    via[reach][folded],
+                    x_new[reach][folded],
+                    spacing,
+                )
+            points[idx, found[idx]] = node
+            on_tool[idx, found[idx]] = True
+            found[idx] += 1
+            last[idx] = node
+        x[act] = x_new
+        t[act] = _gunit(step)
+        # The foot of the first projection is O(h³) from x_{k+1}: its normal serves there.
+        normal[act] = n_new
+    return _finish(points, on_tool, _residual(surface, points, starts[0], spacing))
+
+
+def _slide_to_chord(
+    surface: Surface, anchor: FloatArray, guess: FloatArray, spacing: float, tolerance: float
+) -> FloatArray:
+    """Move surface points ``guess`` to chord ``spacing`` from ``anchor`` keeping their
+    direction: alternate rescaling and projection (each round shrinks the error by ~(d/R)²)."""
+    node = guess
+    for _ in range(8):
+        node = anchor + spacing * _gunit(node - anchor)
+        node, _ = surface.closest_point(node)
+        chord = np.sqrt(_gdot(node - anchor, node - anchor))
+        if np.all(np.abs(chord - spacing) <= tolerance * spacing):
+            break
+    return node
+
+
+def _old_generators(
+    surface: Surface,
+    start: FloatArray,
+    start_xy: FloatArray,
+    t_u: FloatArray,
+    t_v: FloatArray,
+    kind: str | PlanPolylines | object,
+    spacing: float,
+    counts: tuple[int, int, int, int],
+    substeps: int,
+    tolerance: float,
+    use_closed_form: bool,
+    polyline_halves: list[FloatArray] | None,
+) -> GeneratorNodes:
+    """Nodes on the four half-generators +u, −u, +v, −v."""
+    count = max(counts)
+    if kind == "geodesic":
+        directions = np.stack([t_u, -t_u, t_v, -t_v])
+        return geodesic_generators(
+            surface,
+            start,
+            directions,
+            spacing,
+            count,
+            substeps=substeps,
+            tolerance=tolerance,
+            use_closed_form=use_closed_form,
+        )
+    if kind == "plan":
+        lines = []
+        for t in (t_u, -t_u, t_v, -t_v):
+            if np.hypot(t[0], t[1]) <= 1e-9:
+                raise DrapeError(
+                    "a generator is vertical at the start point, so it has no plan direction; "
+                    "use geodesic generators"
+                )
+            lines.append(np.vstack([start_xy, start_xy + spacing * t[:2] / np.hypot(*t[:2])]))
+        return plan_generators(
+            surface, start, lines, spacing, count, substeps=substeps, tolerance=tolerance
+        )
+    if hasattr(kind, "nodes"):
+        # Paths that build their own nodes, e.g. preform.optimise.curved.CurvedGenerators.
+        return kind.nodes(
+            surface, start, t_u, t_v, spacing, count, substeps=substeps, tolerance=tolerance
+        )
+    assert polyline_halves is not None
+    return plan_generators(
+        surface, start, polyline_halves, spacing, count, substeps=substeps, tolerance=tolerance
+    )
+
+
+class NumpyHemisphere(Hemisphere):
+    """The hemisphere with its numpy closest point and normal of before the compiled queries."""
+
+    def _radial(self, points: FloatArray) -> FloatArray:
+        """Unit directions from the centre; +z for the centre itself (any choice is closest)."""
+        rel = np.asarray(points, dtype=float) - self.centre
+        length = np.sqrt(_gdot(rel, rel))
+        at_centre = length == 0
+        if at_centre.any():
+            rel[at_centre] = (0.0, 0.0, 1.0)
+            length[at_centre] = 1.0
+        rel /= length[:, None]
+        return rel
+
+    def normal(self, points: FloatArray) -> FloatArray:
+        """Unit outward normals (n, 3) at sphere points (n, 3) [m]."""
+        return self._radial(points)
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Closest points on the tool [m] (on its lower edge for points below it) and
+        distances."""
+        p = np.asarray(points, dtype=float)
+        radial = self._radial(p)
+        floor = -self.run_off / self.radius
+        below = radial[:, 2] < floor
+        if np.any(below):
+            flat = radial[below].copy()
+            flat[:, 2] = 0.0
+            length = np.sqrt(_gdot(flat, flat))
+            flat = np.where(
+                length[:, None] > 0,
+                flat / np.where(length > 0, length, 1.0)[:, None],
+                np.array([1.0, 0.0, 0.0]),
+            )
+            # The edge circle at height floor·R: radial = (cos·flat, sin) with sin = floor.
+            radial[below] = np.sqrt(1.0 - floor * floor) * flat
+            radial[below, 2] = floor
+        q = self.centre + self.radius * radial
+        return q, np.sqrt(_gdot(p - q, p - q))
+
+
+def as_numpy_tool(surface: Any) -> Any:
+    """The numpy hemisphere for a Hemisphere (same radius, centre and run-off), else itself."""
+    if isinstance(surface, Hemisphere) and not isinstance(surface, NumpyHemisphere):
+        run_off = surface.run_off or None
+        return NumpyHemisphere(surface.radius, centre_m=surface.centre, run_off_m=run_off)
+    return surface
 
 
 def surrogate_energy(self: Any, gamma: ArrayLike) -> FloatArray:

@@ -157,15 +157,27 @@ class Sphere:
         rel /= length[:, None]
         return rel
 
+    def _queries(self, points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Closest tool points, the normals there and distances: compiled, the same queries
+        the net kernels use (``preform.drape.net_kernels._query``)."""
+        from preform.drape import net_kernels
+
+        p = np.ascontiguousarray(points, dtype=float)
+        kind, params = self.compiled_queries()
+        foot, normal, dist = net_kernels.query_points(kind, params, p.reshape(-1, 3))
+        shape = p.shape[:-1]
+        return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)
+
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the sphere [m] and distances (n,) [m] to points (n, 3) [m]."""
-        p = np.asarray(points, dtype=float)
-        q = self.centre + self.radius * self._radial(p)
-        return q, np.sqrt(_dot(p - q, p - q))
+        """Closest points on the tool [m] and distances (n,) [m] to points (n, 3) [m]; a point
+        at the centre gets the top (+z), any point being closest."""
+        foot, _, dist = self._queries(points)
+        return foot, dist
 
     def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at sphere points (n, 3) [m]."""
-        return self._radial(points)
+        """Unit outward normals (n, 3) at tool points (n, 3) [m] (for a point off the tool,
+        the normal at its closest tool point)."""
+        return self._queries(points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """The top of the sphere over plan positions (n, 2) [m], and which lie over it."""
@@ -264,31 +276,10 @@ class Hemisphere(Sphere):
         """The part this tool makes: the hemisphere above its rim, z ≥ centre z (area 2πR²)."""
         return HeightCut(float(self.centre[2]), area_m2=2.0 * np.pi * self.radius**2)
 
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the tool [m] (on its lower edge for points below it) and
-        distances."""
-        p = np.asarray(points, dtype=float)
-        radial = self._radial(p)
-        floor = -self.run_off / self.radius
-        below = radial[:, 2] < floor
-        if np.any(below):
-            flat = radial[below].copy()
-            flat[:, 2] = 0.0
-            length = np.sqrt(_dot(flat, flat))
-            flat = np.where(
-                length[:, None] > 0,
-                flat / np.where(length > 0, length, 1.0)[:, None],
-                np.array([1.0, 0.0, 0.0]),
-            )
-            # The edge circle at height floor·R: radial = (cos·flat, sin) with sin = floor.
-            radial[below] = np.sqrt(1.0 - floor * floor) * flat
-            radial[below, 2] = floor
-        q = self.centre + self.radius * radial
-        return q, np.sqrt(_dot(p - q, p - q))
-
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """The tool for the compiled net kernels: (TRIMMED_SPHERE, (centre x, y, z, radius,
-        floor z)) [m]."""
+        floor z)) [m]. Points below the floor have their closest tool point on the edge circle
+        there."""
         floor = float(self.centre[2]) - self.run_off
         return TRIMMED_SPHERE, np.array([*self.centre, self.radius, floor], dtype=float)
 

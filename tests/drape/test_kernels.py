@@ -267,3 +267,36 @@ def test_surrogate_kernel_returns_the_table_at_its_nodes_and_nan_for_nan() -> No
     assert table.energy(np.array([[0.3, -0.3]])).shape == (1, 2)
     # past the table's end the energy stays at its last value (parallel fibres)
     assert float(table.energy(3.0)) == table._positive.energy[-1]
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    point=st.tuples(st.floats(-2, 2), st.floats(-2, 2), st.floats(-2, 2)),
+    run_off=st.floats(0.05, 1.0),
+)
+def test_compiled_tool_queries_find_the_nearest_point_of_a_dense_sampling(
+    point: tuple[float, float, float], run_off: float
+) -> None:
+    """The hemisphere with run-off (a sphere cut at z = −run_off) through its compiled
+    queries: no sampled tool point is nearer than the answer, which lies on the tool."""
+    tool = Hemisphere(1.0, run_off_m=run_off)
+    p = np.array([point])
+    foot, dist = tool.closest_point(p)
+    assert abs(np.linalg.norm(foot[0]) - 1.0) < 1e-12 and foot[0, 2] >= -run_off - 1e-12
+    assert dist[0] == pytest.approx(np.linalg.norm(foot[0] - p[0]), abs=1e-12)
+    theta = np.linspace(0.0, 2 * np.pi, 721)
+    z = np.linspace(-run_off, 1.0, 400)
+    ring = np.sqrt(1.0 - z**2)
+    samples = np.stack(
+        [
+            np.outer(ring, np.cos(theta)),
+            np.outer(ring, np.sin(theta)),
+            np.repeat(z[:, None], 721, 1),
+        ],
+        axis=-1,
+    ).reshape(-1, 3)
+    nearest = np.min(np.linalg.norm(samples - p[0], axis=1))
+    # the sampling is ~0.009 apart: its nearest point is at most that much farther
+    assert dist[0] <= nearest + 1e-12 and nearest - dist[0] < 0.01
+    # the normal is the tool's radial direction at the answer, pointing outward
+    np.testing.assert_allclose(tool.normal(foot)[0], foot[0], atol=1e-12)
