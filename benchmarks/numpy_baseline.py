@@ -39,10 +39,11 @@ from preform.drape.net import (
 )
 from preform.drape.part import Part
 from preform.drape.ply import PlyOutline
-from preform.drape.result import CellStatus, DrapeResult, NodeStatus
+from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.drape.surface import Surface
 from preform.plugins.surfaces.basic import Hemisphere, Sphere
 from preform.shear import surrogate as surrogate_module
+from preform.shear.law import ShearLaw
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -886,6 +887,58 @@ def as_numpy_tool(surface: Any) -> Any:
     return surface
 
 
+def energy_field(
+    result: DrapeResult,
+    law: ShearLaw,
+    *,
+    region: BoolArray | CentroidPredicate | None = None,
+) -> EnergyField:
+    """Shear strain energy of a draped net under ``law``.
+
+    W(γ) [J/m²] per cell from the signed shear (so an asymmetric law takes the branch the
+    convention in ``preform.drape.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
+    locking angle (|γ| > locking) and past stitch failure (γ > failure, the parallel sense),
+    and the total Σ W·s·d² [J] over the counted cells (d² the undeformed cell, s its share
+    inside the part, ``result.part_weight``: 1 for a cell wholly inside).
+
+    Counted cells: valid cells in the part (``result.in_part``), further restricted by
+    ``region`` (a boolean mask (ni−1, nj−1) or a predicate on centroids (n, 3) [m]). The
+    per-cell arrays are zero outside them (the thickness ratio is 1 there: no deformation counted).
+    """
+    counted = result.valid & result.in_part
+    if region is not None:
+        if callable(region):
+            keep = np.zeros_like(counted)
+            if counted.any():
+                keep[counted] = np.asarray(region(result.centroid[counted]), dtype=bool)
+        else:
+            keep = np.asarray(region, dtype=bool)
+            if keep.shape != counted.shape:
+                raise ValueError(f"region mask shape {keep.shape} != cell shape {counted.shape}")
+        counted = counted & keep
+    gamma = np.where(counted, result.shear, 0.0)
+    # the law is evaluated on the counted cells only (a mechanistic law is costly per angle)
+    density = np.zeros(counted.shape, dtype=float)
+    if counted.any():
+        density[counted] = np.asarray(law.energy(gamma[counted]), dtype=float)
+    thickness_ratio = np.where(counted, 1.0 / np.maximum(np.cos(gamma), 1e-12), 1.0)
+    locking = law.locking_angle
+    failure = law.failure_angle
+    past_locking = (
+        counted & (np.abs(gamma) > locking) if locking is not None else np.zeros_like(counted)
+    )
+    past_failure = counted & (gamma > failure) if failure is not None else np.zeros_like(counted)
+    weight = np.where(counted, result.part_weight, 0.0)
+    total = float((density * weight).sum() * result.node_spacing**2)
+    return EnergyField(
+        energy_density=density,
+        thickness_ratio=thickness_ratio,
+        past_locking=np.asarray(past_locking, dtype=bool),
+        past_failure=np.asarray(past_failure, dtype=bool),
+        total_energy=total,
+    )
+
+
 def surrogate_energy(self: Any, gamma: ArrayLike) -> FloatArray:
     g = np.asarray(gamma, dtype=float)
     u = np.abs(g)
@@ -897,10 +950,12 @@ def numpy_path() -> Iterator[None]:
     """Run the drape step (``preform.drape.steps.run_drape``) on this module's numpy code."""
     saved = (
         steps_module.drape,
+        steps_module.energy_field,
         fields_module.node_shear,
         surrogate_module.TabulatedSurrogate.energy,
     )
     steps_module.drape = drape  # type: ignore[assignment]
+    steps_module.energy_field = energy_field
     fields_module.node_shear = node_shear
     surrogate_module.TabulatedSurrogate.energy = surrogate_energy  # type: ignore[method-assign]
     try:
@@ -908,6 +963,7 @@ def numpy_path() -> Iterator[None]:
     finally:
         (
             steps_module.drape,
+            steps_module.energy_field,
             fields_module.node_shear,
             surrogate_module.TabulatedSurrogate.energy,
         ) = saved  # type: ignore[assignment]
