@@ -15,8 +15,8 @@ The per-node steps are plain scalar functions:
   cell, residual) and its write into the net.
 
 Two drivers use them. For a surface with compiled queries
-(:class:`~preform.drape.compiled_surface.CompiledQueries`), :func:`fill_fronts` runs every front
-of the net in one compiled loop. For any other surface (a mesh, a plugin's tool) the front loop
+(:class:`~preform.drape.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
+net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a plugin's tool) the front loop
 stays in Python and calls the vectorised wrappers below once per front, with the surface's own
 vectorised ``closest_point``/``normal`` in between; the per-node arithmetic is the same code.
 """
