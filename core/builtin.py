@@ -19,12 +19,19 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 
 @hookimpl
 def preform_register_steps(register: StepRegistrar) -> None:
+    from preform.drape import preform_steps
     from preform.drape import steps as drape_steps
     from preform.export import export_steps
     from preform.optimise import search_steps
     from preform.pipeline.core_steps import STEPS
 
-    for step in [*STEPS, *drape_steps.STEPS, *search_steps.STEPS, *export_steps.STEPS]:
+    for step in [
+        *STEPS,
+        *drape_steps.STEPS,
+        *preform_steps.STEPS,
+        *search_steps.STEPS,
+        *export_steps.STEPS,
+    ]:
         register.add(step)
 
 

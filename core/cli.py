@@ -273,6 +273,14 @@ def _repeats(_ctx: Any, _param: Any, value: str) -> tuple[int, int]:
 @click.option(
     "--colour-by", type=click.Choice(["level", "type"]), default="level", show_default=True
 )
+@click.option(
+    "--shear-deg",
+    type=float,
+    default=None,
+    metavar="DEG",
+    help="Draw the cell sheared by this angle [deg, either sign, |γ| ≤ 89] and print its "
+    "thickness and fibre volume fractions.",
+)
 @library_options
 @json_option
 def view(
@@ -281,31 +289,67 @@ def view(
     png: str | None,
     vtu: str | None,
     colour_by: Literal["level", "type"],
+    shear_deg: float | None,
     libraries: tuple[str, ...],
     no_bundled: bool,
     as_json: bool,
 ) -> None:
-    """A 3D picture of a fabric's unit cell (tows as ribbons), and optionally a VTU file."""
+    """A 3D picture of a fabric's unit cell (tows as ribbons), and optionally a VTU file
+    (tow centre-lines and tow volumes)."""
+    import math
+
     from preform.export.fig_unit_cell import unit_cell_figure
     from preform.export.vtu import write_unit_cell_vtu
 
     lib = load_library_or_exit(libraries, bundled=not no_bundled)
     fabric = fabric_or_exit(lib, name)
-    cell = fabric.unit_cell()
+    properties: dict[str, Any] | None = None
+    if shear_deg is None:
+        cell = fabric.unit_cell()
+    else:
+        try:
+            sheared = fabric.sheared_cell(math.radians(shear_deg))
+        except ValueError as error:
+            _fail([f"{name}: {error}"])
+        if sheared is None:
+            _fail([f"architecture {fabric.architecture!r} has no sheared-cell model"])
+        cell = sheared.unit_cell()
+        properties = sheared.summary()
     if cell is None:
         _fail([f"architecture {fabric.architecture!r} has no unit-cell model to view"])
     out = Path(png or f"{name}.png")
-    unit_cell_figure(cell, out, colour_by=colour_by, repeats=repeats, title=name)
+    title = name if shear_deg is None else f"{name}, sheared {shear_deg:g}°"
+    unit_cell_figure(cell, out, colour_by=colour_by, repeats=repeats, title=title)
     written = {"figure": str(out), "vtu": None}
     if vtu:
         write_unit_cell_vtu(cell.tiled(*repeats), Path(vtu))
         written["vtu"] = vtu
     if as_json:
-        _echo_json({"material": name, "repeats": list(repeats), "files": written})
+        doc: dict[str, Any] = {"material": name, "repeats": list(repeats), "files": written}
+        if properties is not None:
+            doc["sheared_cell"] = properties
+        _echo_json(doc)
         return
+    if properties is not None:
+        click.echo(_sheared_cell_lines(properties))
     for path in written.values():
         if path:
             click.echo(f"wrote {path}")
+
+
+def _sheared_cell_lines(p: dict[str, Any]) -> str:
+    """The sheared cell's properties in words (``preform view --shear-deg``)."""
+    state = (
+        "past jamming: the tows thicken"
+        if p["jammed"]
+        else ("past locking: the tows compact" if p["locked"] else "before locking")
+    )
+    fractions = ", ".join(f"{v:.3f}" for v in p["tow_volume_fractions"])
+    return (
+        f"sheared {p['shear_deg']:g}° ({state}; locking {p['locking_angle_deg']:.2f}°, "
+        f"jamming {p['jamming_angle_deg']:.2f}°): thickness {p['thickness_mm']:.3f} mm, "
+        f"fabric Vf {p['fibre_volume_fraction']:.3f}, tow Vf {fractions}"
+    )
 
 
 # -- schema ---------------------------------------------------------------------------------

@@ -38,6 +38,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validat
 from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
 
 if TYPE_CHECKING:
+    from preform.geometry.sheared_cell import ShearedCell
     from preform.geometry.unit_cell import UnitCell
 
 #: Where in an entry a problem is: a path of field names and list indices,
@@ -450,6 +451,13 @@ FIBRE_MODULUS = Plausible(
     "a fibre axial modulus",
     "thermoplastic yarns from ≈ 1 GPa; ultra-high-modulus pitch carbon ≈ 950 GPa",
 )
+FILAMENT_DIAMETER = Plausible(
+    1.0,
+    100.0,
+    "µm",
+    "a filament diameter",
+    "carbon filaments ≈ 5–8 µm, glass 9–24 µm, thick polymer monofilaments ≈ 50 µm",
+)
 
 
 class FabricBase(ParamsModel):
@@ -489,6 +497,12 @@ class FabricBase(ParamsModel):
     # -- hooks an architecture overrides ---------------------------------------------------
     def unit_cell(self) -> UnitCell | None:
         """The repeating cell of the fabric in SI units, or None if the architecture has none."""
+        return None
+
+    def sheared_cell(self, shear_rad: float) -> ShearedCell | None:
+        """The unit cell at shear angle ``shear_rad`` [rad] with its thickness and fibre
+        fractions (``preform.geometry.sheared_cell``), or None if the architecture has none.
+        Raises ValueError, in words, for a cell that cannot be sheared."""
         return None
 
     def derived(self) -> dict[str, Any]:

@@ -196,3 +196,25 @@ def test_hemisphere_scene_writes_what_issue_5_lists(tmp_path):
     mesh = meshio.read(case / "drape.vtu")
     assert len(mesh.cells[0].data) == len(valid)
     assert (case / "fibre_pattern.png").stat().st_size > 10_000
+
+
+def test_view_shear_deg_draws_the_sheared_cell_and_says_its_thickness(tmp_path):
+    import math
+
+    import meshio
+
+    png, vtu = tmp_path / "pw.png", tmp_path / "pw.vtu"
+    args = ["view", "plain-weave-600", "--repeats", "1x1", "--out", str(png), "--vtu", str(vtu)]
+    doc = json.loads(run(*args, "--shear-deg", "-50", "--json"))
+    cell = doc["sheared_cell"]
+    assert cell["shear_deg"] == -50.0 and cell["jammed"]
+    # past locking the tows are Ts·cos γ wide, so the cell's plan area is (8 mm)² cos γ
+    assert cell["tow_widths_mm"] == pytest.approx([4.0 * math.cos(math.radians(50))] * 2)
+    assert cell["area_mm2"] == pytest.approx(64.0 * math.cos(math.radians(50)))
+    mesh = meshio.read(vtu)
+    assert {"line", "wedge"} <= set(mesh.cells_dict)
+    assert "thickness" in run(*args, "--shear-deg", "20")
+    bad = CliRunner().invoke(
+        cli, ["view", "plain-weave-600", "--shear-deg", "90", "--out", str(png)]
+    )
+    assert bad.exit_code == 2 and "outside ±89°" in bad.output

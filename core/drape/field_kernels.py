@@ -287,6 +287,7 @@ def energy_cells(
     share: FloatArray,
     locking: float,
     failure: float,
+    failure_negative: float,
     density: FloatArray,
     thickness_ratio: FloatArray,
     past_locking: BoolArray,
@@ -295,8 +296,9 @@ def energy_cells(
     """Fill the energy field's cell arrays and return Σ W·s over the counted cells [J/m²·cell]
     (``preform.drape.fields.energy_field``): W from ``law_energy`` (the law at the counted
     cells' shear, in row order), s from ``share`` (the part weight), t/t0 = 1/cos γ, and the
-    cells past the locking (|γ| > locking) and failure (γ > failure) angles [rad] (inf for a
-    law without one). Cells not counted get W = 0, t/t0 = 1 and no flag."""
+    cells past the locking (|γ| > locking) and failure angles (γ > failure, or
+    γ < −failure_negative for a stitch that also breaks the other way) [rad] (inf for a law
+    without one). Cells not counted get W = 0, t/t0 = 1 and no flag."""
     total = 0.0
     k = 0
     for i in range(shear.shape[0]):
@@ -313,6 +315,6 @@ def energy_cells(
             density[i, j] = w
             thickness_ratio[i, j] = 1.0 / max(math.cos(gamma), 1e-12)
             past_locking[i, j] = abs(gamma) > locking
-            past_failure[i, j] = gamma > failure
+            past_failure[i, j] = gamma > failure or gamma < -failure_negative
             total += w * share[i, j]
     return total

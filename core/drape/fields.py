@@ -151,6 +151,8 @@ def energy_field(
     past_locking = np.empty(counted.shape, dtype=bool)
     past_failure = np.empty(counted.shape, dtype=bool)
     locking, failure = law.locking_angle, law.failure_angle
+    # A law whose stitch also breaks shearing the other way says so (stitch_yarn).
+    failure_negative = getattr(law, "failure_angle_negative", None)
     weighted = field_kernels.energy_cells(
         shear,
         counted,
@@ -158,6 +160,7 @@ def energy_field(
         share,
         np.inf if locking is None else float(locking),
         np.inf if failure is None else float(failure),
+        np.inf if failure_negative is None else float(failure_negative),
         density,
         thickness_ratio,
         past_locking,

@@ -7,6 +7,8 @@ nodes of the two previous anti-diagonals |i − i0| + |j − j0| = k − 1, k �
 a front (all four quadrants stacked) is placed in one vectorised step:
 
 - in closed form when the surface offers it (:class:`ClosedFormPlacement`, e.g. the sphere);
+- exactly on a faceted tool that walks from the parents' facets (:class:`WalkingPlacement`,
+  triangle meshes): each node's facet is kept as the hint for its children;
 - otherwise on the circle where the two distance spheres meet: P(φ) = M + r(cos φ·a1 +
   sin φ·a2), a1 the surface normal seen from the chord A→B, a2 pointing away from the opposite
   node. Both distance constraints then hold exactly for every φ and only the signed distance
@@ -27,7 +29,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any, Protocol, cast, runtime_checkable
+from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -67,6 +69,41 @@ class ClosedFormPlacement(Protocol):
         """Points (m, 3) [m] on the tool at chord ``spacing`` [m] from both ``a`` and ``b``
         (m, 3), the root on the far side from ``opposite`` (m, 3); and NodeStatus codes (m,):
         PLACED, NO_INTERSECTION (no such point), OFF_TOOL (it lies past the tool's edge)."""
+        ...
+
+
+class FacePlacement(NamedTuple):
+    """Nodes placed on a faceted tool, with what the engine would otherwise search for."""
+
+    #: Positions (m, 3) [m], NaN where not placed.
+    points: FloatArray
+    #: NodeStatus codes (m,): PLACED, NO_INTERSECTION, OFF_TOOL, FOLDED (parents coincide).
+    status: StatusArray
+    #: The facet each node lies on (m,), −1 where not placed; the hint for its children.
+    faces: IntArray
+    #: Unit outward normals (m, 3) there, and the distance (m,) [m] to the facet.
+    normals: FloatArray
+    distance: FloatArray
+
+
+@runtime_checkable
+class WalkingPlacement(Protocol):
+    """Optional surface methods: exact placement walking from the parents' facets (meshes)."""
+
+    def locate_faces(self, points: FloatArray) -> IntArray:
+        """The facet (n,) each surface point (n, 3) [m] lies on."""
+        ...
+
+    def place_nodes_from_faces(
+        self,
+        a: FloatArray,
+        b: FloatArray,
+        opposite: FloatArray,
+        spacing: float,
+        face_a: IntArray,
+        face_b: IntArray,
+    ) -> FacePlacement:
+        """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b."""
         ...
 
 
@@ -249,10 +286,13 @@ def _fill_fronts_python(
     lo_bound: FloatArray,
     hi_bound: FloatArray,
     closed_form: bool,
+    face: IntArray | None,
 ) -> tuple[int, int]:
     """The fronts of a net on a surface queried through its vectorised methods: the front
     bookkeeping and node checks are the compiled kernels', the placement and queries the
-    surface's. Returns (fronts placed, most Newton passes over a front)."""
+    surface's. ``face``: each node's facet (flat, −1 where not placed) for a surface that
+    places by walking from the parents' facets (:class:`WalkingPlacement`), else None.
+    Returns (fronts placed, most Newton passes over a front)."""
     from preform.drape import net_kernels as kernels
 
     nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front = layout
@@ -270,18 +310,30 @@ def _fill_fronts_python(
         fronts += 1
         front = members[:count]
         a, b, c = pos[front[:, 1]], pos[front[:, 2]], pos[front[:, 3]]
-        if closed_form:
+        at_p: FacePlacement | None = None
+        if face is not None:
+            # an exact placement that walks from the parents' facets (meshes)
+            at_p = cast(WalkingPlacement, surface).place_nodes_from_faces(
+                a, b, c, d, face[front[:, 1]], face[front[:, 2]]
+            )
+            p, st = at_p.points, np.asarray(at_p.status, dtype=np.int8).copy()
+            face[front[:, 0]] = at_p.faces
+        elif closed_form:
             # closed_form: the surface has its own exact placement
             p, st = cast(Any, surface).place_nodes(a, b, c, d)
             st = np.asarray(st, dtype=np.int8).copy()
         else:
             p, st, used = _solve_on_circle(surface, a, b, c, d, tol_m, max_iterations)
             newton_iterations = max(newton_iterations, used)
-        p = np.asarray(p, dtype=float)
+        p = np.ascontiguousarray(p, dtype=float)
         ok = st == _PLACED
         normals = np.full((count, 3), np.nan)
         dist = np.full(count, np.nan)
-        if ok.any():
+        if at_p is not None:
+            # the walk has them already, on the facet it found
+            normals[ok] = np.asarray(at_p.normals, dtype=float)[ok]
+            dist[ok] = np.asarray(at_p.distance, dtype=float)[ok]
+        elif ok.any():
             normals[ok] = surface.normal(p[ok])
             dist[ok] = surface.closest_point(p[ok])[1]
         kernels.finish_front(
@@ -464,6 +516,12 @@ def drape(
     closed_form = use_closed_form and (
         isinstance(surface, ClosedFormPlacement) or (compiled and _compiled_closed_form(surface))
     )
+    # a faceted tool that places nodes exactly by walking from the parents' facets (meshes)
+    walking = use_closed_form and isinstance(surface, WalkingPlacement)
+    face = np.full(n_nodes, -1, dtype=np.int64)
+    if walking:
+        seeded = np.flatnonzero(status == _PLACED)
+        face[seeded] = cast(WalkingPlacement, surface).locate_faces(pos[seeded])
     (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
     lo_bound = np.array([bx0, by0, bz0]) - tol_m
     hi_bound = np.array([bx1, by1, bz1]) + tol_m
@@ -477,7 +535,7 @@ def drape(
     q_sa, q_sb, q_na, q_nb = (
         np.array([q[col] for q in quadrants], dtype=np.int64) for col in range(4)
     )
-    if compiled and (not closed_form or _compiled_closed_form(surface)):
+    if compiled and not walking and (not closed_form or _compiled_closed_form(surface)):
         # The whole fill in one compiled loop (preform.drape.net_kernels).
         kind, params = cast(CompiledQueries, surface).compiled_queries()
         fronts, newton_iterations = kernels.fill_fronts(
@@ -488,7 +546,7 @@ def drape(
     else:
         fronts, newton_iterations = _fill_fronts_python(
             surface, pos, status, residual, (nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front),
-            d, tol_m, max_iterations, lo_bound, hi_bound, closed_form,
+            d, tol_m, max_iterations, lo_bound, hi_bound, closed_form, face if walking else None,
         )  # fmt: skip
 
     fill_seconds = time.perf_counter() - fill_clock
@@ -498,7 +556,11 @@ def drape(
     fields = cell_fields(nodes, node_status, trim=trim)
     placed = status == _PLACED
     info: dict[str, object] = {
-        "placement": "closed form" if closed_form else "newton on the constraint circle",
+        "placement": "walking exact"
+        if walking
+        else "closed form"
+        if closed_form
+        else "newton on the constraint circle",
         "generators": generators if isinstance(generators, str) else "plan polylines",
         "tolerance_m": tol_m,
         "max_residual_m": float(residual[placed].max()) if placed.any() else 0.0,

@@ -23,6 +23,7 @@ from preform.drape.fields import cell_fields, energy_field, summary
 from preform.drape.net import DrapeError, drape
 from preform.drape.part import HeightCut, Part, PlanPolygon, combine
 from preform.drape.ply import MAX_COUNT, PlyOutline
+from preform.drape.preform_steps import preform_if_asked
 from preform.drape.result import DrapeResult, EnergyField
 from preform.drape.verdict import (
     coverage,
@@ -242,6 +243,8 @@ def judge_drape(
     ctx.summary["complete"] = cover.complete
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
+    elif cover.fold_zones:
+        ctx.warn(cover.fold_warning())
     law = ctx.products["shear_law"]
     block = getattr(ctx.fabric, "shear_law", None)
     if block is None and hasattr(ctx.fabric, "default_shear_law"):
@@ -346,7 +349,8 @@ def write_cells_csv(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.tables import cells_table, write_table
 
     ply: DrapedPly = ctx.products["drape"]
-    write_table(cells_table(ply.result, ply.energy), ctx.case_dir / "cells.csv")
+    preform = ctx.products.get("permeability")  # only when the scene asks for it
+    write_table(cells_table(ply.result, ply.energy, preform), ctx.case_dir / "cells.csv")
     return {"cells_csv": "cells.csv"}
 
 
@@ -354,7 +358,8 @@ def write_vtu(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.vtu import write_drape_vtu
 
     ply: DrapedPly = ctx.products["drape"]
-    write_drape_vtu(ply.result, ply.energy, ctx.case_dir / "drape.vtu")
+    preform = ctx.products.get("permeability")  # only when the scene asks for it
+    write_drape_vtu(ply.result, ply.energy, ctx.case_dir / "drape.vtu", preform)
     return {"vtu": "drape.vtu"}
 
 
@@ -421,10 +426,21 @@ EXPORTERS = [
         ("drape",),
         "1",
         write_cells_csv,
-        "cells.csv: one row per cell (shear, energy, status)",
+        "cells.csv: one row per cell (shear, energy, status; thickness, Vf, permeability "
+        "when the scene asks for permeability)",
         writes_files=True,
+        extra_requires=preform_if_asked,
     ),
-    Step("vtu", ("vtu",), ("drape",), "1", write_vtu, "drape.vtu for ParaView", writes_files=True),
+    Step(
+        "vtu",
+        ("vtu",),
+        ("drape",),
+        "1",
+        write_vtu,
+        "drape.vtu for ParaView",
+        writes_files=True,
+        extra_requires=preform_if_asked,
+    ),
     Step(
         "fibre_pattern_png",
         ("fibre_pattern_png",),

@@ -21,7 +21,8 @@ for want of a parent inherits the cause of whichever node of that rectangle fail
   over the tool.
 
 The generator marchers mark *any* stop as OFF_TOOL, also a geodesic that cannot cross a
-concave crease of a mesh (the hat mould's wall foot) while the tool goes on. So an OFF_TOOL
+concave crease while the tool goes on (on meshes the exact walking geodesics and placement of
+``preform.plugins.surfaces.mesh_kernels`` stop only at the mesh's boundary, and are trusted). So an OFF_TOOL
 node on a generator is taken as the tool's edge only when the generator's last chord, continued
 one step straight on, lands outside the tool's plan or farther than a node spacing from it; a
 generator that stops where the tool goes on is a failure ("stopped on the tool"). The same
@@ -29,6 +30,12 @@ test judges the interior OFF_TOOL nodes of the general Newton placement (continu
 parallelogram), which calls a node at a concave crease of a mesh OFF_TOOL too. A tool that
 ends at the foot of a vertical wall (no plate beyond) cannot be told from a crease by this test
 and reads as "stopped on the tool".
+
+Behind a sharp convex vertex a pin-jointed net cannot go on: the fibre angle there changes
+by the vertex's angle deficit (90° at a box corner), so the net closes up and folds. The
+*fold zones* are the connected patches of ply cells lost behind a FOLDED node (none past the
+tool's edge), reported with their undeformed plan centre and fabric area, also where that
+fabric would have hung past the tool's plan.
 
 A missing node has no position, so "lying over the tool" is judged on its undeformed position:
 the flat ply laid on the plan at the start point, its +u fibres along the orientation and +v at
@@ -187,6 +194,11 @@ class Coverage:
     #: first cause among their corners: folded, no_intersection, stopped_on_tool,
     #: behind_failure, behind_outline.
     uncovered_area_m2: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    #: The fold zones: each connected patch of ply cells lost to a fold (a corner FOLDED or not
+    #: reached behind a FOLDED node, none past the tool's edge: a sharp convex vertex's
+    #: shadow), also where that fabric would hang past the tool's plan, as (undeformed plan
+    #: centre (x, y) [m], fabric area [m²]), largest first.
+    fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
 
     @property
     def covered_fraction(self) -> float:
@@ -212,8 +224,9 @@ class Coverage:
             )
         if m.get("folded"):
             causes.append(
-                f"{m['folded']} node(s) folded (the net would turn over there: an edge or "
-                "corner of the tool sharper than a net of this spacing can follow)"
+                f"{m['folded']} node(s) folded (the net would turn over there: behind a sharp "
+                "convex vertex of the tool, or at an edge or corner sharper than a net of this "
+                "spacing can follow)"
             )
         if m.get("no_intersection"):
             causes.append(
@@ -231,6 +244,8 @@ class Coverage:
                 f"{m['not_reached_behind_outline']} node(s) over the tool were not reached "
                 "because the ply outline cuts a generator before them"
             )
+        if self.fold_zones:
+            causes.append(self.fold_words())
         where = ""
         if self.first_missing_xy_m is not None:
             # rounded first, then + 0.0, so that -0.4 mm reads "0", not "-0"
@@ -246,6 +261,28 @@ class Coverage:
             + where
         )
 
+    def fold_words(self) -> str:
+        """The fold zones in words (empty when there are none)."""
+        if not self.fold_zones:
+            return ""
+        zones = ", ".join(
+            f"{1e6 * area:.0f} mm² around ({round(1e3 * x) + 0.0:.0f}, "
+            f"{round(1e3 * y) + 0.0:.0f}) mm"
+            for (x, y), area in self.fold_zones
+        )
+        return f"{len(self.fold_zones)} fold zone(s) of the flat ply lost behind a fold: {zones}"
+
+    def fold_warning(self) -> str:
+        """For a complete drape that still folded (its fold zones lie past the tool's plan,
+        e.g. behind a box corner whose walls are vertical): what the coverage does not say."""
+        if not (self.complete and self.fold_zones):
+            return ""
+        return (
+            "the net folded (behind a sharp convex vertex of the tool, where the fibre angle "
+            "changes by the vertex's angle deficit); the fabric lost there lies past the tool's "
+            "plan, so the coverage counts it as overhang: " + self.fold_words()
+        )
+
     def summary(self) -> dict[str, Any]:
         """Scalar results for the case summary."""
         out: dict[str, Any] = {
@@ -259,6 +296,11 @@ class Coverage:
             out[f"nodes_missing_{key}"] = value
         for key, area in self.uncovered_area_m2.items():
             out[f"uncovered_area_m2_{key}"] = area
+        out["fold_zones"] = len(self.fold_zones)
+        out["fold_zone_area_m2"] = float(sum(area for _, area in self.fold_zones))
+        for k, ((x, y), area) in enumerate(self.fold_zones, start=1):
+            out[f"fold_zone_{k}_x_m"], out[f"fold_zone_{k}_y_m"] = x, y
+            out[f"fold_zone_{k}_area_m2"] = area
         return out
 
 
@@ -329,6 +371,16 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     if left.any():
         uncovered["other"] = float(np.count_nonzero(left)) * result.node_spacing**2
 
+    # The fold zone is all the fabric lost behind a fold, also where it would have hung past
+    # the tool's plan (a vertex's shadow on a tool with vertical walls lies wholly there).
+    fold_nodes = lost & dependency_shadow(status == NodeStatus.FOLDED, start)
+    fold_corner = (
+        fold_nodes[:-1, :-1] | fold_nodes[1:, :-1] | fold_nodes[:-1, 1:] | fold_nodes[1:, 1:]
+    )
+    zones = _fold_zones(
+        cell_in_ply & ~valid & ~edge_corner & fold_corner, plan, result.node_spacing
+    )
+
     first: tuple[float, float] | None = None
     if missing.any():
         i0, j0 = start
@@ -344,7 +396,27 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         first_missing_xy_m=first,
         node_spacing_m=result.node_spacing,
         uncovered_area_m2=uncovered,
+        fold_zones=zones,
     )
+
+
+def _fold_zones(
+    cells: BoolArray, plan: FloatArray, spacing: float
+) -> tuple[tuple[tuple[float, float], float], ...]:
+    """Connected patches (edge or corner neighbours) of ``cells`` (ni−1, nj−1): undeformed
+    plan centre [m] and fabric area (d² a cell) [m²] of each, largest first."""
+    if not cells.any():
+        return ()
+    from scipy import ndimage
+
+    labels, count = ndimage.label(cells, structure=np.ones((3, 3), dtype=int))
+    centre = 0.25 * (plan[:-1, :-1] + plan[1:, :-1] + plan[:-1, 1:] + plan[1:, 1:])
+    zones = []
+    for k in range(1, count + 1):
+        mine = labels == k
+        x, y = centre[mine].mean(axis=0)
+        zones.append(((float(x), float(y)), float(np.count_nonzero(mine)) * spacing**2))
+    return tuple(sorted(zones, key=lambda zone: -zone[1]))
 
 
 # --------------------------------------------------------------------------------------------
@@ -404,7 +476,9 @@ class LawRange:
 
     locking: float | None = None
     failure: float | None = None
-    #: Physical limit of the model (tows packed solid), past which it continues artificially.
+    #: Stitch-failure angle magnitude in the perpendicular sense (γ < 0), if the law has one.
+    failure_negative: float | None = None
+    #: Physical limit of the model (fabric jammed), past which it holds its torque artificially.
     packing: float | None = None
     #: End of the measured/fitted data in the positive and negative senses, and what the law
     #: does past it ("hold", "linear", "extrapolate").
@@ -464,6 +538,7 @@ def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
     return LawRange(
         locking=law.locking_angle,
         failure=law.failure_angle,
+        failure_negative=getattr(law, "failure_angle_negative", None),
         packing=None if packing is None else float(packing),
         data_positive=positive,
         data_negative=negative,
@@ -504,13 +579,21 @@ def shear_limit_warnings(
                 f"{_share(past, area, counted)} are sheared past the locking angle "
                 f"{math.degrees(limits.locking):.1f}°: the fabric would wrinkle there"
             )
-    if limits.failure is not None:
+    if limits.failure is not None or limits.failure_negative is not None:
         past = np.asarray(energy.past_failure, dtype=bool) & counted
         counts["cells_past_failure"] = int(np.count_nonzero(past))
+        senses = []
+        if limits.failure is not None:
+            senses.append(f"{math.degrees(limits.failure):.1f}° (parallel to the stitch)")
+        if limits.failure_negative is not None:
+            senses.append(
+                f"−{math.degrees(limits.failure_negative):.1f}° (perpendicular to the stitch)"
+            )
+        where = " or ".join(senses)
         if past.any():
             messages.append(
                 f"{_share(past, area, counted)} are sheared past the stitch-failure angle "
-                f"{math.degrees(limits.failure):.1f}° (parallel to the stitch): the stitching "
+                f"{where}: the stitching "
                 "would break there"
             )
     if limits.packing is not None:
@@ -520,9 +603,9 @@ def shear_limit_warnings(
             share = float(cell_energy[past].sum()) / total if total > 0 else 0.0
             messages.append(
                 f"{_share(past, area, counted)} are sheared past "
-                f"{math.degrees(limits.packing):.1f}°, where the law's tows are packed solid "
-                "(fibre volume fraction at its maximum): the law only continues its stress "
-                f"along a tangent there, so their energy, {100 * share:.3g} % of the total "
+                f"{math.degrees(limits.packing):.1f}°, where the law's fabric is jammed (tows "
+                "packed solid or at the jamming force; it would wrinkle): the law only holds "
+                f"its jammed torque there, so their energy, {100 * share:.3g} % of the total "
                 f"{total:.3g} J, is not a physical energy"
             )
     beyond_pos = (

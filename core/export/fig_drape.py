@@ -88,6 +88,22 @@ def _polyline_xy(result: DrapeResult, family: str, lines: list[int]) -> np.ndarr
     return np.concatenate(parts) if parts else np.empty((0, 2))
 
 
+#: Colour of the cells where the net folded (turned over at a sharp vertex or edge).
+FOLD_COLOUR = "#e08a00"
+
+
+def fold_triangles(result: DrapeResult) -> np.ndarray:
+    """Where the net folded (k, 3, 3) [m]: for each FOLDED node, the triangle of its three
+    placed parents, the cell that would have turned over. Beyond it lies the fold zone (the
+    nodes not reached behind the fold), which has no draped position to draw."""
+    i0, j0 = result.start_index
+    nodes = np.asarray(result.nodes, dtype=float)
+    fi, fj = np.nonzero(np.asarray(result.status) == NodeStatus.FOLDED)
+    si, sj = np.sign(fi - i0), np.sign(fj - j0)
+    tri = np.stack([nodes[fi - si, fj], nodes[fi - si, fj - sj], nodes[fi, fj - sj]], axis=1)
+    return tri[np.all(np.isfinite(tri), axis=(1, 2))]
+
+
 def _top_view(ax: Axes, result: DrapeResult, tow_every: int, edge: np.ndarray | None) -> None:
     i0, j0 = result.start_index
     if edge is not None and len(edge):
@@ -99,6 +115,23 @@ def _top_view(ax: Axes, result: DrapeResult, tow_every: int, edge: np.ndarray | 
         ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=0.7, label=f"{family} fibres")
         line = _polyline_xy(result, family, [generator])
         ax.plot(line[:, 0], line[:, 1], color=colour, lw=2.2, label=f"{family} generator")
+    folds = fold_triangles(result)
+    if len(folds):
+        # A fold at a wall's corner is a vertical triangle, a line from above: mark it too.
+        for tri in folds:
+            ax.fill(1e3 * tri[:, 0], 1e3 * tri[:, 1], color=FOLD_COLOUR, alpha=0.8)
+        centre = 1e3 * folds.mean(axis=1)
+        ax.plot(
+            centre[:, 0],
+            centre[:, 1],
+            "X",
+            color=FOLD_COLOUR,
+            ms=10,
+            mec="k",
+            mew=0.6,
+            ls="none",
+            label="fold (net turns over)",
+        )
     start = np.asarray(result.nodes, dtype=float)[i0, j0]
     if result.status[i0, j0] == NodeStatus.PLACED:
         ax.plot(1e3 * start[0], 1e3 * start[1], "o", color="k", ms=5, label="start node")
@@ -143,6 +176,11 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
                 quads, facecolors=cmap(norm(shear_deg)), edgecolors=edge, linewidths=widths
             )
         )
+        folds = fold_triangles(result)
+        if len(folds):
+            ax.add_collection3d(Poly3DCollection(1e3 * folds, facecolors=FOLD_COLOUR))
+            centre = 1e3 * folds.mean(axis=1)
+            ax.scatter(*centre.T, marker="X", s=80, color=FOLD_COLOUR, edgecolors="k")
         pts = quads.reshape(-1, 3)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         # A flat net has no z extent: give every axis a little room so the limits are not singular.
@@ -181,7 +219,8 @@ def fibre_pattern_figure(
     through the start node, the generators, always and in bold), broken wherever a node is not
     placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
     colour bar in degrees; with ``energy``, cells past locking are outlined and the total energy
-    [J] goes into the title. Axes in mm. ``size_px`` is the saved (width, height) [pixels].
+    [J] goes into the title. Where the net folded (a sharp vertex's shadow), the cell that would
+    turn over is filled orange in both views and the count goes into the title. Axes in mm. ``size_px`` is the saved (width, height) [pixels].
     A net clipped to a part is drawn over the part only (cells with area in it, and their
     nodes); with ``part`` its edge is drawn dashed in the top view.
     Returns the figure (already saved).
@@ -194,6 +233,9 @@ def fibre_pattern_figure(
         f"generator angle {np.degrees(result.generator_angle):.1f}°, "
         f"{result.nodes_placed}/{result.nodes_total} nodes placed"
     )
+    folded = int(np.count_nonzero(np.asarray(result.status) == NodeStatus.FOLDED))
+    if folded:
+        summary += f", {folded} fold(s) (orange; the fabric behind them is not placed)"
     if energy is not None:
         summary += f", total shear energy {energy.total_energy:.4g} J"
     fig.suptitle(f"{title}\n{summary}" if title else summary)

@@ -23,6 +23,8 @@ from preform.export.atomic import atomic_open, atomic_path
 if TYPE_CHECKING:
     import pandas as pd
 
+    from preform.drape.preform_fields import PreformField
+
 #: Column order of ``cells_table``.
 CELL_COLUMNS: tuple[str, ...] = (
     "i",
@@ -42,7 +44,21 @@ CELL_COLUMNS: tuple[str, ...] = (
 )
 
 
-def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.DataFrame:
+#: Columns added by the ``permeability`` output (``preform.drape.preform_fields``).
+PREFORM_COLUMNS: tuple[str, ...] = (
+    "preform_thickness_mm",
+    "fibre_volume_fraction",
+    "permeability_k1_m2",
+    "permeability_k2_m2",
+    "permeability_k1_dir_x",
+    "permeability_k1_dir_y",
+    "permeability_k1_dir_z",
+)
+
+
+def cells_table(
+    result: DrapeResult, energy: EnergyField | None = None, preform: PreformField | None = None
+) -> pd.DataFrame:
     """One row per cell of the net, invalid cells included.
 
     Columns: ``i``, ``j`` (cell index), ``status`` (CellStatus name, e.g. "VALID",
@@ -53,7 +69,10 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
     cell's undeformed area inside the part, 0 outside it: the total energy is
     Σ energy_J_per_m2 · part_share · d²). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
-    the thickness ratio then follows from the shear.
+    the thickness ratio then follows from the shear. With ``preform`` (the ``permeability``
+    output) the ``PREFORM_COLUMNS`` follow: the sheared cell's thickness [mm] and fabric fibre
+    volume fraction [-], the principal in-plane permeabilities k1 ≥ k2 [m²] and k1's unit
+    direction in the tool's axes.
     """
     import pandas as pd
 
@@ -102,7 +121,20 @@ def cells_table(result: DrapeResult, energy: EnergyField | None = None) -> pd.Da
             "past_failure": flags(None if energy is None else energy.past_failure),
         }
     )
-    return table.loc[:, list(CELL_COLUMNS)]
+    table = table.loc[:, list(CELL_COLUMNS)]
+    if preform is not None:
+        direction = np.asarray(preform.principal_direction, dtype=float).reshape(-1, 3)
+        columns = {
+            "preform_thickness_mm": 1e3 * on_valid(preform.thickness),
+            "fibre_volume_fraction": on_valid(preform.fibre_volume_fraction),
+            "permeability_k1_m2": on_valid(preform.principal_permeability[..., 0]),
+            "permeability_k2_m2": on_valid(preform.principal_permeability[..., 1]),
+            "permeability_k1_dir_x": on_valid(direction[:, 0]),
+            "permeability_k1_dir_y": on_valid(direction[:, 1]),
+            "permeability_k1_dir_z": on_valid(direction[:, 2]),
+        }
+        table = table.assign(**columns)
+    return table
 
 
 def write_table(table: pd.DataFrame, path: str | os.PathLike[str]) -> None:

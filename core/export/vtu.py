@@ -17,6 +17,7 @@ from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatu
 from preform.export.atomic import atomic_path
 
 if TYPE_CHECKING:
+    from preform.drape.preform_fields import PreformField
     from preform.geometry.unit_cell import UnitCell
 
 #: Integer code of each tow kind in the ``kind`` cell array (VTK cell data must be numeric).
@@ -35,14 +36,22 @@ def _require_meshio() -> ModuleType:
     return meshio
 
 
-def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
-    """Write a unit cell's tow centrelines to ``path`` (.vtu) as line segments.
+def write_unit_cell_vtu(
+    cell: UnitCell, path: str | os.PathLike[str], *, volumes: bool = True
+) -> None:
+    """Write a unit cell's tows to ``path`` (.vtu): centre-lines and, with ``volumes``, solids.
 
-    Each tow becomes a chain of VTK "line" cells between its consecutive centreline points
-    (meshio has no poly-line cell). Points are in millimetres. Cell data on every segment:
-    ``tow`` (index of the tow in ``cell.tows``), ``kind`` (code from ``TOW_KIND_CODES``),
-    ``level``, ``width_mm`` [mm] and ``height_mm`` [mm].
+    Each tow's centreline becomes a chain of VTK "line" cells between its consecutive points
+    (meshio has no poly-line cell); with ``volumes`` a second block holds the tow as a solid of
+    wedges, its elliptical section swept along the centreline (``preform.export.tow_volumes``;
+    the solid of a straight tow holds exactly its (π/4)·w·h section times its length). Points
+    are in millimetres. Cell data on every cell of both blocks: ``tow`` (index of the tow in
+    ``cell.tows``), ``kind`` (code from ``TOW_KIND_CODES``), ``level``, ``width_mm`` [mm],
+    ``height_mm`` [mm] and ``solid`` (0 centre-line, 1 volume: ParaView's Threshold on it shows
+    one or the other).
     """
+    from preform.export.tow_volumes import tow_solids
+
     meshio = _require_meshio()
     point_blocks: list[np.ndarray] = []
     segment_blocks: list[np.ndarray] = []
@@ -60,22 +69,27 @@ def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
     if not segment_blocks:
         raise ValueError("the unit cell has no tow with two or more points to write")
 
-    tows = np.concatenate(tow_index)
     kind = np.array(
         [TOW_KIND_CODES.get(t.kind, OTHER_KIND_CODE) for t in cell.tows], dtype=np.int32
     )
     level = np.array([t.level for t in cell.tows], dtype=np.int32)
     width = MM_PER_M * np.array([t.width for t in cell.tows], dtype=float)
     height = MM_PER_M * np.array([t.height for t in cell.tows], dtype=float)
+    blocks = [("line", np.concatenate(segment_blocks), np.concatenate(tow_index), 0)]
+    if volumes:
+        solids = tow_solids(cell)
+        point_blocks.append(solids.points)
+        blocks.append(("wedge", solids.wedges + offset, solids.tow.astype(np.int32), 1))
     mesh = meshio.Mesh(
         points=MM_PER_M * np.concatenate(point_blocks),
-        cells=[("line", np.concatenate(segment_blocks))],
+        cells=[(name, cells) for name, cells, _, _ in blocks],
         cell_data={
-            "tow": [tows],
-            "kind": [kind[tows]],
-            "level": [level[tows]],
-            "width_mm": [width[tows]],
-            "height_mm": [height[tows]],
+            "tow": [tows for _, _, tows, _ in blocks],
+            "kind": [kind[tows] for _, _, tows, _ in blocks],
+            "level": [level[tows] for _, _, tows, _ in blocks],
+            "width_mm": [width[tows] for _, _, tows, _ in blocks],
+            "height_mm": [height[tows] for _, _, tows, _ in blocks],
+            "solid": [np.full(len(tows), s, dtype=np.int32) for _, _, tows, s in blocks],
         },
     )
     with atomic_path(path) as tmp:
@@ -83,7 +97,10 @@ def write_unit_cell_vtu(cell: UnitCell, path: str | os.PathLike[str]) -> None:
 
 
 def write_drape_vtu(
-    result: DrapeResult, energy: EnergyField | None, path: str | os.PathLike[str]
+    result: DrapeResult,
+    energy: EnergyField | None,
+    path: str | os.PathLike[str],
+    preform: PreformField | None = None,
 ) -> None:
     """Write the draped net to ``path`` (.vtu): placed nodes as points, valid cells as quads.
 
@@ -92,7 +109,12 @@ def write_drape_vtu(
     ``shear_deg`` (signed shear [deg]), ``fibre_u`` and ``fibre_v`` (unit 3-vectors),
     ``thickness_ratio`` (t/t0 = 1/cos γ [-]), ``status`` (CellStatus code), ``in_part`` (0/1) and,
     when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking`` and
-    ``past_failure`` (0/1). Without ``energy`` the thickness ratio is computed from the shear. A net
+    ``past_failure`` (0/1); with ``preform`` (the ``permeability`` output)
+    ``preform_thickness_mm`` [mm], ``fibre_volume_fraction`` [-], ``permeability_m2`` (the
+    in-plane tensor in the file's axes, 9 components [m²]), ``permeability_k1_m2`` and
+    ``permeability_k2_m2`` (principal values k1 ≥ k2 [m²]) and ``permeability_k1_dir`` (k1's unit
+    direction: ParaView's Glyph filter draws the flow's fast direction). Without ``energy`` the
+    thickness ratio is computed from the shear. A net
     with no valid cell is written as its placed nodes, one vertex cell each, without cell data.
     """
     meshio = _require_meshio()
@@ -130,6 +152,13 @@ def write_drape_vtu(
         cell_data["past_failure"] = np.asarray(energy.past_failure, dtype=np.int32)[ci, cj]
     else:
         cell_data["thickness_ratio"] = 1.0 / np.cos(shear)
+    if preform is not None:
+        cell_data["preform_thickness_mm"] = MM_PER_M * np.asarray(preform.thickness)[ci, cj]
+        cell_data["fibre_volume_fraction"] = np.asarray(preform.fibre_volume_fraction)[ci, cj]
+        cell_data["permeability_m2"] = np.asarray(preform.permeability)[ci, cj].reshape(-1, 9)
+        cell_data["permeability_k1_m2"] = np.asarray(preform.principal_permeability)[ci, cj, 0]
+        cell_data["permeability_k2_m2"] = np.asarray(preform.principal_permeability)[ci, cj, 1]
+        cell_data["permeability_k1_dir"] = np.asarray(preform.principal_direction)[ci, cj]
 
     # A file is a result users open and trust: never write a NaN or an infinity into one (the
     # drape step fails such a case first; this guards direct callers).

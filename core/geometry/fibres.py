@@ -4,6 +4,10 @@ Values are typical handbook figures, not measurements of a particular product:
 E-glass 2.55 g/cm³ (PHYSICS §1.3) and 72 GPa; carbon (AS4-class) 1.79 g/cm³ and 234 GPa
 (Gutowski 1987 quotes 234 GPa for AS4); aramid (Kevlar 49-class) 1.44 g/cm³, 112 GPa;
 polyester stitching yarn 1.38 g/cm³, 10 GPa. A tow type may override them.
+
+Filament diameters (for the permeability of the fibre bed, ``preform.geometry.permeability``)
+are typical values, illustrative [U]: E-glass rovings 17 µm (made 9–24 µm), standard-modulus
+carbon 7 µm, aramid 12 µm, polyester stitching yarn 20 µm.
 """
 
 from __future__ import annotations
@@ -18,13 +22,15 @@ class Fibre:
     density_g_cm3: float
     #: Axial Young's modulus [Pa].
     modulus_Pa: float
+    #: Filament (single fibre) diameter [m].
+    filament_diameter_m: float = 17e-6
 
 
 FIBRES: dict[str, Fibre] = {
-    "glass": Fibre("glass", 2.55, 72e9),
-    "carbon": Fibre("carbon", 1.79, 234e9),
-    "aramid": Fibre("aramid", 1.44, 112e9),
-    "polyester": Fibre("polyester", 1.38, 10e9),
+    "glass": Fibre("glass", 2.55, 72e9, 17e-6),
+    "carbon": Fibre("carbon", 1.79, 234e9, 7e-6),
+    "aramid": Fibre("aramid", 1.44, 112e9, 12e-6),
+    "polyester": Fibre("polyester", 1.38, 10e9, 20e-6),
 }
 
 

@@ -188,7 +188,7 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
             ctx.warn(
                 f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
                 f"the drape shears cells past {math.degrees(limits.packing):.1f}°, where the "
-                "law's tows are packed solid: E(α) there (up to "
+                "law's fabric is jammed: E(α) there (up to "
                 f"{worst:.3g} J) is the law's continuation past that physical limit, not a "
                 "physical energy"
             )
@@ -245,6 +245,8 @@ def _judge_optimum_drape(
     ctx.summary["optimum_covered_fraction"] = cover.covered_fraction
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
+    elif cover.fold_zones:
+        ctx.warn(cover.fold_warning())
 
 
 def run_optimum(ctx: CaseContext) -> dict[str, Any]:

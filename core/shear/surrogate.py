@@ -4,8 +4,9 @@ Mechanistic laws (crossover friction + tow compaction) cost tens of milliseconds
 search evaluates the energy of dozens of nets. The surrogate tabulates, once per sense of
 shear, the exact strain energy W and its exact slope (the torque magnitude) on a grid of
 angle magnitudes, and interpolates W between nodes with the cubic Hermite polynomial through
-both. The grid always contains the law's locking and failure angles (where the torque's slope
-may jump), and each sense is tabulated separately (a friction law's torque steps at γ = 0).
+both. The grid always contains the law's locking, failure and jamming angles (where the torque's
+slope may jump), is eight times finer over the 3° before the jamming angle (where compaction
+stiffens W steeply), and each sense is tabulated separately (a friction law's torque steps at γ = 0).
 
 Accuracy: for W with a bounded fourth derivative on each interval of width h the Hermite error
 is at most h⁴/384 · max|W''''|. `max_relative_error` measures it against the exact law over
@@ -26,6 +27,9 @@ from numpy.typing import ArrayLike, NDArray
 from preform.shear.law import ShearLaw
 
 FloatArray = NDArray[np.float64]
+
+#: Width [rad] before a law's jamming angle over which the table is eight times finer.
+_JAM_REFINED = math.radians(3.0)
 
 #: Largest tabulated magnitude [rad]: the fibre families are parallel at 90°.
 _DOMAIN_END = math.pi / 2
@@ -82,7 +86,7 @@ class TabulatedSurrogate:
     """A ``ShearLaw`` that evaluates ``law``'s energy (and its slope, the torque) from tables.
 
     ``step_rad`` is the table spacing [rad]; the grid runs from 0 to 90° and also holds the
-    law's locking and failure angles.
+    law's locking, failure and jamming (``packing_angle``) angles.
     """
 
     def __init__(self, law: ShearLaw, step_rad: float = math.radians(0.25)) -> None:
@@ -92,13 +96,29 @@ class TabulatedSurrogate:
         self.step_rad = float(step_rad)
         self.locking_angle = law.locking_angle
         self.failure_angle = law.failure_angle
+        # a stitch that also breaks shearing the other way (stitch_yarn): the energy field
+        # flags it from the law in hand, so the table must carry it
+        self.failure_angle_negative = getattr(law, "failure_angle_negative", None)
         count = math.ceil(_DOMAIN_END / step_rad)
         grid = np.linspace(0.0, _DOMAIN_END, count + 1)
         special = [
             a
-            for a in (law.locking_angle, law.failure_angle)
+            # the jamming (packing) angle too: the torque is held from there, a kink
+            for a in (
+                law.locking_angle,
+                law.failure_angle,
+                self.failure_angle_negative,
+                getattr(law, "packing_angle", None),
+            )
             if a is not None and 0 < a < _DOMAIN_END
         ]
+        jam = getattr(law, "packing_angle", None)
+        if jam is not None and 0 < jam < _DOMAIN_END:
+            # Compaction stiffens W steeply just before the jam: 8× finer over the 3° before
+            # it (measured, tests/shear/test_surrogate.py).
+            count = math.ceil(_JAM_REFINED / (step_rad / 8.0))
+            fine = jam - step_rad / 8.0 * np.arange(1, count + 1)
+            special.extend(float(a) for a in fine if a > 0)
         nodes = np.unique(np.concatenate([grid, special]))
         # a special angle right next to a grid node would make a needle-thin interval
         keep = np.concatenate([[True], np.diff(nodes) > 1e-3 * step_rad])

@@ -30,14 +30,16 @@ def _hermite(
         return np.nan
     last = nodes.shape[0] - 1
     u = min(max(u, 0.0), nodes[last])
-    # the interval k with nodes[k] <= u < nodes[k + 1] (the last one for u at the end): the
-    # table is a uniform grid with at most a few angles inserted, so the uniform index is at
-    # most a few intervals off
-    k = min(int(u * last / nodes[last]), last - 1)
-    while k > 0 and nodes[k] > u:
-        k -= 1
-    while k < last - 1 and nodes[k + 1] <= u:
-        k += 1
+    # the interval k with nodes[k] <= u < nodes[k + 1] (the last one for u at the end), by
+    # bisection: the grid is refined near a jamming angle, so it is not uniform
+    lo, hi = 0, last
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if nodes[mid] <= u:
+            lo = mid
+        else:
+            hi = mid
+    k = lo
     h = nodes[k + 1] - nodes[k]
     t = (u - nodes[k]) / h
     t2, t3 = t * t, t * t * t

@@ -14,9 +14,14 @@ import os
 import stat
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:
+    from preform.drape.net import FacePlacement
+    from preform.plugins.surfaces.mesh_walk import MeshWalker
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -283,6 +288,62 @@ class TriangleMesh:
             blended = np.einsum("ni,nij->nj", weights, self.vertex_normals[self.faces[face]])
             normals = blended / np.linalg.norm(blended, axis=1, keepdims=True)
         return np.where(np.isfinite(closest[:, :1]), normals, np.nan)
+
+    # --- walking queries (exact net placement and geodesics) --------------------------------
+
+    @property
+    def walker(self) -> MeshWalker:
+        """Walking queries over this mesh's topology (built on first use, then kept)."""
+        walker = getattr(self, "_walker", None)
+        if walker is None:
+            from preform.plugins.surfaces.mesh_topology import build_topology
+            from preform.plugins.surfaces.mesh_walk import MeshWalker
+
+            walker = MeshWalker(build_topology(self.vertices, self.faces, self.face_normals))
+            self._walker = walker
+        return walker
+
+    def locate_faces(self, points: FloatArray) -> IntArray:
+        """The triangle (n,) each point (n, 3) [m] lies on (or is closest to)."""
+        return self.closest_faces(points)[2]
+
+    def place_nodes_from_faces(
+        self,
+        a: FloatArray,
+        b: FloatArray,
+        opposite: FloatArray,
+        spacing: float,
+        face_a: IntArray,
+        face_b: IntArray,
+    ) -> FacePlacement:
+        """Net nodes at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) [m], on the far side
+        from ``opposite``, found exactly on the triangles met walking from the parents'
+        triangles ``face_a``/``face_b`` (``preform.plugins.surfaces.mesh_kernels``)."""
+        return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b)
+
+    def place_nodes(
+        self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
+    ) -> tuple[FloatArray, NDArray[np.int8]]:
+        """As :meth:`place_nodes_from_faces`, locating the parents' triangles first."""
+        placed = self.place_nodes_from_faces(
+            a, b, opposite, spacing, self.locate_faces(a), self.locate_faces(b)
+        )
+        return placed.points, placed.status
+
+    def geodesic_nodes(
+        self, start: FloatArray, direction: FloatArray, spacing: float, count: int
+    ) -> tuple[FloatArray, NDArray[np.int8]]:
+        """``count`` nodes (m, count, 3) [m] along the straightest geodesics of the faceted
+        surface from ``start`` (m, 3) in tangent ``direction`` (m, 3), successive chords
+        ``spacing`` [m]; NodeStatus codes (m, count), OFF_TOOL past the mesh's boundary. Exact
+        for the piecewise-flat surface: no sub-steps."""
+        from preform.plugins.surfaces.mesh_walk import faces_ahead
+
+        start = np.asarray(start, dtype=float)
+        direction = np.asarray(direction, dtype=float)
+        faces = faces_ahead(self, start, direction)
+        points, status, _ = self.walker.geodesic_nodes(start, faces, direction, spacing, count)
+        return points, status
 
     # --- vertical rays ----------------------------------------------------------------------
 

@@ -80,6 +80,8 @@ class TowType:
     linear_density_tex: float
     width: float
     height: float
+    #: Filament diameter [m]; None: the fibre's typical value.
+    filament_diameter: float | None = None
 
     @property
     def name(self) -> str:

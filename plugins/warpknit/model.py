@@ -17,8 +17,10 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from preform.geometry.fibres import FIBRES, fibre
+from preform.geometry.sheared_cell import ShearedCell
 from preform.geometry.unit_cell import UnitCell
 from preform.material import (
+    FILAMENT_DIAMETER,
     TOW_HEIGHT,
     TOW_LINEAR_DENSITY,
     TOW_SPACING,
@@ -88,6 +90,20 @@ STITCH_LINEAR_DENSITY = Plausible(
     "a stitching-yarn linear density",
     "stitch yarns are 2–30 tex (76 dtex polyester = 7.6 tex), glass stitching up to ≈ 70 tex",
 )
+YARN_FAILURE_STRAIN = Plausible(
+    0.005,
+    1.0,
+    "",
+    "a stitching yarn's strain at break",
+    "polyester filament yarns break at ≈ 0.10–0.35 strain, glass at ≈ 0.03–0.05",
+)
+YARN_MODULUS = Plausible(
+    0.1,
+    300.0,
+    "GPa",
+    "a stitching yarn's tensile modulus",
+    "polyester filament ≈ 5–15 GPa, aramid ≈ 60–120 GPa, glass ≈ 72 GPa",
+)
 AREAL_DENSITY = Plausible(
     5.0,
     20000.0,
@@ -122,7 +138,16 @@ class TowLayerEntry(_Part):
         gt=0.0, description="Tow width in the fabric plane [mm]."
     )
     tow_height_mm: Annotated[float, TOW_HEIGHT] = Field(
-        gt=0.0, description="Tow height (thickness) [mm]."
+        gt=0.0,
+        description="Tow height (thickness of one tow as built, in the unit cell) [mm]. The "
+        "cell's thickness (derived thickness_mm) stacks these with the stitch threads; the "
+        "sheared cell, and the draped preform's thickness, Vf and permeability, start from it.",
+    )
+    filament_diameter_um: Annotated[float | None, FILAMENT_DIAMETER] = Field(
+        default=None,
+        gt=0.0,
+        description="Filament diameter [µm], for the preform's permeability; default: the "
+        "fibre's typical value (illustrative).",
     )
     offset_mm: Annotated[float | None, TOW_OFFSET] = Field(
         default=None,
@@ -167,6 +192,18 @@ class ThreadLevelEntry(_Part):
     )
     fibre: str | None = Field(
         default=None, description="Fibre of the stitching yarn (default polyester)."
+    )
+    failure_strain: Annotated[float | None, YARN_FAILURE_STRAIN] = Field(
+        default=None,
+        gt=0.0,
+        description="Tensile strain at break of the stitching yarn [-] (the stitch_yarn law "
+        "breaks the stitch there); none: the law needs it in its own block.",
+    )
+    yarn_modulus_GPa: Annotated[float | None, YARN_MODULUS] = Field(
+        default=None,
+        gt=0.0,
+        description="Tensile modulus of the stitching yarn [GPa], linear to break; default the "
+        "fibre's modulus (polyester 10 GPa).",
     )
 
     @field_validator("knitting_sequence")
@@ -235,6 +272,9 @@ class WarpKnitFabric(FabricBase):
                     linear_density_tex=t.linear_density_tex,
                     width=t.tow_width_mm * MM,
                     height=t.tow_height_mm * MM,
+                    filament_diameter=None
+                    if t.filament_diameter_um is None
+                    else t.filament_diameter_um * 1e-6,
                 ),
                 offset=(t.offset_mm or 0.0) * MM,
             )
@@ -268,6 +308,17 @@ class WarpKnitFabric(FabricBase):
             cell, reference_direction=math.radians(self.reference_direction_deg())
         )
 
+    def sheared_cell(self, shear_rad: float) -> ShearedCell:
+        """The cell at shear angle ``shear_rad`` [rad] about the reference direction
+        (``sheared_warp_knit_cell``); raises ValueError on an entry with errors."""
+        from preform.plugins.warpknit.sheared_cell import sheared_warp_knit_cell
+
+        problems = self.errors()
+        if problems:
+            loc, message = problems[0]
+            raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
+        return sheared_warp_knit_cell(self.geometry, shear_rad, self.reference_direction_deg())
+
     def derived(self) -> dict[str, Any]:
         """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow
         fibre volume fractions [-] (elliptical tow section) and each level's stitch."""
@@ -298,8 +349,24 @@ class WarpKnitFabric(FabricBase):
         }
 
     def errors(self) -> list[tuple[Location, str]]:
-        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors."""
-        return self.geometry.problems()
+        """Placement, machine (gauge, needle distance, stitch length) and loop-length errors;
+        a thread without the strain at break the ``stitch_yarn`` law needs."""
+        problems = list(self.geometry.problems())
+        law = self.shear_law
+        if getattr(law, "law", None) == "stitch_yarn" and (
+            getattr(law, "yarn_failure_strain", None) is None
+        ):
+            problems += [
+                (
+                    ("threads", k, "failure_strain"),
+                    "the stitch_yarn shear law needs the stitching yarn's strain at break: give "
+                    "failure_strain here (regular polyester filament ≈ 0.2–0.3) or "
+                    "yarn_failure_strain in the shear_law",
+                )
+                for k, thread in enumerate(self.threads)
+                if thread.failure_strain is None
+            ]
+        return problems
 
     def check(self) -> list[tuple[Location, str]]:
         """Warnings: tows no stitch crosses, cells that fit poorly, wide overlaps, and a

@@ -6,7 +6,7 @@ consumes it. Keeping the hand-over in one small dataclass keeps geometry and mec
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 
 @dataclass(frozen=True)
@@ -36,3 +36,13 @@ class CrossoverGeometry:
     mean_float_weft: float = 1.0
     #: Number of tow levels stacked in the cell (2 for a 2D weave).
     levels: int = 2
+    #: Thickness of the unit cell [m] (envelope of its tows), or None: the height the law's
+    #: rises and tow heights are scaled from when a free thickness is given.
+    thickness: float | None = None
+    #: Per contact of the cell (``WovenUnitCell.contacts()`` order): the rises [m] of the
+    #: warp-wise tow's path segments whose arcs wrap the crossing tow there (none inside a float,
+    #: one at a float's end, two where the tow changes side on both sides). None: every contact
+    #: is wrapped on both sides with the rise (h_warp + h_weft)/2, a plain weave.
+    warp_wrap_rises: tuple[tuple[float, ...], ...] | None = field(default=None)
+    #: The same for the weft-wise tow at each contact.
+    weft_wrap_rises: tuple[tuple[float, ...], ...] | None = field(default=None)

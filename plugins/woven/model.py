@@ -25,10 +25,12 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, ValidationInfo, field_validator
 
 from preform.geometry.fibres import FIBRES, Fibre
+from preform.geometry.sheared_cell import ShearedCell
 from preform.geometry.unit_cell import UnitCell
 from preform.material import (
     FIBRE_DENSITY,
     FIBRE_MODULUS,
+    FILAMENT_DIAMETER,
     TOW_HEIGHT,
     TOW_LINEAR_DENSITY,
     TOW_SPACING,
@@ -64,7 +66,12 @@ class TowTypeEntry(ParamsModel):
         gt=0, description="Tow width in the fabric plane [mm] (Tw0)."
     )
     height_mm: Annotated[float, TOW_HEIGHT] = Field(
-        gt=0, description="Tow height (thickness of one tow) [mm]."
+        gt=0,
+        description="Tow height (thickness of one tow as built, in the unit cell) [mm]. The "
+        "cell's thickness (derived thickness_mm) stacks these with the crimp; the sheared "
+        "cell, and the draped preform's thickness, Vf and permeability, start from it. Not "
+        "the shear law's fabric_thickness_mm, a free (uncompressed) thickness fitted to shear "
+        "data.",
     )
     fibre_density_g_cm3: Annotated[float | None, FIBRE_DENSITY] = Field(
         default=None,
@@ -73,6 +80,12 @@ class TowTypeEntry(ParamsModel):
     )
     fibre_modulus_GPa: Annotated[float | None, FIBRE_MODULUS] = Field(
         default=None, gt=0, description="Fibre axial modulus [GPa]; default: the fibre's value."
+    )
+    filament_diameter_um: Annotated[float | None, FILAMENT_DIAMETER] = Field(
+        default=None,
+        gt=0,
+        description="Filament diameter [µm], for the preform's permeability; default: the "
+        "fibre's typical value (illustrative).",
     )
 
     @field_validator("fibre")
@@ -89,6 +102,9 @@ class TowTypeEntry(ParamsModel):
             base.name,
             self.fibre_density_g_cm3 or base.density_g_cm3,
             self.fibre_modulus_GPa * 1e9 if self.fibre_modulus_GPa else base.modulus_Pa,
+            self.filament_diameter_um * 1e-6
+            if self.filament_diameter_um
+            else base.filament_diameter_m,
         )
         return TowType(
             name=name,
@@ -493,6 +509,12 @@ class WovenFabric(FabricBase):
     def unit_cell(self) -> UnitCell:
         """The repeat as a generic unit cell [m]; x along the warp, reference direction 45°."""
         return self._require_valid().to_unit_cell()
+
+    def sheared_cell(self, shear_rad: float) -> ShearedCell:
+        """The woven cell at shear angle ``shear_rad`` [rad] (``sheared_woven_cell``)."""
+        from preform.plugins.woven.sheared_cell import sheared_woven_cell
+
+        return sheared_woven_cell(self._require_valid(), shear_rad)
 
     def crossover_geometry(self) -> CrossoverGeometry:
         """Mean crossover description for the friction–compaction shear law (SI units)."""

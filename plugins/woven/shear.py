@@ -9,30 +9,40 @@ Torque per unit area C(γ) = (crossovers per area)·T. The law is symmetric in �
 
 Modelling choices [C] (the paper does not pin these down; every one is a parameter):
 
-* Tow height h = fabric_thickness / levels (the paper calibrated the thickness, so it overrides
-  the nominal tow heights of the unit cell); tow cross-section lenticular, area (2/3)·Tw0·h,
-  which gives the as-woven tow fibre fraction V_f0 = A_f / ((2/3)·Tw0·h) unless given.
-* Pre-tension contact force, crimp interaction: ``pretension_N`` is the clamping-frame tension
+* One geometry: tow widths, spacings, fibre areas, heights and the tow paths come from the
+  fabric's unit cell (``WovenUnitCell``). The cell's tow height is the nominal (as-woven,
+  compacted) height of one tow. ``fabric_thickness_mm``, when given, is a *free* (uncompressed)
+  fabric thickness, such as the one the paper fitted for its Table 1 fabrics: the relaxed fabric
+  is the cell expanded through its thickness by t_free / t_cell, so the law's path rises and tow
+  heights are the cell's times that ratio, and the tow section is the paper's lenticular one,
+  (2/3)·Tw0·h. Without it the law uses the cell as it is, with the cell's own (elliptical)
+  section: V_f0 = A_f / ((π/4)·Tw0·h).
+* Pre-tension contact force, from the weave: ``pretension_N`` is the clamping-frame tension
   across a fabric width ``pretension_width_mm``, shared by the tows of each family, so one tow
-  carries T = pretension·Ts/width. A lenticular tow path (two circular arcs) rising by the
-  crossing tow's height h over one crossing spacing Ts' turns by 2θ at a crossover with
-  tan(θ/2) = h/Ts', pressing the crossing tow with 2T·sin θ; the contact force is the mean of the
-  two families' values, F_pre = T_wp sin θ_wp + T_wt sin θ_wt.
+  carries T = pretension·Ts/width. Between two neighbouring crossovers the tow path rises by r
+  (from the cell's tow path) over one crossing pitch Ts'; drawn as two tangent circular arcs each
+  arc turns by α = 2·atan(r/Ts'). The arcs next to a crossover that bend towards the crossing tow
+  wrap it (``preform.plugins.woven.crimp``): none inside a float, one at a float's end, two where
+  the tow changes side on both sides. The tow presses on the crossing tow with the resultant of
+  its tension at the two ends of the wrapping arcs, 2T·sin(Σα/2). The contact force is the mean
+  of the two tows' values, averaged over the contacts of the cell. A plain weave's crossovers are
+  all wrapped twice with r = h: F_pre = T_wp sin α_wp + T_wt sin α_wt, the paper's model.
 * Compaction: the bundle stress (``preform.plugins.woven.compaction``; V_f = V_f0·Tw0/Tw, onset
   fraction V_o = V_f0 by default so the force starts at zero at locking) is integrated over the
   tow contact area the paper names, the crossover parallelogram A = Tw_wp·Tw_wt/cos γ; the mean
-  of the two families' stresses is used. Past the cap fraction V_a(1 − ε) the stress continues
-  linearly: the torque grows steeply but stays finite; ``packing_angle`` reports where.
+  of the two families' stresses is used. Compaction acts at every contact, wrapped or not.
+* Jamming: the fabric is jammed at the first angle where its tows reach the packing cap
+  V_a(1 − ε) or its picture-frame force F_s/L reaches ``jamming_force_N_per_mm``; a dry fabric
+  that cannot shear further in its plane leaves it (wrinkles). Past that angle the law holds the
+  torque it reached (the energy grows linearly, by C_J per radian) instead of following the
+  compaction pole, whose energies (1e7–1e9 J/m²) are no fabric's; ``packing_angle`` reports the
+  jamming angle and drape results count the cells past it as unphysical.
 * Angles are clamped to |γ| ≤ 90° − 1e-9 rad (the picture frame and the parallelogram are
   singular at 90°).
 
-Our extension to twill, satin and 3D weaves [C, not from the paper], driven by the unit cell's
-``CrossoverGeometry``: the pre-tension presses tows together only where a tow changes side (an
-interlacing); a crossover inside a float keeps only ``float_contact_fraction`` of the crimp force.
-With f = interlacings / (2·crossovers) (1 for a plain weave, whose every crossover is flanked by
-two interlacings) the mean pre-tension contact force is F_pre·(f + κ(1 − f)). Compaction acts at
-every crossover; for 3D weaves crossovers_per_area counts every tow-on-tow contact of the stack
-and h = thickness / levels. For a plain weave the extension reduces exactly to the paper's model.
+The same rules serve twill, satin, basket and 3D weaves: their floats leave crossovers unwrapped,
+so the crimp force falls with the share of interlacings; for 3D weaves crossovers_per_area counts
+every tow-on-tow contact of the stack. No weave-specific constant enters.
 """
 
 from __future__ import annotations
@@ -135,8 +145,15 @@ FABRIC_THICKNESS = Plausible(
     0.01,
     100.0,
     "mm",
-    "a fabric thickness",
+    "a free (uncompressed) fabric thickness",
     "spread-tow fabrics ≈ 0.03 mm thick, thick 3D weaves ≈ 50 mm",
+)
+JAMMING_FORCE = Plausible(
+    0.1,
+    100.0,
+    "N/mm",
+    "a picture-frame force at which a jammed fabric wrinkles",
+    "measured picture-frame curves of dry fabrics end, wrinkling, at ≈ 1–10 N/mm",
 )
 FRAME_WIDTH = Plausible(1.0, 5000.0, "mm", "a frame width", "picture frames are 100–300 mm a side")
 TOW_FRACTION = Plausible(
@@ -184,9 +201,15 @@ class FrictionCompactionParams(ParamsModel):
             "its crimp [C]."
         ),
     )
-    fabric_thickness_mm: Annotated[float, FABRIC_THICKNESS] = Field(
+    fabric_thickness_mm: Annotated[float | None, FABRIC_THICKNESS] = Field(
+        default=None,
         gt=0.0,
-        description="Fabric thickness [mm]; tow height = thickness / levels [C] (paper: fitted).",
+        description=(
+            "Free (uncompressed) fabric thickness [mm], e.g. the paper's fitted Table 1 value; "
+            "the law then expands the unit cell's tow heights and path rises by thickness / "
+            "(cell thickness) [C]. Default: none, the unit cell's own tow heights (the "
+            "nominal height of one tow, tow_types.*.height_mm)."
+        ),
     )
     pretension_width_mm: Annotated[float, FRAME_WIDTH] = Field(
         default=150.0,
@@ -234,13 +257,12 @@ class FrictionCompactionParams(ParamsModel):
         lt=0.5,
         description="ε: V_f is followed exactly up to V_a(1−ε), linearly beyond (pole guard) [-].",
     )
-    float_contact_fraction: float = Field(
-        default=0.25,
-        ge=0.0,
-        le=1.0,
+    jamming_force_N_per_mm: Annotated[float, JAMMING_FORCE] = Field(
+        default=10.0,
+        gt=0.0,
         description=(
-            "Share of the crimp contact force kept at a crossover inside a float (twill, satin, "
-            "3D; our extension, no effect on a plain weave) [-]."
+            "Picture-frame force F_s/L [N/mm] at which the jammed fabric leaves its plane; past "
+            "the angle where it (or the packing cap) is reached the torque is held [C]."
         ),
     )
 
@@ -250,7 +272,8 @@ class FrictionCompactionLaw(SignedShearLaw):
 
     ``geometries``: one ``CrossoverGeometry`` (2D weave) or several (e.g. level pairs of a 3D
     weave), whose torques add. Torque [N·m/m²], energy [J/m²], angles [rad]. Also offers the
-    intermediate quantities per crossover for inspection and tests.
+    intermediate quantities per crossover for inspection and tests. ``packing_angle`` [rad] is
+    the jamming angle past which the torque is held (module docstring).
     """
 
     def __init__(
@@ -266,26 +289,67 @@ class FrictionCompactionLaw(SignedShearLaw):
         self.params = params
         self._parts = [_CrossoverPart(g, params) for g in self.geometries]
         locks = [a for part in self._parts for a in part.locking_angles]
-        packs = [a for part in self._parts for a in part.packing_angles if a is not None]
-        #: Angle [rad] where the first tow family reaches the guarded packing cap, or None.
-        self.packing_angle: float | None = min(packs) if packs else None
-        branch = QuadratureBranch(self.torque_magnitude, breakpoints=[*locks, *packs])
+        packs = [a for part in self._parts for a in part.packing_angles]
+        packing = min(packs)
+        #: Angle [rad] where the tows reach the guarded packing cap (before any jamming force).
+        self.tows_packed_angle: float = packing
+        jam = self._force_jamming_angle(params.jamming_force_N_per_mm * 1000.0, packing)
+        #: Jamming angle [rad]: packing cap or jamming force, whichever comes first.
+        first = min(packing, jam)
+        self.packing_angle: float | None = None if first >= MAX_SHEAR - 1e-12 else first
+        self._jam = MAX_SHEAR if self.packing_angle is None else self.packing_angle
+        # Kinks: the locking angles before the jam, and the jam itself (the torque is held).
+        breaks = [a for a in locks if a < self._jam]
+        if self.packing_angle is not None:
+            breaks.append(self.packing_angle)
+        branch = QuadratureBranch(self.torque_magnitude, breakpoints=breaks)
         super().__init__(branch, None, locking_angle=min(locks), failure_angle=None)
 
-    def torque_magnitude(self, u: FloatArray) -> FloatArray:
-        """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]."""
+    def _free_torque(self, u: FloatArray) -> FloatArray:
         total = np.zeros(np.shape(u))
         for part in self._parts:
             total = total + part.torque_per_area(u)
         return total
 
+    def _force_jamming_angle(self, force_N_per_m: float, stop: float) -> float:
+        """First angle [rad] in [0, stop] where C/cos γ reaches ``force_N_per_m``; MAX_SHEAR if
+        none. A grid finds the first crossing (the force rises monotonically past locking);
+        four finer grids inside the bracket refine it to ~1e-12 rad, one vector call each."""
+        lo, hi = 0.0, stop
+        for level in range(5):
+            grid = np.linspace(lo, hi, 257)
+            force = self._free_torque(grid) / np.cos(grid)
+            above = np.nonzero(force >= force_N_per_m)[0]
+            if above.size == 0:
+                return MAX_SHEAR if level == 0 else hi
+            k = int(above[0])
+            if k == 0:
+                return float(grid[0])
+            lo, hi = float(grid[k - 1]), float(grid[k])
+        return hi
+
+    def torque_magnitude(self, u: FloatArray) -> FloatArray:
+        """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]; held past jamming."""
+        return self._free_torque(np.minimum(np.asarray(u, dtype=float), self._jam))
+
     def contact_force(self, gamma: ArrayLike) -> FloatArray:
         """Mean contact force per crossover F_c [N] of the first geometry."""
         return self._parts[0].contact_force(np.asarray(gamma, dtype=float))
 
+    def pretension_force(self) -> float:
+        """Mean pre-tension (crimp) contact force per crossover [N] of the first geometry."""
+        return self._parts[0].pretension_force
+
     def effective_radius(self, gamma: ArrayLike) -> FloatArray:
         """R_eff [m] of the first geometry's crossover at γ [rad]."""
         return self._parts[0].effective_radius(np.asarray(gamma, dtype=float))
+
+
+def wrapped_contact_force(tension: float, rises: Sequence[float], pitch: float) -> float:
+    """Force [N] a tow of tension T [N] presses on a crossing tow with, its path segments of
+    rises r [m] over pitch Ts' [m] wrapping it: 2T·sin(Σα/2), α = 2·atan(r/Ts') per arc."""
+    turn = sum(crimp_angle(r, pitch) for r in rises)
+    return 2.0 * tension * math.sin(0.5 * turn)
 
 
 class _CrossoverPart:
@@ -295,26 +359,49 @@ class _CrossoverPart:
         g = geometry
         self.geometry = g
         self.mu = params.friction_coefficient
-        height = params.fabric_thickness_mm * 1e-3 / max(g.levels, 1)
+        heights = (g.tow_height_warp, g.tow_height_weft)
+        if params.fabric_thickness_mm is not None:
+            # Free thickness: the relaxed cell, expanded through its thickness (module doc).
+            cell_thickness = g.thickness if g.thickness is not None else g.levels * max(heights)
+            expand = params.fabric_thickness_mm * 1e-3 / cell_thickness
+            section = 2.0 / 3.0  # the paper's lenticular tow section
+        else:
+            expand = 1.0
+            section = math.pi / 4.0  # the unit cell's elliptical tow section
         width = params.pretension_width_mm * 1e-3
         tension_wp = params.pretension_N * g.tow_spacing_warp / width
         tension_wt = params.pretension_N * g.tow_spacing_weft / width
-        crimp_force = tension_wp * math.sin(
-            crimp_angle(height, g.tow_spacing_weft)
-        ) + tension_wt * math.sin(crimp_angle(height, g.tow_spacing_warp))
-        share = min(1.0, max(0.0, g.interlacings_per_area / (2.0 * g.crossovers_per_area)))
-        kappa = params.float_contact_fraction
-        #: Pre-tension contact force per crossover [N].
-        self.pretension_force = crimp_force * (share + kappa * (1.0 - share))
+        plain_rise = 0.5 * (g.tow_height_warp + g.tow_height_weft)
+        if g.warp_wrap_rises is None or g.weft_wrap_rises is None:
+            if g.interlacings_per_area < 2.0 * g.crossovers_per_area * (1 - 1e-9):
+                raise ValueError(
+                    "a weave with floats needs the rises of the tow paths at its contacts "
+                    "(CrossoverGeometry.warp_wrap_rises, weft_wrap_rises; built from the unit "
+                    "cell by preform.plugins.woven.crimp)"
+                )
+            warp_rises: tuple[tuple[float, ...], ...] = ((plain_rise, plain_rise),)
+            weft_rises: tuple[tuple[float, ...], ...] = ((plain_rise, plain_rise),)
+        else:
+            warp_rises, weft_rises = g.warp_wrap_rises, g.weft_wrap_rises
+        forces = [
+            0.5
+            * (
+                wrapped_contact_force(tension_wp, [r * expand for r in wp], g.tow_spacing_weft)
+                + wrapped_contact_force(tension_wt, [r * expand for r in wt], g.tow_spacing_warp)
+            )
+            for wp, wt in zip(warp_rises, weft_rises, strict=True)
+        ]
+        #: Pre-tension contact force per crossover, mean over the contacts [N].
+        self.pretension_force = sum(forces) / len(forces) if forces else 0.0
         self.locking_angles = (
             locking_angle(g.tow_width_warp, g.tow_spacing_warp),
             locking_angle(g.tow_width_weft, g.tow_spacing_weft),
         )
         self.bundles = tuple(
-            self._bundle(params, fibre_area, w0, height, g.fibre_modulus)
-            for fibre_area, w0 in (
-                (g.fibre_area_warp, g.tow_width_warp),
-                (g.fibre_area_weft, g.tow_width_weft),
+            self._bundle(params, fibre_area, w0, h * expand, section, g.fibre_modulus)
+            for fibre_area, w0, h in (
+                (g.fibre_area_warp, g.tow_width_warp, g.tow_height_warp),
+                (g.fibre_area_weft, g.tow_width_weft, g.tow_height_weft),
             )
         )
         self.packing_angles = tuple(
@@ -331,16 +418,18 @@ class _CrossoverPart:
         fibre_area: float,
         initial_width: float,
         height: float,
+        section: float,
         modulus: float,
     ) -> BundleCompaction:
-        v0 = params.tow_volume_fraction or fibre_area / (2.0 / 3.0 * initial_width * height)
+        v0 = params.tow_volume_fraction or fibre_area / (section * initial_width * height)
         cap = params.max_volume_fraction * (1.0 - params.packing_margin)
         if not v0 < cap:
+            shape = "lenticular" if section < 0.7 else "elliptical"
             raise ValueError(
-                f"as-woven tow fibre fraction {v0:.3f} (fibre area over a lenticular section of "
-                f"width {initial_width * 1e3:.3g} mm, height {height * 1e3:.3g} mm = thickness / "
-                f"levels) is not below the packing cap {cap:.3f}: raise fabric_thickness_mm or "
-                "give tow_volume_fraction"
+                f"as-woven tow fibre fraction {v0:.3f} (fibre area over a {shape} section of "
+                f"width {initial_width * 1e3:.3g} mm, height {height * 1e3:.3g} mm) is not "
+                f"below the packing cap {cap:.3f}: raise the tow height (or the free "
+                "fabric_thickness_mm) or give tow_volume_fraction"
             )
         return BundleCompaction(
             fibre_modulus=modulus,
@@ -385,7 +474,13 @@ class _CrossoverPart:
 
 
 def build_friction_compaction(params: FrictionCompactionParams, fabric: Any) -> SignedShearLaw:
-    """Build the law for a woven fabric entry offering ``crossover_geometry()``."""
+    """Build the law for a woven fabric entry: from its unit cell (``woven_unit_cell``, with the
+    crimp of every contact), else from its ``crossover_geometry()`` (a plain weave's)."""
+    cell = getattr(fabric, "woven_unit_cell", None)
+    if cell is not None and hasattr(fabric, "errors") and not fabric.errors():
+        from preform.plugins.woven.crimp import crossover_geometry_with_crimp
+
+        return FrictionCompactionLaw(crossover_geometry_with_crimp(cell), params)
     return FrictionCompactionLaw(fabric.crossover_geometry(), params)
 
 
@@ -413,6 +508,7 @@ def plain_weave_geometry(
         fibre_modulus=fibre_modulus_GPa * 1e9,
         crossovers_per_area=1.0 / (s * s),
         interlacings_per_area=2.0 / (s * s),
+        thickness=2.0 * tow_height_mm * 1e-3,
     )
 
 

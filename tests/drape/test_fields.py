@@ -143,6 +143,17 @@ def test_energy_takes_the_signed_branch_and_flags_limits() -> None:
         assert not energy.past_failure.any() or gamma > 0
 
 
+def test_a_law_failing_in_both_senses_flags_both() -> None:
+    """A law with ``failure_angle_negative`` (stitch_yarn) flags cells sheared past it the
+    perpendicular way too; without it only the parallel sense is flagged (above)."""
+    d = 0.01
+    law = QuadraticLaw(k_pos=10.0, k_neg=1.0, locking_angle=0.5, failure_angle=0.3)
+    law.failure_angle_negative = 0.4  # type: ignore[attr-defined]
+    for omega_deg, flagged in ((120.0, True), (60.0, True), (70.0, False), (100.0, False)):
+        result = _result_from(flat_rhombus_net(np.radians(omega_deg), d), d)
+        assert energy_field(result, law).past_failure.all() == flagged, omega_deg
+
+
 def test_energy_region_and_trim() -> None:
     d = 0.01
     nodes = flat_rhombus_net(np.radians(70.0), d)

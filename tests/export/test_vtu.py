@@ -9,7 +9,7 @@ from preform.export.vtu import TOW_KIND_CODES, write_drape_vtu, write_unit_cell_
 
 def test_unit_cell_vtu_reads_back_as_one_polyline_per_tow(tmp_path, unit_cell):
     path = tmp_path / "cell.vtu"
-    write_unit_cell_vtu(unit_cell, path)
+    write_unit_cell_vtu(unit_cell, path, volumes=False)
 
     mesh = meshio.read(path)
     assert len(mesh.points) == sum(len(t.points) for t in unit_cell.tows)
@@ -91,3 +91,35 @@ def test_drape_vtu_of_a_net_without_valid_cells_keeps_its_nodes(tmp_path, make_n
     assert len(mesh.points) == 8
     assert list(mesh.cells_dict) == ["vertex"]
     assert not mesh.cell_data
+
+
+def test_unit_cell_vtu_tow_volumes_hold_each_straight_tows_section_times_length(tmp_path):
+    """The solids block: a straight tow's wedges add up to (π/4)·w·h·L exactly, crimped
+    tows to within the chord error, and every wedge carries its tow's data."""
+    import math
+
+    from preform.api import load_library
+    from preform.export.tow_volumes import wedge_volumes
+
+    lib = load_library(env=False)
+    for name, gamma in (("E-BX-318", 0.0), ("ncf-0-90-tricot", 0.5), ("plain-weave-600", 0.8)):
+        cell = lib.fabric(name).sheared_cell(gamma).unit_cell()
+        path = tmp_path / f"{name}.vtu"
+        write_unit_cell_vtu(cell, path)
+        mesh = meshio.read(path)
+        wedges = mesh.cells_dict["wedge"]
+        tow = mesh.cell_data_dict["tow"]["wedge"]
+        assert np.all(mesh.cell_data_dict["solid"]["wedge"] == 1)
+        assert np.all(mesh.cell_data_dict["solid"]["line"] == 0)
+        volumes = wedge_volumes(mesh.points * 1e-3, wedges)
+        for k, t in enumerate(cell.tows):
+            if t.kind == "stitch":
+                continue
+            expected = math.pi / 4 * t.width * t.height * t.length()
+            got = volumes[tow == k].sum()
+            # straight pieces are exact; a crimped tow's polygon corners cost a little
+            tolerance = 1e-9 if len(t.points) == 2 else 2e-2
+            np.testing.assert_allclose(got, expected, rtol=tolerance)
+            np.testing.assert_allclose(
+                mesh.cell_data_dict["width_mm"]["wedge"][tow == k], 1e3 * t.width
+            )

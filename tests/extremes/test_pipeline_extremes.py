@@ -123,7 +123,8 @@ def test_a_run_records_partial_and_warnings_in_words(
     assert hat.status == "partial", hat.error
     (reason,) = hat.reasons
     fraction = hat.results["covered_fraction"]
-    assert 0 < fraction < 0.2
+    # the band over the block and down its walls is placed, the block corners' shadows fold
+    assert 0.3 < fraction < 0.8
     assert reason.startswith(f"the net covers {100 * fraction:.1f} % of the ply's fabric area")
     written = json.loads((out / "hat" / "good-weave" / "summary.json").read_text())
     assert written["status"] == "partial" and written["reasons"] == [reason]

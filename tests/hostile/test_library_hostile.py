@@ -54,6 +54,7 @@ WOVEN: dict[str, Any] = {
             "height_mm": 0.32,
             "fibre_density_g_cm3": 2.55,
             "fibre_modulus_GPa": 72.0,
+            "filament_diameter_um": 17.0,
         }
     },
     "warp": {"tow_spacing_mm": 4.0, "tow_type": "glass"},
@@ -71,7 +72,7 @@ WOVEN: dict[str, Any] = {
         "fibre_wave_ratio": 30.0,
         "coupling_compliance_per_GPa": 0.01,
         "packing_margin": 0.01,
-        "float_contact_fraction": 0.25,
+        "jamming_force_N_per_mm": 10.0,
     },
 }
 
@@ -90,6 +91,7 @@ WARP_KNIT: dict[str, Any] = {
             "tow_width_mm": 2.58,
             "tow_height_mm": 0.39,
             "offset_mm": 0.5,
+            "filament_diameter_um": 17.0,
         },
         {
             "orientation_deg": -45.0,
@@ -109,6 +111,8 @@ WARP_KNIT: dict[str, Any] = {
             "needle_distance_mm": 5.08,
             "linear_density_tex": 7.6,
             "fibre": "polyester",
+            "failure_strain": 0.25,
+            "yarn_modulus_GPa": 10.0,
         }
     ],
     "placement": [[1], [1]],
@@ -181,6 +185,15 @@ BASES: dict[str, dict[str, Any]] = {
             "torque_negative_N_per_m": [0.0, 50.0],
         },
     ),
+    "stitch-yarn": {
+        **copy.deepcopy(WARP_KNIT),
+        "name": "hostile-stitch-yarn",
+        "shear_law": {
+            "law": "stitch_yarn",
+            "ply_friction_coefficient": 0.3,
+            "yarn_failure_strain": 0.25,
+        },
+    },
 }
 
 

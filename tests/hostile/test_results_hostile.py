@@ -326,9 +326,9 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
 
     # Independent count: the mould's plan is the 300 × 200 mm plate; a node's undeformed plan
     # position is the start plus its flat offsets along the generators. Every unplaced node of
-    # the ply over the plate is missing (the net never reaches a true edge of this tool: it
-    # stops on the walls' foot and folds at the block's corners), and a cell is asked for when
-    # it is valid or has such a corner.
+    # the ply over the plate is missing (inside the plate's outline the net meets no true edge
+    # of this tool: it folds at the block's four corners, and their shadows are lost), and a
+    # cell is asked for when it is valid or has such a corner.
     ni, nj = result.shape
     i0, j0 = result.start_index
     a = math.radians(alpha)
@@ -342,16 +342,20 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
     expected = np.count_nonzero(valid) / np.count_nonzero(valid | corner)
 
     assert ctx.summary["covered_fraction"] == pytest.approx(expected, abs=1e-12)
-    assert ctx.summary["covered_fraction"] < 0.5
+    # the cross-shaped band over the block and down its walls is placed; the corners' shadows
+    # are not
+    assert 0.3 < ctx.summary["covered_fraction"] < 0.8
     assert reason.startswith(f"the net covers {100 * expected:.1f} % of the ply's fabric area")
-    assert "stopped on the tool" in reason
+    assert "folded" in reason and "stopped on the tool" not in reason
     assert ctx.summary["nodes_missing"] == np.count_nonzero(missing)
     assert ctx.summary["complete"] is False
     # The uncovered fabric area by cause sums to the missing cells' d² each.
     by_cause = [v for k, v in ctx.summary.items() if k.startswith("uncovered_area_m2_")]
     lost_cells = np.count_nonzero((valid | corner) & ~valid)
     assert sum(by_cause) == pytest.approx(lost_cells * (spacing * 1e-3) ** 2, rel=1e-12)
-    assert ctx.summary["uncovered_area_m2_stopped_on_tool"] > 0
+    # nothing is lost to numerics: what is missing lies behind a fold
+    assert ctx.summary["uncovered_area_m2_stopped_on_tool"] == 0
+    assert ctx.summary["uncovered_area_m2_folded"] > 0
 
 
 def test_the_hat_moulds_reason_names_the_folds(
@@ -447,7 +451,8 @@ def test_cells_past_stitch_failure_are_counted(
 def test_cells_past_packing_are_said_to_be_unphysical(
     sandbox: PluginSandbox, bundled: Any, tmp_path: Path
 ) -> None:
-    """The 1e9 J drapes: cells past the packing limit carry the law's tangent continuation."""
+    """Cells past the jamming angle carry the law's held torque, not a physical energy; the
+    energy stays bounded (it was 1e8–1e9 J while the law followed the compaction pole)."""
     ctx = run(
         context(
             sandbox,
@@ -457,8 +462,8 @@ def test_cells_past_packing_are_said_to_be_unphysical(
         )
     )
     result, law = ctx.products["drape"].result, ctx.products["shear_law"]
-    assert ctx.summary["total_energy_J"] > 1e8
-    (message,) = [w for w in ctx.warnings if "packed solid" in w]
+    assert 0 < ctx.summary["total_energy_J"] < 1e3
+    (message,) = [w for w in ctx.warnings if "is jammed" in w]
     count, _ = _count(message)
     assert count == _independent(result, np.abs(result.shear) > law.packing_angle)[0] > 0
     assert f"past {math.degrees(law.packing_angle):.1f}°" in message
@@ -499,7 +504,7 @@ def test_search_angles_past_packing_are_named(
     law = ctx.products["shear_law"]
     past = [p for p in study.points if p.max_abs_shear_rad > law.packing_angle]
     assert past and ctx.summary["search_angles_past_packing"] == len(past)
-    (message,) = [w for w in ctx.warnings if "E(α) there" in w and "packed solid" in w]
+    (message,) = [w for w in ctx.warnings if "E(α) there" in w and "is jammed" in w]
     assert message.startswith(f"at generator angle(s) {past[0].generator_angle_deg:.4g}°")
     # The optimum itself is not affected: its drape is complete and its energy is small.
     assert ctx.partial_reasons == [] and ctx.summary["total_energy_J"] < 100
@@ -575,8 +580,8 @@ def test_a_search_on_the_hat_mould_is_partial_without_a_drape_step(
     text += "search: {generator_angle_deg: {min: 70, max: 110}, scan_step_deg: 10}\n"
     ctx = run(context(sandbox, bundled, "plain-weave-150", write(tmp_path / "hs.yaml", text)))
     (reason,) = ctx.partial_reasons
-    assert reason.startswith("the net covers ") and "stopped on the tool" in reason
-    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.5
+    assert reason.startswith("the net covers ") and "folded" in reason
+    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.8
 
 
 TABULATED = (

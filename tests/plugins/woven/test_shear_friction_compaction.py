@@ -236,12 +236,10 @@ def test_extreme_parameters_stay_finite() -> None:
         assert np.all(np.isfinite(law.torque(g))) and np.all(np.isfinite(law.energy(g)))
 
 
-def test_twill_extension_reduces_crimp_force_and_leaves_plain_weave_alone() -> None:
+def test_a_weave_with_floats_needs_its_tow_paths() -> None:
     twill = replace(HEAVY, interlacings_per_area=HEAVY.crossovers_per_area)  # half the gaps
-    plain_default, plain_other = heavy(), heavy(float_contact_fraction=1.0)
-    assert plain_default.torque(0.1) == pytest.approx(plain_other.torque(0.1))
-    law = FrictionCompactionLaw(twill, params(float_contact_fraction=0.25))
-    assert law.contact_force(0.1) == pytest.approx(0.625 * heavy().contact_force(0.1))
+    with pytest.raises(ValueError, match="rises of the tow paths"):
+        FrictionCompactionLaw(twill, params())
 
 
 def test_several_geometries_add() -> None:
@@ -268,4 +266,9 @@ def test_params_forbid_unknown_fields_and_default_friction() -> None:
     with pytest.raises(ValidationError):
         params(tow_spacing_mm=4.0)
     with pytest.raises(ValidationError):
-        FrictionCompactionParams.model_validate({"law": "friction_compaction", "pretension_N": 1})
+        FrictionCompactionParams.model_validate({"law": "friction_compaction"})
+    # No free thickness: the law takes the unit cell's own tow heights.
+    bare = FrictionCompactionParams.model_validate(
+        {"law": "friction_compaction", "pretension_N": 1}
+    )
+    assert bare.fabric_thickness_mm is None

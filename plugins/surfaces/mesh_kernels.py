@@ -1,0 +1,341 @@
+"""Compiled walking kernels on a triangle mesh: exact net placement and exact geodesics.
+
+Imported lazily (numba is not loaded by ``import preform``); ``@njit(cache=True)`` compiles once
+per install. Both kernels walk from triangle to triangle over a :class:`MeshTopology`, so a
+query costs a few triangles, not a search of the mesh. Lengths in metres.
+
+Net placement. Node P is at chord d from its parents A and B, so it lies on the circle
+P(φ) = M + r(cos φ·a1 + sin φ·a2), M = (A + B)/2, r² = d² − |AB|²/4, a1 the mean outward normal
+of the parents' triangles made normal to the chord, a2 = ê × a1 turned away from the opposite
+node C (C itself lies on the circle at some φ in (−π, 0)). The surface is piecewise flat, so
+each triangle's plane meets the circle in at most two points, in closed form:
+n·(M − p0) + r cos φ (n·a1) + r sin φ (n·a2) = 0. The circle lies in the ball of radius d about M,
+so the candidates are the triangles meeting that ball, found by a breadth-first walk from the
+parents' triangles. Of the roots inside their triangle with 0 < φ < π (the far half from C),
+the node is the one with the smallest φ: turning from the outward side, the first point where
+the circle meets the tool, which is where the fabric, lying on the tool and never inside it,
+touches it. At a crease this picks the wall beyond a convex edge and the wall rising from a
+concave foot, with no iteration to stall. No root: OFF_TOOL if the ball reaches the mesh's
+boundary, else NO_INTERSECTION. Parents that coincide (a cell closed up completely, as behind a
+sharp convex vertex when the fibre angle falls to 0) or lie on facets facing opposite ways
+(the net folded flat over a knife edge): FOLDED.
+
+Geodesics. The straightest path on a piecewise-flat surface is straight inside each triangle
+and crosses an edge by unfolding: the component of the direction along the edge is kept and the
+component across it turns into the next triangle's plane (Polthier & Schmies' straightest
+geodesics, which coincide with shortest ones away from vertices). Nodes are put where the
+chord from the previous node reaches d, solved in closed form on each straight piece.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from preform.drape.result import NodeStatus
+
+_PLACED = int(NodeStatus.PLACED)
+_OFF_TOOL = int(NodeStatus.OFF_TOOL)
+_NO_INTERSECTION = int(NodeStatus.NO_INTERSECTION)
+_FOLDED = int(NodeStatus.FOLDED)
+
+
+@numba.njit(cache=True, inline="always")
+def _dot3(u0, u1, u2, v0, v1, v2):
+    return u0 * v0 + u1 * v1 + u2 * v2
+
+
+@numba.njit(cache=True)
+def _segment_distance(p, q0, q1):
+    """Distance [m] from point p to the segment q0–q1 (3-vectors)."""
+    e0, e1, e2 = q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]
+    w0, w1, w2 = p[0] - q0[0], p[1] - q0[1], p[2] - q0[2]
+    ll = e0 * e0 + e1 * e1 + e2 * e2
+    s = 0.0
+    if ll > 0.0:
+        s = min(max((w0 * e0 + w1 * e1 + w2 * e2) / ll, 0.0), 1.0)
+    d0, d1, d2 = w0 - s * e0, w1 - s * e1, w2 - s * e2
+    return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+
+
+@numba.njit(cache=True)
+def place_nodes_kernel(
+    corners,
+    normals,
+    neighbours,
+    edge_normals,
+    centroids,
+    radii,
+    a,
+    b,
+    c,
+    spacing,
+    face_a,
+    face_b,
+    visited,
+    queue,
+    out_points,
+    out_status,
+    out_faces,
+    out_normals,
+    out_distance,
+):
+    """Nodes at chord ``spacing`` from a[i] and b[i] on the mesh, away from c[i] (module doc).
+
+    ``face_a``/``face_b``: the parents' triangles. ``visited`` (m,) bool all False and ``queue``
+    (m,) int64 are scratch (left all False). Writes points, NodeStatus codes, the node's
+    triangle, its normal and its distance to that triangle's plane [m]."""
+    n = a.shape[0]
+    inside_tol = 1e-9 * spacing
+    for i in range(n):
+        for k in range(3):
+            out_points[i, k] = np.nan
+            out_normals[i, k] = np.nan
+        out_faces[i] = -1
+        out_distance[i] = np.nan
+        m0 = 0.5 * (a[i, 0] + b[i, 0])
+        m1 = 0.5 * (a[i, 1] + b[i, 1])
+        m2 = 0.5 * (a[i, 2] + b[i, 2])
+        e0, e1, e2 = b[i, 0] - a[i, 0], b[i, 1] - a[i, 1], b[i, 2] - a[i, 2]
+        chord = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+        r2 = spacing * spacing - 0.25 * chord * chord
+        if chord <= 1e-9 * spacing:
+            # The parents coincide: the cell has closed up completely (ω = 0, the collapse
+            # behind a sharp convex vertex), the limit of a fold.
+            out_status[i] = _FOLDED
+            continue
+        if not r2 > 0.0:
+            out_status[i] = _NO_INTERSECTION
+            continue
+        r = math.sqrt(r2)
+        e0, e1, e2 = e0 / chord, e1 / chord, e2 / chord
+        fa, fb = face_a[i], face_b[i]
+        s0 = normals[fa, 0] + normals[fb, 0]
+        s1 = normals[fa, 1] + normals[fb, 1]
+        s2 = normals[fa, 2] + normals[fb, 2]
+        along = _dot3(s0, s1, s2, e0, e1, e2)
+        x0, x1, x2 = s0 - along * e0, s1 - along * e1, s2 - along * e2
+        length = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        if length < 1e-12:
+            # Parents' normals cancel or lie along the chord: the net is folded flat here.
+            out_status[i] = _FOLDED
+            continue
+        x0, x1, x2 = x0 / length, x1 / length, x2 / length
+        y0, y1, y2 = e1 * x2 - e2 * x1, e2 * x0 - e0 * x2, e0 * x1 - e1 * x0
+        if _dot3(y0, y1, y2, c[i, 0] - m0, c[i, 1] - m1, c[i, 2] - m2) > 0.0:
+            y0, y1, y2 = -y0, -y1, -y2
+
+        ball = spacing * (1.0 + 1e-9)
+        head, tail = 0, 0
+        for f in (fa, fb):
+            if not visited[f]:
+                visited[f] = True
+                queue[tail] = f
+                tail += 1
+        best_phi = np.inf
+        best_face = -1
+        bp0, bp1, bp2 = 0.0, 0.0, 0.0
+        boundary = False
+        mid = np.empty(3)
+        mid[0], mid[1], mid[2] = m0, m1, m2
+        while head < tail:
+            t = queue[head]
+            head += 1
+            for k in range(3):
+                nb = neighbours[t, k]
+                if nb < 0:
+                    if not boundary:
+                        if _segment_distance(mid, corners[t, k], corners[t, (k + 1) % 3]) <= ball:
+                            boundary = True
+                    continue
+                if visited[nb]:
+                    continue
+                g0 = centroids[nb, 0] - m0
+                g1 = centroids[nb, 1] - m1
+                g2 = centroids[nb, 2] - m2
+                if math.sqrt(g0 * g0 + g1 * g1 + g2 * g2) <= ball + radii[nb]:
+                    visited[nb] = True
+                    queue[tail] = nb
+                    tail += 1
+            n0, n1, n2 = normals[t, 0], normals[t, 1], normals[t, 2]
+            al = _dot3(n0, n1, n2, x0, x1, x2)
+            be = _dot3(n0, n1, n2, y0, y1, y2)
+            ga = _dot3(
+                n0, n1, n2, m0 - corners[t, 0, 0], m1 - corners[t, 0, 1], m2 - corners[t, 0, 2]
+            )
+            rho = math.sqrt(al * al + be * be)
+            if rho * r < abs(ga) or rho == 0.0:
+                continue
+            base = math.atan2(be, al)
+            half = math.acos(min(max(-ga / (r * rho), -1.0), 1.0))
+            for sign in (1.0, -1.0):
+                phi = base + sign * half
+                if phi > math.pi:
+                    phi -= 2.0 * math.pi
+                elif phi <= -math.pi:
+                    phi += 2.0 * math.pi
+                if not (0.0 < phi < math.pi) or phi >= best_phi:
+                    continue
+                cp, sp = r * math.cos(phi), r * math.sin(phi)
+                p0 = m0 + cp * x0 + sp * y0
+                p1 = m1 + cp * x1 + sp * y1
+                p2 = m2 + cp * x2 + sp * y2
+                inside = True
+                for k in range(3):
+                    w = _dot3(
+                        edge_normals[t, k, 0],
+                        edge_normals[t, k, 1],
+                        edge_normals[t, k, 2],
+                        p0 - corners[t, k, 0],
+                        p1 - corners[t, k, 1],
+                        p2 - corners[t, k, 2],
+                    )
+                    if w > inside_tol:
+                        inside = False
+                        break
+                if inside:
+                    best_phi, best_face = phi, t
+                    bp0, bp1, bp2 = p0, p1, p2
+        for j in range(tail):
+            visited[queue[j]] = False
+        if best_face >= 0:
+            out_status[i] = _PLACED
+            out_points[i, 0], out_points[i, 1], out_points[i, 2] = bp0, bp1, bp2
+            out_faces[i] = best_face
+            for k in range(3):
+                out_normals[i, k] = normals[best_face, k]
+            out_distance[i] = abs(
+                _dot3(
+                    normals[best_face, 0],
+                    normals[best_face, 1],
+                    normals[best_face, 2],
+                    bp0 - corners[best_face, 0, 0],
+                    bp1 - corners[best_face, 0, 1],
+                    bp2 - corners[best_face, 0, 2],
+                )
+            )
+        elif boundary:
+            out_status[i] = _OFF_TOOL
+        else:
+            out_status[i] = _NO_INTERSECTION
+
+
+@numba.njit(cache=True)
+def geodesic_kernel(
+    corners,
+    normals,
+    neighbours,
+    edge_normals,
+    start,
+    start_face,
+    direction,
+    spacing,
+    count,
+    out_points,
+    out_status,
+    out_faces,
+):
+    """``count`` nodes along the straightest geodesic from start[g] on triangle start_face[g]
+    in tangent direction[g], successive chords ``spacing`` [m] (module doc). Status PLACED,
+    then OFF_TOOL from the node that would lie past the mesh's boundary on."""
+    m = start.shape[0]
+    max_crossings = 64 * neighbours.shape[0] + 1024
+    for g in range(m):
+        for j in range(count):
+            out_status[g, j] = _OFF_TOOL
+            out_faces[g, j] = -1
+            for k in range(3):
+                out_points[g, j, k] = np.nan
+        f = start_face[g]
+        x0, x1, x2 = start[g, 0], start[g, 1], start[g, 2]
+        q0, q1, q2 = x0, x1, x2
+        n0, n1, n2 = normals[f, 0], normals[f, 1], normals[f, 2]
+        t0, t1, t2 = direction[g, 0], direction[g, 1], direction[g, 2]
+        tn = _dot3(t0, t1, t2, n0, n1, n2)
+        t0, t1, t2 = t0 - tn * n0, t1 - tn * n1, t2 - tn * n2
+        length = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        if length == 0.0:
+            continue
+        t0, t1, t2 = t0 / length, t1 / length, t2 / length
+        entry = -1
+        found = 0
+        for _ in range(max_crossings):
+            s_exit = np.inf
+            k_exit = -1
+            for k in range(3):
+                if k == entry:
+                    continue
+                rate = _dot3(
+                    edge_normals[f, k, 0], edge_normals[f, k, 1], edge_normals[f, k, 2], t0, t1, t2
+                )
+                if rate <= 1e-15:
+                    continue
+                gap = _dot3(
+                    edge_normals[f, k, 0],
+                    edge_normals[f, k, 1],
+                    edge_normals[f, k, 2],
+                    corners[f, k, 0] - x0,
+                    corners[f, k, 1] - x1,
+                    corners[f, k, 2] - x2,
+                )
+                s = max(gap, 0.0) / rate
+                if s < s_exit:
+                    s_exit, k_exit = s, k
+            if k_exit < 0:
+                break
+            # Nodes on this straight piece: |x + s·t − q| = d, the root ahead.
+            while found < count:
+                w0, w1, w2 = x0 - q0, x1 - q1, x2 - q2
+                bb = _dot3(t0, t1, t2, w0, w1, w2)
+                cc = w0 * w0 + w1 * w1 + w2 * w2 - spacing * spacing
+                disc = bb * bb - cc
+                if disc < 0.0:
+                    break
+                s_node = -bb + math.sqrt(disc)
+                if s_node < 0.0 or s_node > s_exit:
+                    break
+                x0, x1, x2 = x0 + s_node * t0, x1 + s_node * t1, x2 + s_node * t2
+                s_exit -= s_node
+                q0, q1, q2 = x0, x1, x2
+                out_points[g, found, 0], out_points[g, found, 1] = x0, x1
+                out_points[g, found, 2] = x2
+                out_status[g, found] = _PLACED
+                out_faces[g, found] = f
+                found += 1
+            if found == count:
+                break
+            x0, x1, x2 = x0 + s_exit * t0, x1 + s_exit * t1, x2 + s_exit * t2
+            nb = neighbours[f, k_exit]
+            if nb < 0:
+                break
+            k1 = (k_exit + 1) % 3
+            v0 = corners[f, k1, 0] - corners[f, k_exit, 0]
+            v1 = corners[f, k1, 1] - corners[f, k_exit, 1]
+            v2 = corners[f, k1, 2] - corners[f, k_exit, 2]
+            vl = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+            v0, v1, v2 = v0 / vl, v1 / vl, v2 / vl
+            along = _dot3(t0, t1, t2, v0, v1, v2)
+            across = _dot3(
+                t0,
+                t1,
+                t2,
+                edge_normals[f, k_exit, 0],
+                edge_normals[f, k_exit, 1],
+                edge_normals[f, k_exit, 2],
+            )
+            entry = -1
+            for k in range(3):
+                if neighbours[nb, k] == f:
+                    entry = k
+                    break
+            if entry < 0:
+                break
+            # Into the next triangle: against its own outward normal of the shared edge.
+            u0 = along * v0 - across * edge_normals[nb, entry, 0]
+            u1 = along * v1 - across * edge_normals[nb, entry, 1]
+            u2 = along * v2 - across * edge_normals[nb, entry, 2]
+            ul = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+            t0, t1, t2 = u0 / ul, u1 / ul, u2 / ul
+            f = nb
