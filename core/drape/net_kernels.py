@@ -60,8 +60,14 @@ def _radial(kind: int, params: FloatArray, x: float, y: float, z: float):
     """Unit direction from a sphere's centre (+z for the centre itself)."""
     rx, ry, rz = x - params[0], y - params[1], z - params[2]
     length = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if length == 0.0:
-        return 0.0, 0.0, 1.0
+    if length < 1e-100:
+        # squares this small are subnormal (or zero) and their root inexact: scale by the
+        # largest component first so the direction stays a unit vector
+        largest = max(abs(rx), abs(ry), abs(rz))
+        if largest == 0.0:
+            return 0.0, 0.0, 1.0
+        rx, ry, rz = rx / largest, ry / largest, rz / largest
+        length = math.sqrt(rx * rx + ry * ry + rz * rz)
     return rx / length, ry / length, rz / length
 
 
