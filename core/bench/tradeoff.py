@@ -9,7 +9,8 @@ own steps (surface → shear law → energy_vs_angle → optimum → drape), so 
 - one knob at a time around ``standard``: node spacing (a fraction of the tool's size), solver
   tolerance, energy-table step (0 = the law itself), scan step, refinement tolerance, drape
   budget, and curved generators (``optimise_curved_generators`` at the straight optimum,
-  budget-limited);
+  budget-limited); and for a tool read from a STEP or IGES file, the tessellation tolerance
+  (``tool.tessellation_tolerance_mm``, the facets' largest distance from the CAD surface);
 - the **reference**: every knob at its finest (:data:`REFERENCE`), and the same one step less
   fine (:data:`REFERENCE_CHECK`), whose distance from the reference bounds the reference's own
   error, i.e. the smallest error this study can resolve.
@@ -72,6 +73,8 @@ TABLE_STEPS_DEG: tuple[float, ...] = (2.0, 1.0, 0.5, 0.25, 0.0)
 SCAN_STEPS_DEG: tuple[float, ...] = (15.0, 10.0, 5.0, 2.5)
 REFINE_TOLERANCES_DEG: tuple[float, ...] = (4.0, 2.0, 1.0, 0.25, 0.0625)
 DRAPE_BUDGETS: tuple[int, ...] = (30, 60, 120)
+#: Tessellation tolerances [mm] of a STEP or IGES tool (``tool.tessellation_tolerance_mm``).
+TESSELLATION_TOLERANCES_MM: tuple[float, ...] = (0.5, 0.2, 0.1, 0.02)
 #: Drape budgets of the curved-generator optimisation.
 CURVED_BUDGETS: tuple[int, ...] = (40, 120)
 #: Curved-generator options when the scene gives none: mirror-tied families suit a dome
@@ -87,6 +90,7 @@ REFERENCE: dict[str, Any] = {
     "scan_step_deg": 2.5,
     "tolerance_deg": 0.0625,
     "max_drapes": 200,
+    "tessellation_tolerance_mm": 0.005,
 }
 #: The reference one step less fine in every knob: its distance from the reference bounds the
 #: reference's own error (assuming the errors shrink as the knobs are refined).
@@ -98,6 +102,7 @@ REFERENCE_CHECK: dict[str, Any] = {
     "scan_step_deg": 5.0,
     "tolerance_deg": 0.125,
     "max_drapes": 200,
+    "tessellation_tolerance_mm": 0.01,
 }
 #: ``--quick``: a coarse stand-in reference, affordable in a test.
 QUICK_REFERENCE: dict[str, Any] = {
@@ -108,6 +113,7 @@ QUICK_REFERENCE: dict[str, Any] = {
     "scan_step_deg": 5.0,
     "tolerance_deg": 0.5,
     "max_drapes": 60,
+    "tessellation_tolerance_mm": 0.02,
 }
 
 #: Runs shorter than this [s] are repeated (best of ``repeat``); longer ones are timed once.
@@ -124,6 +130,7 @@ CSV_COLUMNS = (
     "scan_step_deg",
     "tolerance_deg",
     "max_drapes",
+    "tessellation_tolerance_mm",
     "curved_max_drapes",
     "drapes",
     "wall_s",
@@ -180,6 +187,8 @@ class TradeoffRow:
     energy_J: float
     max_abs_shear_deg: float
     noise_limited: bool
+    #: A STEP or IGES tool's tessellation tolerance [mm] (NaN for other tools).
+    tessellation_tolerance_mm: float = math.nan
     chebyshev_max_shear_error_deg: float = math.nan
     chebyshev_field_error_deg: float = math.nan
     time_ratio: float = math.nan
@@ -246,10 +255,13 @@ def _variant(
     spacing_mm: float | None = None,
     numerics: dict[str, Any] | None = None,
     search: dict[str, Any] | None = None,
+    tool: dict[str, Any] | None = None,
 ) -> Scene:
     """``base`` (cleared) at ``preset`` with the given knobs hand-set."""
     assert base.ply is not None and base.search is not None
     update: dict[str, Any] = {"fidelity": preset}
+    if tool:
+        update["tool"] = base.tool.model_copy(update=tool)
     if spacing_mm is not None:
         update["ply"] = base.ply.model_copy(update={"node_spacing_mm": spacing_mm})
     if numerics:
@@ -275,7 +287,25 @@ def _pinned(base: Scene, knobs: dict[str, Any], tool_size_m: float) -> Scene:
             "tolerance_deg": knobs["tolerance_deg"],
             "max_drapes": knobs["max_drapes"],
         },
+        tool=(
+            {"tessellation_tolerance_mm": knobs["tessellation_tolerance_mm"]}
+            if _is_cad(base)
+            else None
+        ),
     )
+
+
+def _tessellation_tolerance_mm(scene: Scene) -> float:
+    """The tessellation tolerance in force [mm] of a tool read from a STEP or IGES file (the
+    tool block says, ``tessellation_tolerance_in_force_mm``); NaN for any other tool."""
+    in_force = getattr(scene.tool, "tessellation_tolerance_in_force_mm", None)
+    value = in_force() if callable(in_force) else None
+    return math.nan if value is None else float(value)
+
+
+def _is_cad(scene: Scene) -> bool:
+    """Whether the scene's tool is tessellated from CAD (it has a tessellation tolerance)."""
+    return math.isfinite(_tessellation_tolerance_mm(scene))
 
 
 def _fraction_label(fraction: float) -> str:
@@ -322,6 +352,19 @@ def tradeoff_settings(scene: Scene, tool_size_m: float, *, quick: bool = False) 
                 _variant(base, spacing_mm=spacing),
             )
         )
+    if _is_cad(base):
+        own = _tessellation_tolerance_mm(base)
+        for value in TESSELLATION_TOLERANCES_MM[:1] if quick else TESSELLATION_TOLERANCES_MM:
+            if math.isclose(value, own):
+                continue
+            settings.append(
+                Setting(
+                    f"tess={value:g}mm",
+                    "tessellation_tolerance_mm",
+                    f"{value:g}",
+                    _variant(base, tool={"tessellation_tolerance_mm": value}),
+                )
+            )
     if quick:
         return settings
     numerics_ladders: tuple[tuple[str, Sequence[float], str], ...] = (
@@ -483,6 +526,7 @@ def measure(
         energy_J=float(optimum["energy_J"]),
         max_abs_shear_deg=float(summary["max_abs_shear_deg"]),
         noise_limited=bool(summary.get("optimum_noise_limited", False)),
+        tessellation_tolerance_mm=_tessellation_tolerance_mm(setting.scene),
         on_front=not curved,
     )
     return row, ctx

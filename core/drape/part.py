@@ -11,8 +11,8 @@ part's edge:
 - :class:`Intersection`: inside every one of several parts (φ = min).
 
 A closed curve drawn on a tool whose plan view is one-to-one (every analytic dome here) is a
-plan polygon of its projected points; mesh face groups (named regions of a tool mesh) wait for
-the real-tools issue.
+plan polygon of its projected points. Named or numbered faces of a tool read from a file (CAD
+faces, OBJ groups) are a part too: ``preform.plugins.surfaces.tool_mesh.FaceSet``.
 
 Cells cut by the edge [D]
 -------------------------

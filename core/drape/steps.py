@@ -184,6 +184,8 @@ def scene_part(scene: Scene, surface: Any) -> Part | None:
             parts.append(HeightCut(section.z_min_mm * MM))
         if section.plan_outline_mm is not None:
             parts.append(PlanPolygon(np.asarray(section.plan_outline_mm, dtype=float) * MM))
+        if section.faces is not None:
+            parts.append(face_part(surface, section.faces))
         if section.area_mm2 is not None:
             area = section.area_mm2 * MM * MM
     if not parts:
@@ -197,7 +199,26 @@ def scene_part(scene: Scene, surface: Any) -> Part | None:
     part = combine(parts)
     assert part is not None
     if area is not None:
-        part = dataclasses.replace(cast(Any, part), area_m2=area)
+        if dataclasses.is_dataclass(part):
+            part = dataclasses.replace(cast(Any, part), area_m2=area)
+        else:
+            part.area_m2 = area
+    return part
+
+
+def face_part(surface: Any, faces: list[int | str]) -> Part:
+    """The part of the named or numbered faces of a tool read from a file (``part.faces``)."""
+    select = getattr(surface, "face_part", None)
+    if select is None:
+        raise CaseFailure(
+            "part.faces selects faces of a tool read from a file (tool surface: mesh, an "
+            f"STL, OBJ, STEP or IGES file); this tool is a {type(surface).__name__}: use "
+            "part.z_min_mm or part.plan_outline_mm"
+        )
+    try:
+        part: Part = select(faces)
+    except ValueError as error:
+        raise CaseFailure(f"part.{error}") from None
     return part
 
 
@@ -264,7 +285,17 @@ def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:
 
 
 def run_surface(ctx: CaseContext) -> dict[str, Any]:
-    return {"surface": build_surface(ctx.scene, ctx.registry)}
+    surface = build_surface(ctx.scene, ctx.registry)
+    # A tool read from a file says where it came from (format, unit and whence) and what
+    # mesh hygiene repaired (preform.plugins.surfaces.mesh_hygiene): in the summary, and the
+    # repairs in words on the console.
+    describe = getattr(surface, "summary", None)
+    if callable(describe):
+        ctx.summary.update(describe())
+        hygiene = getattr(surface, "hygiene", None)
+        for repaired in hygiene.repairs() if hygiene is not None else ():
+            ctx.warn(f"tool mesh: {repaired}")
+    return {"surface": surface}
 
 
 def run_drape(ctx: CaseContext) -> dict[str, Any]:

@@ -107,7 +107,7 @@ class PartSection(BaseModel):
     draped over the tool as far as the ply reaches and clipped to the part; energies and
     extremes are of the part. Several fields together mean their intersection. Without this
     section the part is the tool's own (a bare hemisphere: z ≥ 0; other tools: every cell the
-    net puts on them). Mesh face groups wait for the real-tools issue."""
+    net puts on them). ``faces`` selects named or numbered faces of a mesh or CAD tool."""
 
     model_config = _STRICT
     z_min_mm: float | None = Field(
@@ -118,6 +118,12 @@ class PartSection(BaseModel):
         max_length=MAX_POLYGON_VERTICES,
         description="Plan outline (x, y) [mm] of the part seen from above, a closed polygon; "
         "a closed curve on a tool whose plan view is one-to-one is its projected points.",
+    )
+    faces: list[int | str] | None = Field(
+        default=None,
+        min_length=1,
+        description="Faces of a tool read from a file that make the part: CAD face numbers "
+        "(from 1) or names (STEP/IGES face labels, OBJ g/o groups).",
     )
     area_mm2: float | None = Field(
         default=None,

@@ -32,8 +32,10 @@ __all__ = [
     "MeshFileError",
     "TriangleMesh",
     "check_mesh_file",
+    "obj_triangles",
     "read_obj",
     "read_stl",
+    "stl_triangles",
     "tessellate_hemisphere",
     "write_stl",
 ]
@@ -597,6 +599,15 @@ def read_stl(
 
     Only regular files are read, and none larger than ``max_bytes`` (:func:`check_mesh_file`);
     ``MeshFileError`` (a ``ValueError``) says which limit refused it."""
+    vertices, faces = stl_triangles(path, units_to_m, max_bytes=max_bytes)
+    return _mesh_of_file(Path(path), vertices, faces, mesh_options)
+
+
+def stl_triangles(
+    path: str | Path, units_to_m: float = 1e-3, *, max_bytes: int | None = None
+) -> tuple[FloatArray, IntArray]:
+    """The triangles of an STL file as read (:func:`read_stl`), before any merging: vertices
+    (3m, 3) [m], every triangle's corners its own, and faces (m, 3)."""
     file = Path(path)
     data = _read_limited(file, max_bytes)
     if data.lstrip()[:5].lower() == b"solid" and b"\x00" not in data:
@@ -620,7 +631,8 @@ def read_stl(
         bad = np.flatnonzero(~np.all(np.isfinite(corners), axis=(1, 2)))
         if bad.size:
             raise ValueError(f"{file}: triangle {bad[0]} has a non-finite coordinate")
-    return _mesh_from_corners(file, corners * _scale(units_to_m), mesh_options)
+    vertices = corners.reshape(-1, 3) * _scale(units_to_m)
+    return vertices, np.arange(vertices.shape[0]).reshape(-1, 3)
 
 
 def _scale(units_to_m: float) -> float:
@@ -628,14 +640,6 @@ def _scale(units_to_m: float) -> float:
     if not np.isfinite(scale) or scale <= 0.0:
         raise ValueError(f"units_to_m must be a positive factor, got {units_to_m!r}")
     return scale
-
-
-def _mesh_from_corners(
-    file: Path, corners: FloatArray, mesh_options: dict[str, object]
-) -> TriangleMesh:
-    vertices = corners.reshape(-1, 3)
-    faces = np.arange(vertices.shape[0]).reshape(-1, 3)
-    return _mesh_of_file(file, vertices, faces, mesh_options)
 
 
 def _mesh_of_file(
@@ -781,10 +785,22 @@ def read_obj(
     CAD writes). Texture, normal, grouping and material statements are ignored. Malformed lines
     raise ``ValueError`` with file:line and what is wrong. Only regular files no larger than
     ``max_bytes`` are read (:func:`check_mesh_file`)."""
+    vertices, faces, _ = obj_triangles(path, units_to_m, max_bytes=max_bytes)
+    return _mesh_of_file(Path(path), vertices, faces, mesh_options)
+
+
+def obj_triangles(
+    path: str | Path, units_to_m: float = 1e-3, *, max_bytes: int | None = None
+) -> tuple[FloatArray, IntArray, list[str]]:
+    """The triangles of an OBJ file as read (:func:`read_obj`), before any merging: vertices
+    (n, 3) [m], faces (m, 3), and each triangle's group: the name of the last ``g`` or ``o``
+    statement before it ("" before any)."""
     file = Path(path)
     vertices: list[list[float]] = []
     triangles: list[tuple[int, int, int]] = []
     triangle_lines: list[int] = []
+    triangle_groups: list[str] = []
+    group = ""
     text = _read_limited(file, max_bytes).decode("utf-8", errors="replace")
     for line_no, raw in enumerate(text.splitlines(), start=1):
         tokens = raw.split("#", 1)[0].split()
@@ -804,6 +820,9 @@ def read_obj(
             for k in range(1, len(corners) - 1):
                 triangles.append((corners[0], corners[k], corners[k + 1]))
                 triangle_lines.append(line_no)
+                triangle_groups.append(group)
+        elif keyword in ("g", "o"):
+            group = " ".join(tokens[1:])
         elif keyword in _OBJ_IGNORED or keyword.isalpha():
             continue
         else:
@@ -817,7 +836,7 @@ def read_obj(
             f"{file}:{triangle_lines[beyond[0]]}: face refers to a vertex beyond the "
             f"{len(vertices)} the file defines"
         )
-    return _mesh_of_file(file, np.array(vertices) * _scale(units_to_m), faces, mesh_options)
+    return np.array(vertices) * _scale(units_to_m), faces, triangle_groups
 
 
 def _obj_vertex_index(file: Path, line_no: int, token: str, n_read: int) -> int:

@@ -20,18 +20,27 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane
+from preform.plugins.surfaces.cad import (
+    DEFAULT_MAX_EDGE_REL,
+    DEFAULT_TESSELLATION_ANGLE_DEG,
+    DEFAULT_TESSELLATION_TOLERANCE_MM,
+    cad_format,
+    read_cad,
+)
 from preform.plugins.surfaces.domes import Cone, EllipsoidDome, FlangedHemisphere, ParaboloidDome
 from preform.plugins.surfaces.mesh import (
     MB,
     MeshFileError,
-    TriangleMesh,
     check_mesh_file,
-    read_obj,
-    read_stl,
+    obj_triangles,
+    stl_triangles,
 )
+from preform.plugins.surfaces.mesh_hygiene import MeshRefused, repair
+from preform.plugins.surfaces.tool_mesh import ToolMesh, ToolSource
 
 MM = 1e-3
 #: Run-off of a bare hemisphere below its rim, as a fraction of its radius [-] [C]. Measured
@@ -171,8 +180,65 @@ class ParaboloidTool(_Analytic):
 class MeshTool(BaseModel):
     model_config = _STRICT
     surface: Literal["mesh"]
-    file: str = Field(description="STL or OBJ file, relative to the scene file (or bundled).")
-    units: Literal["mm", "m", "in"] = Field(default="mm", description="Length unit of the file.")
+    file: str = Field(
+        description="STL, OBJ, STEP (.step/.stp) or IGES (.iges/.igs) file, relative to the "
+        "scene file (or bundled). STEP and IGES need the extra preform[cad]."
+    )
+    units: Literal["mm", "m", "in"] | None = Field(
+        default=None,
+        description="Length unit of an STL or OBJ file (default mm); a STEP or IGES file "
+        "declares its own.",
+    )
+    weld_tolerance_mm: float | None = Field(
+        default=None,
+        ge=0,
+        description="Vertices closer than this [mm] are welded into one, closing cracks "
+        "(default: 1e-6 × the mesh's bounding-box diagonal; 0: exact copies only).",
+    )
+    max_edge_mm: float | None = Field(
+        default=None,
+        gt=0,
+        description="Split triangles until no edge is longer than this [mm]; the surface stays "
+        "the same, closest-point queries get faster (default: none for STL/OBJ, 1/20 of the "
+        "bounding-box diagonal for STEP/IGES).",
+    )
+    tessellation_tolerance_mm: float | None = Field(
+        default=None,
+        ge=0.001,
+        description="STEP/IGES only: largest distance between the facets and the CAD surface "
+        f"[mm] (default {DEFAULT_TESSELLATION_TOLERANCE_MM:g}; at least 0.001: the triangle "
+        "count grows as 1/tolerance).",
+    )
+    tessellation_angle_deg: float | None = Field(
+        default=None,
+        gt=0,
+        lt=180,
+        description="STEP/IGES only: largest angle between neighbouring facets' normals [deg] "
+        f"(default {DEFAULT_TESSELLATION_ANGLE_DEG:g}).",
+    )
+
+    @model_validator(mode="after")
+    def _per_format(self) -> MeshTool:
+        if cad_format(self.file) is not None:
+            if self.units is not None:
+                raise ValueError(
+                    "units: a STEP or IGES file declares its own length unit; remove units"
+                )
+        else:
+            for name in ("tessellation_tolerance_mm", "tessellation_angle_deg"):
+                if getattr(self, name) is not None:
+                    raise ValueError(
+                        f"{name} is for STEP and IGES tools; an STL or OBJ file is already "
+                        "tessellated"
+                    )
+        return self
+
+    def tessellation_tolerance_in_force_mm(self) -> float | None:
+        """The tessellation tolerance [mm] a STEP or IGES file is read with (the scene's or
+        the default); None for an STL or OBJ file, which comes tessellated."""
+        if cad_format(self.file) is None:
+            return None
+        return self.tessellation_tolerance_mm or DEFAULT_TESSELLATION_TOLERANCE_MM
 
     def preflight(self, base_dir: str, limits: Any = None) -> tuple[Any, list[Problem]]:
         """No surface (reading waits for the step) and the problems of the mesh file."""
@@ -242,15 +308,58 @@ def resolve_tool_file(name: str, base_dir: str) -> Path:
     return path
 
 
-def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> TriangleMesh:
-    """Read the tool mesh; ``limits`` (a scene's ``limits``) caps the file size, which is
-    checked with ``stat`` before reading (see ``check_mesh_file``)."""
+def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
+    """Read the tool file and repair it (``preform.plugins.surfaces.mesh_hygiene``);
+    ``limits`` (a scene's ``limits``) caps the file size, which is checked with ``stat``
+    before reading (see ``check_mesh_file``). A STEP or IGES file is tessellated first
+    (``preform.plugins.surfaces.cad``)."""
     path = resolve_tool_file(p.file, base_dir)
-    scale = _UNITS_TO_M[p.units]
     max_bytes = _max_bytes(limits)
-    if path.suffix.lower() == ".obj":
-        return read_obj(path, scale, max_bytes=max_bytes)
-    return read_stl(path, scale, max_bytes=max_bytes)
+    weld = None if p.weld_tolerance_mm is None else p.weld_tolerance_mm * MM
+    max_edge = None if p.max_edge_mm is None else p.max_edge_mm * MM
+    kind = cad_format(path)
+    labels: Any = None
+    names: dict[int, str] = {}
+    if kind is not None:
+        tolerance = p.tessellation_tolerance_in_force_mm() or DEFAULT_TESSELLATION_TOLERANCE_MM
+        angle = p.tessellation_angle_deg or DEFAULT_TESSELLATION_ANGLE_DEG
+        cad = read_cad(path, tolerance * MM, float(np.radians(angle)), max_bytes=max_bytes)
+        vertices, faces, labels, names = (
+            cad.vertices,
+            cad.faces,
+            cad.face_of_triangle,
+            cad.face_names,
+        )
+        unit, unit_from = (
+            (cad.unit, f"declared in the {kind} file")
+            if cad.unit is not None
+            else ("mm", f"not declared in the {kind} file: OpenCASCADE's default")
+        )
+        source = ToolSource(str(p.file), kind, unit, unit_from, tolerance * MM, np.radians(angle))
+        if max_edge is None:
+            extent = vertices[np.unique(faces)]
+            diagonal = float(np.linalg.norm(extent.max(axis=0) - extent.min(axis=0)))
+            max_edge = DEFAULT_MAX_EDGE_REL * diagonal
+    else:
+        unit = p.units or "mm"
+        unit_from = "scene tool.units" if p.units else "default (scene gives no tool.units)"
+        scale = _UNITS_TO_M[unit]
+        if path.suffix.lower() == ".obj":
+            kind = "OBJ"
+            vertices, faces, groups = obj_triangles(path, scale, max_bytes=max_bytes)
+            group_names = sorted(set(groups))
+            numbering = {g: k + 1 for k, g in enumerate(group_names)}
+            labels = np.array([numbering[g] for g in groups], dtype=np.int64)
+            names = {numbering[g]: g for g in group_names if g}
+        else:
+            kind = "STL"
+            vertices, faces = stl_triangles(path, scale, max_bytes=max_bytes)
+        source = ToolSource(str(p.file), kind, unit, unit_from)
+    try:
+        repaired = repair(vertices, faces, weld, max_edge_m=max_edge)
+    except MeshRefused as error:
+        raise MeshRefused(f"{path}: {error}") from None
+    return ToolMesh(repaired, labels, names, source)
 
 
 _BUILDERS: dict[type, Any] = {

@@ -49,3 +49,31 @@ def test_pareto_front_keeps_only_undominated_points() -> None:
     times = [1.0, 2.0, 3.0, 2.5, 0.5]
     errors = [0.1, 0.05, 0.0, 0.2, math.nan]
     assert pareto_front(times, errors) == [True, True, True, False, False]
+
+
+def test_a_cad_tool_gets_a_tessellation_row_and_a_finer_reference() -> None:
+    from preform.bench.tradeoff import (
+        REFERENCE,
+        TESSELLATION_TOLERANCES_MM,
+        tradeoff_settings,
+    )
+    from preform.pipeline.scene import load_scene, resolve_scene_path
+    from preform.plugin_manager import default_host
+
+    registry = default_host().registry
+    cad, _ = load_scene(resolve_scene_path("hat-stiffener-min-energy"), registry)
+    settings = tradeoff_settings(cad, 0.45)
+    tess = {s.label: s for s in settings if s.knob == "tessellation_tolerance_mm"}
+    own = cad.tool.tessellation_tolerance_in_force_mm()  # type: ignore[union-attr]
+    assert set(tess) == {f"tess={t:g}mm" for t in TESSELLATION_TOLERANCES_MM if t != own}
+    for s in tess.values():
+        assert s.scene.tool.tessellation_tolerance_mm == float(s.value)  # type: ignore[union-attr]
+    # Everything else keeps the scene's tessellation; the reference is finer than any row.
+    reference = settings[0].scene.tool
+    assert reference.tessellation_tolerance_mm == REFERENCE["tessellation_tolerance_mm"]  # type: ignore[union-attr]
+    assert REFERENCE["tessellation_tolerance_mm"] < min(TESSELLATION_TOLERANCES_MM)
+    standard = next(s for s in settings if s.label == "standard").scene.tool
+    assert standard.tessellation_tolerance_in_force_mm() == own  # type: ignore[union-attr]
+    # An analytic tool has no tessellation: no such row.
+    sphere, _ = load_scene(resolve_scene_path("hemisphere-min-energy"), registry)
+    assert not any(s.knob == "tessellation_tolerance_mm" for s in tradeoff_settings(sphere, 0.1))

@@ -37,6 +37,11 @@ from preform.material import LIMITS_ENV, SIZE_LIMITS, Plausible, plausible_field
 from preform.testing import PluginSandbox
 from preform.validation import format_path
 
+#: CPU seconds of this process (not wall time, which a loaded machine inflates) within which
+#: an oversized input must be refused: the guard is against building it first (minutes,
+#: gigabytes), not a speed target.
+REFUSAL_CPU_S = 2.0
+
 MARK = "__HOSTILE_VALUE__"
 
 # -- base entries: every optional physical field given, all values inside their ranges --------
@@ -776,10 +781,12 @@ def test_a_huge_harness_is_refused_at_once(
 ) -> None:
     entry = set_at(_satin(5), ("weave", "harness"), MARK)
     written = write_entry(tmp_path, entry, str(harness))
-    start = time.perf_counter()
+    start = time.process_time()
     errors, _ = load_errors(sandbox, written)
-    elapsed = time.perf_counter() - start
-    assert elapsed < 0.5, elapsed  # was minutes and gigabytes (3001), out of memory (100001)
+    elapsed = time.process_time() - start
+    assert elapsed < REFUSAL_CPU_S, (
+        elapsed
+    )  # was minutes and gigabytes (3001), out of memory (100001)
     assert_one_located(
         errors,
         written,
@@ -813,9 +820,9 @@ def test_every_woven_size_is_limited(
     entry["weave"] = weave
     value = _value_at(entry, path)
     written = write_entry(tmp_path, set_at(entry, path, MARK), str(value))
-    start = time.perf_counter()
+    start = time.process_time()
     errors, _ = load_errors(sandbox, written)
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < REFUSAL_CPU_S
     assert_one_located(
         errors,
         written,
@@ -865,9 +872,9 @@ def test_every_warp_knit_size_is_limited(
     sandbox: PluginSandbox, tmp_path: Path, path: tuple[str | int, ...], raw: str, limit: str
 ) -> None:
     written = write_entry(tmp_path, set_at(WARP_KNIT, path, MARK), raw)
-    start = time.perf_counter()
+    start = time.process_time()
     errors, _ = load_errors(sandbox, written)
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < REFUSAL_CPU_S
     assert_one_located(
         errors, written, f"hostile-knit.{format_path(path)}", f"above the size limit {limit}"
     )

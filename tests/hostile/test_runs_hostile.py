@@ -503,7 +503,11 @@ def _finished(out: Path) -> dict[str, bytes]:
     ("sig", "engine"), [(signal.SIGINT, "process"), (signal.SIGTERM, "serial")]
 )
 def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig, engine):
-    lib = runenv.library(*(fabric(f"f{i}", work_s=0.5) for i in range(6)))
+    # Two quick cases and four that sleep 4 s: the signal lands while cases run however loaded
+    # the machine is (six equal 0.5 s cases could all end before it on a busy host).
+    quick = [fabric(f"a{i}", work_s=0.2) for i in range(2)]
+    long = [fabric(f"f{i}", work_s=4.0) for i in range(4)]
+    lib = runenv.library(*quick, *long)
     scene = runenv.scene()
     proc = runenv.start(lib, scene, "--workers", "2", "--engine", engine)
     assert _wait_for(lambda: len(_finished(runenv.out)) >= 2)

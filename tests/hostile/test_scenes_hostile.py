@@ -35,6 +35,11 @@ from preform.plugins.surfaces.mesh import (
 from preform.testing import PluginSandbox
 from preform.yamlsource import load_yaml
 
+#: CPU seconds of this process (not wall time, which a loaded machine inflates) within which
+#: an oversized input must be refused: the guard is against building it first (minutes,
+#: gigabytes), not a speed target.
+REFUSAL_CPU_S = 2.0
+
 MESH_SCENE = """\
 name: hostile-mesh
 tool:
@@ -206,9 +211,9 @@ def test_an_oversized_mesh_is_refused_by_its_size(sandbox: PluginSandbox, tmp_pa
     big = tmp_path / "huge.stl"
     with open(big, "wb") as f:
         f.truncate(3_000_000)  # sparse: no disk, no reading
-    started = time.perf_counter()
+    started = time.process_time()
     message = one_error(sandbox, mesh_scene(tmp_path, "huge.stl", mb=1), TOOL_FILE, "tool.file")
-    assert time.perf_counter() - started < 5
+    assert time.process_time() - started < 5
     assert message.endswith(
         "huge.stl: 3.0 MB, larger than the limit of 1 MB (limits.max_mesh_mb); decimate the "
         "mesh or raise limits.max_mesh_mb in the scene"
@@ -221,9 +226,9 @@ def test_a_raised_mesh_limit_lets_a_gigabyte_file_validate_without_reading_it(
     big = tmp_path / "huge.stl"
     with open(big, "wb") as f:
         f.truncate(2_000_000_000)
-    started = time.perf_counter()
+    started = time.process_time()
     scene, _ = load_scene(mesh_scene(tmp_path, "huge.stl", mb=3000), sandbox.registry)
-    assert time.perf_counter() - started < 5
+    assert time.process_time() - started < 5
     assert scene.limits.max_mesh_mb == 3000
     # The default limit refuses the same file.
     assert (
@@ -392,10 +397,10 @@ def test_a_ply_of_ten_to_the_twelve_nodes_is_refused_in_milliseconds(
 ) -> None:
     path = analytic_scene(tmp_path, spacing=0.1, ply=1e5)
     (doc,) = load_yaml(path)
-    started = time.perf_counter()
+    started = time.process_time()
     with pytest.raises(SceneError) as info:
         validate_scene_data(doc, doc.data, sandbox.registry)
-    assert time.perf_counter() - started < 0.5
+    assert time.process_time() - started < REFUSAL_CPU_S
     (error,) = info.value.errors
     assert (error.line, error.column, error.path) == (*SPACING, "ply.node_spacing_mm")
     assert error.message.startswith(
@@ -652,9 +657,9 @@ def test_section_problems_are_refused_before_running(
     start, extra, (line, column, field), words = SECTION_CASES[case]
     path = tmp_path / "sections.yaml"
     path.write_text(SECTIONS.format(start=start, extra=extra))
-    started = time.perf_counter()
+    started = time.process_time()
     errors = refused(sandbox, path)
-    assert time.perf_counter() - started < 5
+    assert time.process_time() - started < 5
     assert errors[0].startswith(f"{path}:{line}:{column}: {field}: "), errors
     assert words in errors[0]
 
