@@ -305,11 +305,33 @@ class Drape(CaseRun):
     def to_pandas(self) -> pd.DataFrame:
         """One row per cell (``cells.csv``): index (i, j), ``status`` by name (VALID,
         INCOMPLETE, FOLDED, OUTSIDE_PLY), centroid ``x_mm``/``y_mm``/``z_mm``, ``shear_deg``,
-        ``area_mm2``, ``thickness_ratio``, ``energy_J_per_m2``, ``past_locking``/``past_failure``."""
+        ``area_mm2``, ``thickness_ratio``, ``thickness_mm``, ``energy_J_per_m2``,
+        ``past_locking``/``past_failure``. The thickness is the one every output of the case
+        gives (:attr:`thickness_model`)."""
         from preform.export.tables import cells_table
 
+        return cells_table(self._product("drape").result, self._energy())
+
+    @property
+    def thickness_model(self) -> str:
+        """Which model gives the cells' thickness, in words: "sheared unit cell" or
+        "constant fibre volume fraction (1/cos γ)" (``preform.drape.thickness``)."""
+        return str(self._thickness().name)
+
+    def _thickness(self) -> Any:
+        # the case's own when an output of it needed a thickness, else the same model now
+        if "thickness" not in self.products:
+            from preform.drape.thickness import thickness_model
+
+            export = getattr(self.scene, "export", None)
+            nominal = getattr(export, "nominal_thickness_mm", None)
+            self.products["thickness"] = thickness_model(self.fabric, nominal)
+        return self.products["thickness"]
+
+    def _energy(self) -> Any:
+        """The drape's energy field carrying the case's one thickness."""
         draped = self._product("drape")
-        return cells_table(draped.result, draped.energy)
+        return self._thickness().applied(draped.result, draped.energy)
 
     def plot(self, path: PathLike | None = None) -> Figure:
         """The fibre pattern (top view with the tows, 3D view coloured by shear [deg]); saved
@@ -324,11 +346,11 @@ class Drape(CaseRun):
 
     def to_vtu(self, path: PathLike) -> Path:
         """Write the net as a VTK .vtu file for ParaView (cell data: shear, fibre directions,
-        energy density, thickness ratio; coordinates in mm); returns the path."""
+        energy density, thickness ratio and thickness; coordinates in mm); returns the path."""
         from preform.export.vtu import write_drape_vtu
 
         draped = self._product("drape")
-        write_drape_vtu(draped.result, draped.energy, path)
+        write_drape_vtu(draped.result, self._energy(), path)
         return Path(path)
 
     def _headline(self) -> str:

@@ -5,6 +5,11 @@ then the ``cells_csv`` and ``vtu`` outputs of the same scene carry its columns a
 and the case summary gets their ranges over the part (``preform.drape.preform_fields``).
 A fabric whose architecture has no sheared unit cell, or whose cell cannot be sheared, fails the
 case in words; cells sheared past 89° (the table's end) are held there and said in a warning.
+
+The ``thickness`` product (``preform.drape.thickness``) is the one thickness model of a case:
+the cell tables, the VTU and the FE mapping read it, and ``permeability`` reuses its table of
+the sheared cell. Only outputs that write a thickness ask for it (tabulating the cell costs
+0.1–2 s per fabric, once per process).
 """
 
 from __future__ import annotations
@@ -29,17 +34,52 @@ def preform_if_asked(scene: Scene) -> tuple[str, ...]:
     return (OUTPUT,) if OUTPUT in tuple(getattr(scene, "outputs", ()) or ()) else ()
 
 
+def run_thickness(ctx: CaseContext) -> dict[str, Any]:
+    from preform.drape.thickness import SHEARED_CELL, thickness_model
+
+    export = getattr(ctx.scene, "export", None)
+    nominal = getattr(export, "nominal_thickness_mm", None)
+    model = thickness_model(ctx.fabric, nominal)
+    ply = ctx.products["drape"]
+    ctx.summary.update(model.summary(ply.result))
+    if model.cell_error is not None:
+        ctx.warn(
+            f"thickness: {model.cell_error}; the thickness follows the constant fibre volume "
+            "fraction (1/cos γ) instead"
+        )
+    beyond = model.beyond_table(ply.result)
+    if beyond and model.response is not None and not preform_if_asked(ctx.scene):
+        # (the permeability step says the same of all its fields when it runs)
+        ctx.warn(
+            f"thickness: {beyond} cell(s) are sheared past "
+            f"{math.degrees(model.response.shear[-1]):g}°, where the sheared unit cell ends: "
+            "their thickness is held at that angle's"
+        )
+    if model.name == SHEARED_CELL and nominal is not None and model.response is not None:
+        cell_mm = 1e3 * float(model.response.thickness[0])
+        if not math.isclose(float(nominal), cell_mm, rel_tol=1e-9):
+            ctx.warn(
+                f"thickness: export.nominal_thickness_mm {float(nominal):g} mm is not the "
+                f"sheared unit cell's {cell_mm:.4g} mm: thickness_mm is t/t0 of the cell times "
+                f"{float(nominal):g} mm, while the cell's own thickness (preform_thickness_mm, "
+                "with its fibre volume fraction) stays the cell's"
+            )
+    return {"thickness": model}
+
+
 def run_permeability(ctx: CaseContext) -> dict[str, Any]:
-    from preform.drape.preform_fields import PreformResponse, preform_field, preform_summary
+    from preform.drape.preform_fields import preform_field, preform_summary
 
     ply = ctx.products["drape"]
     fabric = ctx.fabric
-    try:
-        response = PreformResponse.from_fabric(fabric)
-    except ValueError as error:
-        raise CaseFailure(
-            f"permeability: the sheared unit cell of {fabric.name}: {error}"
-        ) from None
+    model = ctx.products.get("thickness")  # the planner runs the thickness step first
+    if model is None:
+        from preform.drape.thickness import thickness_model
+
+        model = thickness_model(fabric)
+    if model.cell_error is not None:
+        raise CaseFailure(f"permeability: {model.cell_error}")
+    response = model.response
     if response is None:
         raise CaseFailure(
             f"permeability: architecture {fabric.architecture!r} has no sheared unit cell, so "
@@ -59,12 +99,21 @@ def run_permeability(ctx: CaseContext) -> dict[str, Any]:
 
 STEPS = [
     Step(
+        "thickness",
+        ("thickness",),
+        ("drape",),
+        "1",
+        run_thickness,
+        "The draped thickness model: the sheared unit cell's t(γ)/t(0) where the fabric has "
+        "one, else constant fibre volume fraction (1/cos γ); the reference thickness t0",
+    ),
+    Step(
         "permeability",
         (OUTPUT,),
-        ("drape",),
+        ("drape", "thickness"),
         "1",
         run_permeability,
         "Per draped cell: thickness and fibre volume fraction from the sheared unit cell, "
         "in-plane permeability tensor (Gebart fibre bed per family)",
-    )
+    ),
 ]

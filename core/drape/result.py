@@ -137,8 +137,9 @@ class EnergyField:
 
     #: Strain energy per unit undeformed area W(γ) per cell (ni−1, nj−1) [J/m²].
     energy_density: FloatArray
-    #: Thickness ratio t/t0 per cell (ni−1, nj−1) [-]: 1/cos γ today (the fabric keeps its
-    #: fibre volume, so the sheared cell's area d² cos γ thickens it). It is a *thickening*
+    #: Thickness ratio t/t0 per cell (ni−1, nj−1) [-]: 1/cos γ as ``energy_field`` gives it
+    #: (the fabric keeps its fibre volume, so the sheared cell's area d² cos γ thickens it);
+    #: the fabric's sheared unit cell where it has one (``preform.drape.thickness``). It is a *thickening*
     #: (≥ 1); the old name ``thinning`` remains as a deprecated alias. No compaction limit is
     #: applied here: exporters report cells above a cap (``preform.export.fe_mapping``).
     thickness_ratio: FloatArray
@@ -147,8 +148,11 @@ class EnergyField:
     past_failure: BoolArray
     #: Total strain energy Σ W·A0 over the valid cells in the part [J] (A0 = d², undeformed).
     total_energy: float
-    #: The model the thickness ratio comes from, recorded with every export.
-    thickness_model: str = "t/t0 = 1/cos γ (constant fibre volume, areal density 1/cos γ)"
+    #: The model the thickness ratio comes from, in words, recorded with every export: this
+    #: default, or "sheared unit cell" once ``preform.drape.thickness`` applies the fabric's.
+    thickness_model: str = "constant fibre volume fraction (1/cos γ)"
+    #: The reference thickness t0 [mm] of the ratio, None when not known.
+    thickness_reference_mm: float | None = None
 
     @property
     def thinning(self) -> FloatArray:

@@ -380,8 +380,9 @@ def write_cells_csv(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.tables import cells_table, write_table
 
     ply: DrapedPly = ctx.products["drape"]
+    energy = ctx.products["thickness"].applied(ply.result, ply.energy)  # the case's one thickness
     preform = ctx.products.get("permeability")  # only when the scene asks for it
-    write_table(cells_table(ply.result, ply.energy, preform), ctx.case_dir / "cells.csv")
+    write_table(cells_table(ply.result, energy, preform), ctx.case_dir / "cells.csv")
     return {"cells_csv": "cells.csv"}
 
 
@@ -389,8 +390,9 @@ def write_vtu(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.vtu import write_drape_vtu
 
     ply: DrapedPly = ctx.products["drape"]
+    energy = ctx.products["thickness"].applied(ply.result, ply.energy)  # the case's one thickness
     preform = ctx.products.get("permeability")  # only when the scene asks for it
-    write_drape_vtu(ply.result, ply.energy, ctx.case_dir / "drape.vtu", preform)
+    write_drape_vtu(ply.result, energy, ctx.case_dir / "drape.vtu", preform)
     return {"vtu": "drape.vtu"}
 
 
@@ -454,10 +456,10 @@ EXPORTERS = [
     Step(
         "cells_csv",
         ("cells_csv",),
-        ("drape",),
+        ("drape", "thickness"),
         "1",
         write_cells_csv,
-        "cells.csv: one row per cell (shear, energy, status; thickness, Vf, permeability "
+        "cells.csv: one row per cell (shear, energy, status, thickness; Vf, permeability "
         "when the scene asks for permeability)",
         writes_files=True,
         extra_requires=preform_if_asked,
@@ -465,7 +467,7 @@ EXPORTERS = [
     Step(
         "vtu",
         ("vtu",),
-        ("drape",),
+        ("drape", "thickness"),
         "1",
         write_vtu,
         "drape.vtu for ParaView",

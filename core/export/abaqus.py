@@ -68,7 +68,7 @@ def abaqus_include_text(
         f"{mapping.mesh.labels_from}.",
         f"** Covered elements: {summary['elements_covered']} of {summary['elements']}; "
         f"uncovered: {summary['elements_uncovered']} (ELSET={name}_UNCOVERED).",
-        f"** Thickness model: {mapping.thickness_model}.",
+        f"** Thickness model: {mapping.thickness_words}.",
         f"** Node spacing of the drape: {mapping.node_spacing_mm:g} mm; mapping by closest "
         "point on the net, bilinear inside cells.",
         "** The first data line of each *DISTRIBUTION is the default Abaqus requires; it is NOT",

@@ -102,8 +102,7 @@ def ansys_macro_text(
         (
             f"! Thickness and both fibre families: a two-layer shell section per element, "
             f"u layer {u_fraction:g} of t at THETA 0, v layer {1 - u_fraction:g} of t at THETA "
-            f"= angle u->v (thickness model: {mapping.thickness_model}; t0 = "
-            f"{mapping.nominal_thickness_mm:g} mm)."
+            f"= angle u->v (thickness model: {mapping.thickness_words})."
             if sections
             else "! Thickness is not set here: t0 unknown (see the per-element table)."
         ),

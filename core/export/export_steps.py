@@ -18,7 +18,6 @@ compaction cap are a warning. A mesh that cannot be read fails the case with the
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
 from typing import Any
 
@@ -30,18 +29,6 @@ from preform.step import CaseContext, Step
 def export_options(ctx: CaseContext) -> ExportSection:
     section = getattr(ctx.scene, "export", None)
     return section if section is not None else ExportSection()
-
-
-def nominal_thickness_mm(ctx: CaseContext, options: ExportSection) -> float | None:
-    """t0 [mm]: the scene's, else the fabric's derived ``thickness_mm``, else unknown."""
-    if options.nominal_thickness_mm is not None:
-        return float(options.nominal_thickness_mm)
-    derived: dict[str, Any] = {}
-    # a fabric whose derivation fails still exports, only without a thickness in mm
-    with contextlib.suppress(Exception):
-        derived = dict(ctx.fabric.derived())
-    value = derived.get("thickness_mm")
-    return float(value) if isinstance(value, (int, float)) and value > 0 else None
 
 
 def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
@@ -57,12 +44,15 @@ def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
     except (ValueError, OSError) as error:
         raise CaseFailure(f"export.mesh: {error}") from None
     ply = ctx.products["drape"]
+    # the case's one thickness (preform.drape.thickness): its model and its t0
+    thickness = ctx.products["thickness"]
     mapping = map_to_mesh(
         ply.result,
         mesh,
-        ply.energy,
+        thickness.applied(ply.result, ply.energy),
         reference_direction=options.reference_direction,
-        nominal_thickness_mm=nominal_thickness_mm(ctx, options),
+        nominal_thickness_mm=thickness.reference_mm,
+        thickness_reference=thickness.reference,
         thickness_cap_ratio=options.thickness_cap_ratio,
         max_gap_mm=options.max_gap_mm,
     )
@@ -210,7 +200,7 @@ STEPS = [
     Step(
         "mesh_mapping",
         ("mesh_mapping",),
-        ("drape",),
+        ("drape", "thickness"),
         "1",
         run_mesh_mapping,
         "The drape mapped onto the scene's FE mesh (export.mesh): directions, shear, thickness.",

@@ -28,9 +28,10 @@ rounding (the centroid of net cell (i, j) maps to (i + ½, j + ½) exactly, up t
 non-planarity), which the tests check, and on a hemisphere the mapped shear approaches the
 drape's at the element centroids as O(d²).
 
-Thickness: the ratio t/t0 comes from the drape's energy field (1/cos γ today: the fibre
-volume of a cell is kept while its area shrinks to d² cos γ), and the thickness in mm is
-t0 · t/t0 when the nominal thickness t0 is known. A compaction cap (a ratio past which the
+Thickness: the ratio t/t0 comes from the drape's energy field, which carries the case's one
+thickness model (``preform.drape.thickness``: the fabric's sheared unit cell where it has one,
+else constant fibre volume fraction, 1/cos γ), and the thickness in mm is t0 · t/t0 when the
+nominal thickness t0 is known; ``thickness_reference`` says where t0 comes from. A compaction cap (a ratio past which the
 fabric cannot thicken further) is reported per element (``above_thickness_cap``) and counted,
 never silently applied.
 
@@ -107,6 +108,18 @@ class MeshMapping:
     max_gap_mm: float
     #: Elements whose reference direction is normal to them (angles NaN there).
     reference_normal_to_element: BoolArray = field(default_factory=lambda: np.zeros(0, bool))
+    #: Where t0 comes from, in words (``preform.drape.thickness``), None when not said.
+    thickness_reference: str | None = None
+
+    @property
+    def thickness_words(self) -> str:
+        """The thickness model and t0 with its source, for the exports' comments."""
+        words = self.thickness_model
+        if self.nominal_thickness_mm is not None:
+            words += f"; t0 = {self.nominal_thickness_mm:g} mm"
+            if self.thickness_reference:
+                words += f" ({self.thickness_reference})"
+        return words
 
     @property
     def uncovered_ids(self) -> IntArray:
@@ -131,6 +144,7 @@ class MeshMapping:
             "thickness_cap_ratio": self.thickness_cap_ratio,
             "thickness_model": self.thickness_model,
             "nominal_thickness_mm": self.nominal_thickness_mm,
+            "thickness_reference": self.thickness_reference,
             "reference_direction": list(self.reference_direction),
             "node_spacing_mm": self.node_spacing_mm,
             "max_gap_mm": self.max_gap_mm,
@@ -288,6 +302,7 @@ def map_to_mesh(
     nominal_thickness_mm: float | None = None,
     thickness_cap_ratio: float | None = None,
     max_gap_mm: float | None = None,
+    thickness_reference: str | None = None,
 ) -> MeshMapping:
     """Map a draped net [m] onto ``mesh`` [mm] (module docstring: method and accuracy).
 
@@ -295,7 +310,8 @@ def map_to_mesh(
     each element). ``nominal_thickness_mm``: the undeformed ply thickness t0 [mm], for
     ``thickness_mm``. ``thickness_cap_ratio``: the compaction limit of t/t0, flagged where
     exceeded. ``max_gap_mm``: largest normal distance [mm] between an element centroid and
-    the net for it to count as covered (default: the node spacing d).
+    the net for it to count as covered (default: the node spacing d). ``thickness_reference``:
+    where t0 comes from, in words, for the exports' comments.
     """
     d_mm = MM_PER_M * float(result.node_spacing)
     gap_limit = d_mm if max_gap_mm is None else float(max_gap_mm)
@@ -374,11 +390,7 @@ def map_to_mesh(
     above = np.zeros(m, dtype=bool)
     if thickness_cap_ratio is not None:
         above = covered & (np.nan_to_num(ratio, nan=0.0) > thickness_cap_ratio)
-    model = (
-        energy.thickness_model
-        if energy is not None
-        else "t/t0 = 1/cos γ (constant fibre volume, areal density 1/cos γ)"
-    )
+    model = energy.thickness_model if energy is not None else EnergyField.thickness_model
     return MeshMapping(
         mesh=mesh,
         covered=covered,
@@ -405,6 +417,7 @@ def map_to_mesh(
         node_spacing_mm=d_mm,
         max_gap_mm=gap_limit,
         reference_normal_to_element=ref_bad,
+        thickness_reference=thickness_reference,
     )
 
 

@@ -104,7 +104,7 @@ def lsdyna_include_text(
         "$ Units: lengths in mm, angles in degrees. BETA from the N1->N2 edge to the u fibres.",
         f"$ Covered elements: {summary['elements_covered']} of {summary['elements']}; "
         f"uncovered: {summary['elements_uncovered']} (*SET_SHELL_LIST {uncovered_set_id}).",
-        f"$ Thickness model: {mapping.thickness_model}"
+        f"$ Thickness model: {mapping.thickness_words}"
         + ("" if mapping.nominal_thickness_mm is not None else "; t0 unknown: THIC = 0 (section)"),
         "$ These cards replace your *ELEMENT_SHELL cards of the same elements.",
         "*ELEMENT_SHELL_BETA",
@@ -190,7 +190,7 @@ def lsdyna_composite_text(
         f"v (MID {materials[1]}, {1 - u_fraction:g} of t).",
         f"$ Covered elements: {summary['elements_covered']} of {summary['elements']}; "
         f"uncovered: {summary['elements_uncovered']} (*SET_SHELL_LIST {uncovered_set_id}).",
-        f"$ Thickness model: {mapping.thickness_model}; t0 = {mapping.nominal_thickness_mm:g} mm",
+        f"$ Thickness model: {mapping.thickness_words}",
         "$ These cards replace your *ELEMENT_SHELL cards of the same elements.",
         "*ELEMENT_SHELL_COMPOSITE",
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",

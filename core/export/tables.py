@@ -38,6 +38,7 @@ CELL_COLUMNS: tuple[str, ...] = (
     "shear_deg",
     "area_mm2",
     "thickness_ratio",
+    "thickness_mm",
     "energy_J_per_m2",
     "past_locking",
     "past_failure",
@@ -64,12 +65,14 @@ def cells_table(
     Columns: ``i``, ``j`` (cell index), ``status`` (CellStatus name, e.g. "VALID",
     "INCOMPLETE"), ``in_part`` (bool), ``x_mm``, ``y_mm``, ``z_mm`` (centroid [mm]),
     ``shear_deg`` (signed shear [deg]), ``area_mm2`` (draped area [mm²]),
-    ``thickness_ratio`` (t/t0 [-], 1/cos γ: a thickening; formerly ``thinning``), ``energy_J_per_m2`` (strain energy density [J/m²]),
+    ``thickness_ratio`` (t/t0 [-]: a thickening, formerly ``thinning``; from the model
+    ``energy.thickness_model`` names, ``preform.drape.thickness``), ``thickness_mm`` (t0 · t/t0
+    [mm], NaN when t0 is unknown), ``energy_J_per_m2`` (strain energy density [J/m²]),
     ``past_locking`` and ``past_failure`` (nullable bool), ``part_share`` (the share 0..1 of the
     cell's undeformed area inside the part, 0 outside it: the total energy is
     Σ energy_J_per_m2 · part_share · d²). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
-    the thickness ratio then follows from the shear. With ``preform`` (the ``permeability``
+    the thickness ratio then follows from the shear as 1/cos γ. With ``preform`` (the ``permeability``
     output) the ``PREFORM_COLUMNS`` follow: the sheared cell's thickness [mm] and fabric fibre
     volume fraction [-], the principal in-plane permeabilities k1 ≥ k2 [m²] and k1's unit
     direction in the tool's axes.
@@ -97,12 +100,15 @@ def cells_table(
     codes = np.asarray(result.cell_status, dtype=np.int64).ravel().tolist()
     status = [names.get(code, f"UNKNOWN_{code}") for code in codes]
 
+    reference_mm = None
     if energy is not None:
         energy_density = on_valid(energy.energy_density)
         thickness_ratio = on_valid(energy.thickness_ratio)
+        reference_mm = energy.thickness_reference_mm
     else:
         energy_density = np.full(n1 * n2, np.nan)
         thickness_ratio = 1.0 / np.cos(shear)
+    thickness_mm = thickness_ratio * (np.nan if reference_mm is None else reference_mm)
     table = pd.DataFrame(
         {
             "i": ii.ravel(),
@@ -116,6 +122,7 @@ def cells_table(
             "shear_deg": np.degrees(shear),
             "area_mm2": 1e6 * on_valid(result.area),
             "thickness_ratio": thickness_ratio,
+            "thickness_mm": thickness_mm,
             "energy_J_per_m2": energy_density,
             "past_locking": flags(None if energy is None else energy.past_locking),
             "past_failure": flags(None if energy is None else energy.past_failure),

@@ -107,14 +107,15 @@ def write_drape_vtu(
     Points are in millimetres. Cells that are not VALID are left out, so the file holds no NaN.
     Point data: ``i``, ``j`` (net indices), ``residual_mm`` [mm]. Cell data: ``i``, ``j``,
     ``shear_deg`` (signed shear [deg]), ``fibre_u`` and ``fibre_v`` (unit 3-vectors),
-    ``thickness_ratio`` (t/t0 = 1/cos γ [-]), ``status`` (CellStatus code), ``in_part`` (0/1) and,
+    ``thickness_ratio`` (t/t0 [-], the model ``energy.thickness_model`` names), ``thickness_mm``
+    (t0 · t/t0 [mm], when t0 is known), ``status`` (CellStatus code), ``in_part`` (0/1) and,
     when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking`` and
     ``past_failure`` (0/1); with ``preform`` (the ``permeability`` output)
     ``preform_thickness_mm`` [mm], ``fibre_volume_fraction`` [-], ``permeability_m2`` (the
     in-plane tensor in the file's axes, 9 components [m²]), ``permeability_k1_m2`` and
     ``permeability_k2_m2`` (principal values k1 ≥ k2 [m²]) and ``permeability_k1_dir`` (k1's unit
     direction: ParaView's Glyph filter draws the flow's fast direction). Without ``energy`` the
-    thickness ratio is computed from the shear. A net
+    thickness ratio is 1/cos γ, computed from the shear. A net
     with no valid cell is written as its placed nodes, one vertex cell each, without cell data.
     """
     meshio = _require_meshio()
@@ -150,6 +151,9 @@ def write_drape_vtu(
         cell_data["thickness_ratio"] = np.asarray(energy.thickness_ratio, dtype=float)[ci, cj]
         cell_data["past_locking"] = np.asarray(energy.past_locking, dtype=np.int32)[ci, cj]
         cell_data["past_failure"] = np.asarray(energy.past_failure, dtype=np.int32)[ci, cj]
+        if energy.thickness_reference_mm is not None:
+            t0 = energy.thickness_reference_mm
+            cell_data["thickness_mm"] = t0 * cell_data["thickness_ratio"]
     else:
         cell_data["thickness_ratio"] = 1.0 / np.cos(shear)
     if preform is not None:

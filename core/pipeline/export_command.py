@@ -204,6 +204,7 @@ def export_command(
                 "elements_above_thickness_cap",
                 "nominal_thickness_mm",
                 "thickness_model",
+                "thickness_reference",
             )
         }
     for key in (

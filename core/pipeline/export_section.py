@@ -60,8 +60,9 @@ class ExportSection(BaseModel):
     nominal_thickness_mm: float | None = Field(
         default=None,
         gt=0,
-        description="Undeformed ply thickness t0 [mm]; default: the fabric's own "
-        "(derived thickness_mm) where it has one.",
+        description="Undeformed ply thickness t0 [mm] of every exported thickness (t0 · t/t0); "
+        "default: the sheared unit cell's thickness at zero shear where the fabric has one, "
+        "else its derived thickness_mm.",
     )
     thickness_cap_ratio: float | None = Field(
         default=None,

@@ -74,7 +74,18 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
     text = (out / "drape_abaqus.inc").read_text()
     assert sorted(elset(text, "PREFORM_UNCOVERED")) == sorted(mesh["uncovered_element_ids"])
     assert report["units"] == {"length": "mm", "angle": "deg"}
-    assert any("compaction cap" in w for w in report["warnings"])
+    # The plain weave shears at most ~10° on this cap, below its locking angle (39.2°): its
+    # sheared unit cell keeps the thickness t0 exactly, so no element passes the 1.001 cap
+    # (under the old 1/cos γ every sheared element did).
+    assert mesh["thickness_model"] == "sheared unit cell"
+    assert mesh["thickness_reference"] == "the sheared unit cell's thickness at zero shear"
+    assert mesh["elements_above_thickness_cap"] == 0
+    assert not any("compaction cap" in w for w in report["warnings"])
+    covered = table[table.covered]
+    assert covered.shear_deg.abs().max() > 5.0
+    assert (covered.thickness_ratio == 1.0).all()
+    assert (covered.thickness_mm == mesh["nominal_thickness_mm"]).all()
+    assert "** Thickness model: sheared unit cell; t0 = 0.64 mm" in text
     assert report["cut_pattern_allowance_area_mm2"] > report["cut_pattern_area_mm2"]
     # whole net cells (d = 5 mm) past the fabric's locking angle, drawn in the flat
     cells = report["cut_pattern_past_locking_area_mm2"] / 25.0
