@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.part import Part, cell_part_share
+from preform.drape.part import Part
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.shear.law import ShearLaw
 
@@ -29,43 +29,6 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 CentroidPredicate = Callable[[FloatArray], BoolArray]
-
-
-# Vectors as (x, y, z) triples of contiguous 2-D arrays: a million cells' worth of cross
-# products is several times faster this way than on strided (…, 3) views.
-Vec = tuple[FloatArray, FloatArray, FloatArray]
-
-
-def _sub(a: Vec, b: Vec) -> Vec:
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _add(a: Vec, b: Vec) -> Vec:
-    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
-
-
-def _dot(a: Vec, b: Vec) -> FloatArray:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross_norm(a: Vec, b: Vec) -> FloatArray:
-    cx = a[1] * b[2] - a[2] * b[1]
-    cy = a[2] * b[0] - a[0] * b[2]
-    cz = a[0] * b[1] - a[1] * b[0]
-    return np.sqrt(cx * cx + cy * cy + cz * cz)
-
-
-def _angle(a: Vec, b: Vec) -> FloatArray:
-    """Angle [rad, 0..π] between vectors; atan2 keeps it accurate near 0 and π too."""
-    return np.arctan2(_cross_norm(a, b), _dot(a, b))
-
-
-def _stack_unit(a: Vec, valid: BoolArray) -> FloatArray:
-    length = np.sqrt(_dot(a, a))
-    out = np.zeros((*length.shape, 3))
-    for k in range(3):
-        np.divide(a[k], length, out=out[..., k], where=valid)
-    return out
 
 
 def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
@@ -103,60 +66,27 @@ def cell_fields(
     inside it: ``part_share``; ``in_part`` is every valid cell with some area inside) or a
     predicate on centroids (a cell is in or out whole). Without it every valid cell counts
     whole. Zero (NaN for centroids) where not VALID."""
+    from preform.drape import field_kernels
+
     c_status = cell_status(status)
     valid = c_status == CellStatus.VALID
     shape = valid.shape
-    shear = np.zeros(shape)
-    area = np.zeros(shape)
-    centroid = np.full((*shape, 3), np.nan)
-    fibre_u = np.zeros((*shape, 3))
-    fibre_v = np.zeros((*shape, 3))
-    comp = [nodes[..., k] for k in range(3)]
-    # Row blocks of ~16k cells keep every temporary in cache; whole-net temporaries of a
-    # million cells cost more in page faults than in arithmetic.
-    rows = max(1, 16384 // max(shape[1], 1))
-    for r0 in range(0, shape[0], rows):
-        r1 = min(r0 + rows, shape[0])
-        x00: Vec = (comp[0][r0:r1, :-1], comp[1][r0:r1, :-1], comp[2][r0:r1, :-1])
-        x10: Vec = (
-            comp[0][r0 + 1 : r1 + 1, :-1],
-            comp[1][r0 + 1 : r1 + 1, :-1],
-            comp[2][r0 + 1 : r1 + 1, :-1],
-        )
-        x01: Vec = (comp[0][r0:r1, 1:], comp[1][r0:r1, 1:], comp[2][r0:r1, 1:])
-        x11: Vec = (
-            comp[0][r0 + 1 : r1 + 1, 1:],
-            comp[1][r0 + 1 : r1 + 1, 1:],
-            comp[2][r0 + 1 : r1 + 1, 1:],
-        )
-        ok = valid[r0:r1]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u_low, u_high = _sub(x10, x00), _sub(x11, x01)
-            v_left, v_right = _sub(x01, x00), _sub(x11, x10)
-            omega = 0.25 * (
-                _angle(u_low, v_left)
-                + _angle(u_low, v_right)
-                + _angle(u_high, v_left)
-                + _angle(u_high, v_right)
-            )
-            shear[r0:r1] = np.where(ok, omega - 0.5 * np.pi, 0.0)
-            for k in range(3):
-                mean = 0.25 * (x00[k] + x10[k] + x01[k] + x11[k])
-                centroid[r0:r1, :, k] = np.where(ok, mean, np.nan)
-            diag, anti = _sub(x11, x00), _sub(x01, x10)
-            # Split along (i, j)-(i+1, j+1), then along (i+1, j)-(i, j+1); average.
-            split_a = _cross_norm(u_low, diag) + _cross_norm(diag, v_left)
-            split_b = _cross_norm(u_low, anti) + _cross_norm(anti, v_right)
-            area[r0:r1] = np.where(ok, 0.25 * (split_a + split_b), 0.0)
-            fibre_u[r0:r1] = _stack_unit(_add(u_low, u_high), ok)
-            fibre_v[r0:r1] = _stack_unit(_add(v_left, v_right), ok)
+    shear = np.empty(shape)
+    area = np.empty(shape)
+    centroid = np.empty((*shape, 3))
+    fibre_u = np.empty((*shape, 3))
+    fibre_v = np.empty((*shape, 3))
+    field_kernels.cell_geometry(
+        np.ascontiguousarray(nodes, dtype=float), valid, shear, centroid, area, fibre_u, fibre_v
+    )
     in_part = valid.copy()
     share = valid.astype(float)
     if isinstance(trim, Part):
         # Cut cells count by their undeformed area inside the part (preform.drape.part).
         with np.errstate(invalid="ignore"):
             phi = np.asarray(trim.level(nodes), dtype=float)
-            cut = cell_part_share(phi[:-1, :-1], phi[1:, :-1], phi[:-1, 1:], phi[1:, 1:])
+            cut = np.empty(shape)
+            field_kernels.grid_part_share(np.ascontiguousarray(phi), cut)
         share = np.where(valid, np.nan_to_num(cut, nan=0.0), 0.0)
         in_part &= share > 0.0
     elif trim is not None and valid.any():
@@ -203,24 +133,40 @@ def energy_field(
             if keep.shape != counted.shape:
                 raise ValueError(f"region mask shape {keep.shape} != cell shape {counted.shape}")
         counted = counted & keep
-    gamma = np.where(counted, result.shear, 0.0)
+    from preform.drape import field_kernels
+
+    counted = np.ascontiguousarray(counted)
+    shear = np.ascontiguousarray(result.shear, dtype=float)
     # the law is evaluated on the counted cells only (a mechanistic law is costly per angle)
-    density = np.zeros(counted.shape, dtype=float)
-    if counted.any():
-        density[counted] = np.asarray(law.energy(gamma[counted]), dtype=float)
-    thickness_ratio = np.where(counted, 1.0 / np.maximum(np.cos(gamma), 1e-12), 1.0)
-    locking = law.locking_angle
-    failure = law.failure_angle
-    past_locking = (
-        counted & (np.abs(gamma) > locking) if locking is not None else np.zeros_like(counted)
+    at_counted = field_kernels.counted_values(shear, counted)
+    law_energy = np.zeros(0)
+    if at_counted.size:
+        values = np.asarray(law.energy(at_counted), dtype=float)
+        law_energy = np.ascontiguousarray(np.broadcast_to(values, at_counted.shape))
+    share = np.ascontiguousarray(
+        counted if result.part_share is None else result.part_share, dtype=float
     )
-    past_failure = counted & (gamma > failure) if failure is not None else np.zeros_like(counted)
+    density = np.empty(counted.shape)
+    thickness_ratio = np.empty(counted.shape)
+    past_locking = np.empty(counted.shape, dtype=bool)
+    past_failure = np.empty(counted.shape, dtype=bool)
+    locking, failure = law.locking_angle, law.failure_angle
     # A law whose stitch also breaks shearing the other way says so (stitch_yarn).
     failure_negative = getattr(law, "failure_angle_negative", None)
-    if failure_negative is not None:
-        past_failure = past_failure | (counted & (gamma < -failure_negative))
-    weight = np.where(counted, result.part_weight, 0.0)
-    total = float((density * weight).sum() * result.node_spacing**2)
+    weighted = field_kernels.energy_cells(
+        shear,
+        counted,
+        law_energy,
+        share,
+        np.inf if locking is None else float(locking),
+        np.inf if failure is None else float(failure),
+        np.inf if failure_negative is None else float(failure_negative),
+        density,
+        thickness_ratio,
+        past_locking,
+        past_failure,
+    )
+    total = float(weighted * result.node_spacing**2)
     return EnergyField(
         energy_density=density,
         thickness_ratio=thickness_ratio,
@@ -238,28 +184,13 @@ def node_shear(result: DrapeResult) -> FloatArray:
     angles ω minus 90°, as for a cell (so it is centred on the node: second-order accurate
     where all four exist). Unlike the cell value, which is the shear at a cell centre, the
     node value reaches the part's edge itself: nodes are where the extremes are read."""
-    p = np.asarray(result.nodes, dtype=float)
-    placed = result.status == NodeStatus.PLACED
-    ni, nj = placed.shape
-    nan = np.full((ni, nj, 3), np.nan)
-    u_fwd, u_bwd, v_fwd, v_bwd = nan.copy(), nan.copy(), nan.copy(), nan.copy()
-    u_fwd[:-1] = p[1:] - p[:-1]
-    u_bwd[1:] = p[1:] - p[:-1]
-    v_fwd[:, :-1] = p[:, 1:] - p[:, :-1]
-    v_bwd[:, 1:] = p[:, 1:] - p[:, :-1]
-    total = np.zeros((ni, nj))
-    count = np.zeros((ni, nj))
-    with np.errstate(invalid="ignore"):
-        for u in (u_fwd, u_bwd):
-            for v in (v_fwd, v_bwd):
-                uu: Vec = (u[..., 0], u[..., 1], u[..., 2])
-                vv: Vec = (v[..., 0], v[..., 1], v[..., 2])
-                omega = _angle(uu, vv)
-                ok = np.isfinite(omega)
-                total += np.where(ok, omega, 0.0)
-                count += ok
-        gamma = np.where(placed & (count > 0), total / np.maximum(count, 1) - 0.5 * np.pi, np.nan)
-    return np.asarray(gamma)
+    from preform.drape import field_kernels
+
+    nodes = np.ascontiguousarray(result.nodes, dtype=float)
+    status = np.ascontiguousarray(result.status, dtype=np.int8)
+    gamma = np.empty(status.shape)
+    field_kernels.node_shear(nodes, status, gamma)
+    return gamma
 
 
 def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:

@@ -17,12 +17,14 @@ Every function here is vectorised over the half-lines and loops only along them.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Protocol, cast, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.drape.compiled_surface import CompiledQueries
 from preform.drape.result import NodeStatus
 from preform.drape.surface import Surface
 
@@ -143,6 +145,32 @@ def geodesic_generators(
     return _march_geodesics(surface, starts, directions, spacing, count, substeps, tolerance)
 
 
+def _surface_queries(
+    surface: Surface,
+) -> Callable[[FloatArray], tuple[FloatArray, FloatArray, FloatArray]]:
+    """Closest points, the normals there and distances for points (m, 3) [m]: compiled for a
+    tool with compiled queries, else the tool's own vectorised methods."""
+    if isinstance(surface, CompiledQueries):
+        from preform.drape import net_kernels
+
+        kind, params = surface.compiled_queries()
+        params = np.asarray(params, dtype=float)
+
+        def compiled(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+            return cast(
+                tuple[FloatArray, FloatArray, FloatArray],
+                net_kernels.query_points(int(kind), params, np.ascontiguousarray(points)),
+            )
+
+        return compiled
+
+    def own(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        foot, dist = surface.closest_point(points)
+        return foot, surface.normal(foot), dist
+
+    return own
+
+
 def _march_geodesics(
     surface: Surface,
     starts: FloatArray,
@@ -152,65 +180,56 @@ def _march_geodesics(
     substeps: int,
     tolerance: float,
 ) -> GeneratorNodes:
+    from preform.drape import generator_kernels as kernels
+
+    query = _surface_queries(surface)
     m = len(starts)
     h = spacing / max(int(substeps), 1)
     points = np.full((m, count, 3), np.nan)
     on_tool = np.zeros((m, count), dtype=bool)
     found = np.zeros(m, dtype=int)
     running = np.ones(m, dtype=bool)
-    x = starts.copy()
-    t = _unit(np.asarray(directions, dtype=float))
-    normal = surface.normal(starts)
-    last = starts.copy()
+    x = np.ascontiguousarray(starts, dtype=float).copy()
+    t = np.ascontiguousarray(_unit(np.asarray(directions, dtype=float)))
+    normal = np.ascontiguousarray(surface.normal(starts), dtype=float)
+    last = x.copy()
     # A generator that keeps turning back (a closed geodesic shorter than d) must still stop.
     for _ in range(4 * count * max(int(substeps), 1) + 16):
         act = np.flatnonzero(running & (found < count))
         if act.size == 0:
             break
-        xa, ta, na = x[act], t[act], normal[act]
         # Straight continuation, brought back to the tool along the normal at x_k (the
         # discrete geodesic equation): projecting along the normal at the new point instead
         # would leave an O(h³) sideways error per step, i.e. an O(h) drift overall.
-        ahead = xa + h * ta
-        foot, _ = surface.closest_point(ahead)
-        n_foot = surface.normal(foot)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lam = _dot(foot - ahead, n_foot) / _dot(na, n_foot)
+        straight = kernels.ahead(x, t, act, h)
+        foot, n_foot, _ = query(straight)
         # A sharp crease (a mesh edge onto a vertical wall): the tangent plane turns by more
         # than 60° within one sub-step, and the correction along the old normal is undefined.
-        crease = np.abs(_dot(na, n_foot)) < 0.5
-        lam = np.where(crease, 0.0, lam)
-        x_new, dist = surface.closest_point(ahead + lam[:, None] * na)
+        corrected, crease = kernels.along_old_normal(
+            straight, np.ascontiguousarray(foot), np.ascontiguousarray(n_foot), normal, act
+        )
+        x_new, _, dist = query(corrected)
+        x_new, dist = np.array(x_new, dtype=float), np.array(dist, dtype=float)
         if crease.any():
             x_new[crease], dist[crease] = _across_crease(
-                surface, ta[crease], na[crease], foot[crease], n_foot[crease], h
+                surface, t[act][crease], normal[act][crease], foot[crease], n_foot[crease], h
             )
-        step = x_new - xa
-        # across a crease the path bends, so progress is the step's length, not its projection
-        progress = np.where(crease, np.linalg.norm(step, axis=-1), _dot(step, ta))
         # Past the edge the closest point sticks to the boundary: no progress, or far away.
-        off = ~np.isfinite(progress) | (progress < 0.5 * h) | (dist > 0.5 * h)
-        running[act[off]] = False
-        keep = ~off
-        act, xa, x_new, step = act[keep], xa[keep], x_new[keep], step[keep]
-        n_new, via, bent = n_foot[keep], foot[keep], crease[keep]
-        w = xa - last[act]
-        reach = _dot(x_new - last[act], x_new - last[act]) >= spacing * spacing
+        reach, before, guess = kernels.advance(
+            act, x_new, dist, crease, np.ascontiguousarray(n_foot), x, t, normal, last, running,
+            h, spacing,
+        )  # fmt: skip
         if reach.any():
             idx = act[reach]
-            s, wr = step[reach], w[reach]
-            ss, ws = _dot(s, s), _dot(wr, s)
-            tau = (-ws + np.sqrt(np.maximum(ws * ws - ss * (_dot(wr, wr) - spacing**2), 0))) / ss
-            node = xa[reach] + tau[:, None] * s
-            node = _slide_to_chord(surface, last[idx], node, spacing, tolerance)
-            folded = bent[reach]
+            node = _slide_to_chord(query, last[idx], guess[reach], spacing, tolerance)
+            folded = crease[reach]
             if folded.any():
                 # across a crease the straight chord cuts through the tool: find the node on
                 # the two flat pieces of the path (start -> crease -> new point) instead
                 node[folded] = _chord_on_bent_path(
                     last[idx][folded],
-                    xa[reach][folded],
-                    via[reach][folded],
+                    before[reach][folded],
+                    foot[reach][folded],
                     x_new[reach][folded],
                     spacing,
                 )
@@ -218,10 +237,6 @@ def _march_geodesics(
             on_tool[idx, found[idx]] = True
             found[idx] += 1
             last[idx] = node
-        x[act] = x_new
-        t[act] = _unit(step)
-        # The foot of the first projection is O(h³) from x_{k+1}: its normal serves there.
-        normal[act] = n_new
     return _finish(points, on_tool, _residual(surface, points, starts[0], spacing))
 
 
@@ -280,18 +295,24 @@ def _chord_on_bent_path(
 
 
 def _slide_to_chord(
-    surface: Surface, anchor: FloatArray, guess: FloatArray, spacing: float, tolerance: float
+    query: Callable[[FloatArray], tuple[FloatArray, FloatArray, FloatArray]],
+    anchor: FloatArray,
+    guess: FloatArray,
+    spacing: float,
+    tolerance: float,
 ) -> FloatArray:
     """Move surface points ``guess`` to chord ``spacing`` from ``anchor`` keeping their
     direction: alternate rescaling and projection (each round shrinks the error by ~(d/R)²)."""
-    node = guess
+    from preform.drape import generator_kernels as kernels
+
+    node = np.ascontiguousarray(guess, dtype=float)
+    anchor = np.ascontiguousarray(anchor, dtype=float)
     for _ in range(8):
-        node = anchor + spacing * _unit(node - anchor)
-        node, _ = surface.closest_point(node)
+        node = np.ascontiguousarray(query(kernels.to_chord(anchor, node, spacing))[0])
         chord = np.sqrt(_dot(node - anchor, node - anchor))
         if np.all(np.abs(chord - spacing) <= tolerance * spacing):
             break
-    return node
+    return np.array(node, dtype=float)
 
 
 class _PlanPaths:

@@ -15,6 +15,12 @@ a front (all four quadrants stacked) is placed in one vectorised step:
   to the surface g(φ) is left: a few vectorised, damped Newton steps in φ solve it to
   ``tolerance``·d.
 
+The arithmetic is compiled (:mod:`preform.drape.net_kernels`, imported when a net is draped):
+on a tool with compiled queries (:class:`~preform.drape.compiled_surface.CompiledQueries`) one
+compiled loop fills the whole net, sweeping each quadrant row by row (a node needs only its
+three parents, so the net is the same); on any other tool the fronts above are filled in turn,
+the tool's own vectorised queries between the same compiled per-node steps.
+
 Every node ends with a :class:`~preform.drape.result.NodeStatus` and a residual; a node whose
 parent failed is NOT_REACHED, never a silent NaN.
 """
@@ -28,6 +34,7 @@ from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.drape.compiled_surface import CompiledQueries
 from preform.drape.fields import cell_fields
 from preform.drape.generators import (
     GeneratorNodes,
@@ -111,25 +118,12 @@ class WalkingPlacement(Protocol):
         ...
 
 
-def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
-    return np.einsum("ij,ij->i", a, b)
-
-
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     out = np.empty_like(a)
     out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
     out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
     out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
     return out
-
-
-def _norm(a: FloatArray) -> FloatArray:
-    return np.sqrt(_dot(a, a))
-
-
-def _unit(a: FloatArray) -> FloatArray:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return a / _norm(a)[:, None]
 
 
 # --------------------------------------------------------------------------------------------
@@ -145,56 +139,41 @@ def _solve_on_circle(
     tolerance_m: float,
     max_iterations: int,
 ) -> tuple[FloatArray, StatusArray, int]:
-    """Nodes at chord ``spacing`` from a and b on the surface, away from c (see module doc).
+    """Nodes at chord ``spacing`` from a and b on the surface, away from c (see module doc),
+    for a surface queried through its own vectorised methods; the per-node arithmetic is the
+    compiled one of :mod:`preform.drape.net_kernels`.
 
     Returns points (m, 3) (NaN where not placed), NodeStatus codes and the iterations used.
     """
+    from preform.drape import net_kernels as kernels
+
     m = len(a)
     points = np.full((m, 3), np.nan)
     status = np.full(m, NodeStatus.NO_INTERSECTION, dtype=np.int8)
-    mid = 0.5 * (a + b)
-    chord = b - a
-    radius2 = spacing * spacing - 0.25 * _dot(chord, chord)
-    e = _unit(chord)
     guess, _ = surface.closest_point(a + b - c)
-    n0 = surface.normal(guess)
-    a1 = _unit(n0 - _dot(n0, e)[:, None] * e)
-    a2 = _cross(e, a1)
-    a2 *= np.where(_dot(c - mid, a2) > 0, -1.0, 1.0)[:, None]
-    radius = np.sqrt(np.maximum(radius2, 0.0))
-    rel = guess - mid
-    phi = np.clip(np.arctan2(_dot(rel, a2), _dot(rel, a1)), 0.0, np.pi)
-    active = np.flatnonzero((radius2 > 0) & np.isfinite(a1[:, 0]) & np.isfinite(phi))
+    n0 = np.asarray(surface.normal(guess), dtype=float)
+    frames, phi = kernels.circle_frames(a, b, c, np.asarray(guess, dtype=float), n0, spacing)
+    active = np.flatnonzero(np.isfinite(phi))
     used = 0
     for used in range(1, max_iterations + 1):  # the last value is reported
         if active.size == 0:
             break
-        p_act, r_act = phi[active], radius[active]
-        cos_p, sin_p = np.cos(p_act), np.sin(p_act)
-        x = mid[active] + r_act[:, None] * (
-            cos_p[:, None] * a1[active] + sin_p[:, None] * a2[active]
-        )
+        x = kernels.circle_points(frames, phi, active)
         foot, dist = surface.closest_point(x)
         n = surface.normal(foot)
-        offset = x - foot
-        g = _dot(offset, n)
-        done = dist <= tolerance_m
-        points[active[done]] = x[done]
-        status[active[done]] = NodeStatus.PLACED
-        slope = r_act * (-sin_p * _dot(n, a1[active]) + cos_p * _dot(n, a2[active]))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.clip(-g / slope, -0.5, 0.5)
-        step = np.where(np.isfinite(step), step, 0.0)
-        new_phi = np.clip(p_act + step, 0.0, np.pi)
-        # A point whose closest point is an edge of the tool has an offset with a tangential
-        # part; an interior closest point has a purely normal one.
-        tangential = _norm(offset - g[:, None] * n) > 0.5 * dist
-        stuck = ~done & (np.abs(new_phi - p_act) <= 1e-15 * np.pi)
-        last_try = used == max_iterations
-        fail = ~done & (stuck | last_try)
-        status[active[fail & tangential]] = NodeStatus.OFF_TOOL
-        phi[active] = new_phi
-        active = active[~done & ~fail]
+        active = kernels.newton_updates(
+            active,
+            x,
+            np.asarray(foot, dtype=float),
+            np.asarray(n, dtype=float),
+            np.asarray(dist, dtype=float),
+            frames,
+            phi,
+            points,
+            status,
+            tolerance_m,
+            used == max_iterations,
+        )
     return points, status, used
 
 
@@ -293,6 +272,90 @@ def _generators(
     return plan_generators(
         surface, start, polyline_halves, spacing, count, substeps=substeps, tolerance=tolerance
     )
+
+
+# --------------------------------------------------------------------------------------------
+# The fronts on a surface without compiled queries
+
+
+def _compiled_closed_form(surface: object) -> bool:
+    """Whether a surface with compiled queries also has a compiled closed-form node."""
+    from preform.drape.compiled_surface import SPHERE, TRIMMED_SPHERE
+
+    return cast(CompiledQueries, surface).compiled_queries()[0] in (SPHERE, TRIMMED_SPHERE)
+
+
+def _fill_fronts_python(
+    surface: Surface,
+    pos: FloatArray,
+    status: StatusArray,
+    residual: FloatArray,
+    layout: tuple[int, int, IntArray, IntArray, IntArray, IntArray, int],
+    d: float,
+    tol_m: float,
+    max_iterations: int,
+    lo_bound: FloatArray,
+    hi_bound: FloatArray,
+    closed_form: bool,
+    face: IntArray | None,
+) -> tuple[int, int]:
+    """The fronts of a net on a surface queried through its vectorised methods: the front
+    bookkeeping and node checks are the compiled kernels', the placement and queries the
+    surface's. ``face``: each node's facet (flat, −1 where not placed) for a surface that
+    places by walking from the parents' facets (:class:`WalkingPlacement`), else None.
+    Returns (fronts placed, most Newton passes over a front)."""
+    from preform.drape import net_kernels as kernels
+
+    nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front = layout
+    longest = 4 * (max(int(q_na.max()), int(q_nb.max())) + 1) if len(q_sa) else 1
+    members = np.empty((longest, 5), dtype=np.int64)
+    newton_iterations = 0
+    fronts = 0
+    for k in range(2, last_front + 1):
+        count = kernels.front_members(k, nj, start_flat, q_sa, q_sb, q_na, q_nb, status, members)
+        if count == 0:
+            if k > 2:
+                # Every node of front k has a parent in front k − 1 off the generators.
+                break
+            continue
+        fronts += 1
+        front = members[:count]
+        a, b, c = pos[front[:, 1]], pos[front[:, 2]], pos[front[:, 3]]
+        at_p: FacePlacement | None = None
+        if face is not None:
+            # an exact placement that walks from the parents' facets (meshes)
+            at_p = cast(WalkingPlacement, surface).place_nodes_from_faces(
+                a, b, c, d, face[front[:, 1]], face[front[:, 2]], face[front[:, 3]]
+            )
+            p, st = at_p.points, np.asarray(at_p.status, dtype=np.int8).copy()
+            face[front[:, 0]] = at_p.faces
+        elif closed_form:
+            # closed_form: the surface has its own exact placement
+            p, st = cast(Any, surface).place_nodes(a, b, c, d)
+            st = np.asarray(st, dtype=np.int8).copy()
+        else:
+            p, st, used = _solve_on_circle(surface, a, b, c, d, tol_m, max_iterations)
+            newton_iterations = max(newton_iterations, used)
+        p = np.ascontiguousarray(p, dtype=float)
+        ok = st == _PLACED
+        normals = np.full((count, 3), np.nan)
+        dist = np.full(count, np.nan)
+        if at_p is not None:
+            # the walk has them already, on the facet it found
+            normals[ok] = np.asarray(at_p.normals, dtype=float)[ok]
+            dist[ok] = np.asarray(at_p.residual, dtype=float)[ok]
+        elif ok.any():
+            normals[ok] = surface.normal(p[ok])
+            dist[ok] = surface.closest_point(p[ok])[1]
+        kernels.finish_front(
+            pos, status, residual, front, p, st, normals, dist, d, lo_bound, hi_bound
+        )
+        if at_p is not None:
+            # The walk's residual is under its own spacing rule (the length along the surface
+            # over a feature crease, where the chord is shorter than d by design).
+            placed = status[front[:, 0]] == _PLACED
+            residual[front[placed, 0]] = np.asarray(at_p.residual, dtype=float)[placed]
+    return fronts, newton_iterations
 
 
 # --------------------------------------------------------------------------------------------
@@ -465,7 +528,15 @@ def drape(
         gen_prev.append(flat[alive] - stride)
 
     # The wavefronts.
-    closed_form = use_closed_form and isinstance(surface, ClosedFormPlacement)
+    fill_clock = time.perf_counter()
+    fill_cpu = time.process_time()
+    from preform.drape import net_kernels as kernels
+
+    compiled = isinstance(surface, CompiledQueries)
+    closed_form = use_closed_form and (
+        isinstance(surface, ClosedFormPlacement) or (compiled and _compiled_closed_form(surface))
+    )
+    # a faceted tool that places nodes exactly by walking from the parents' facets (meshes)
     walking = use_closed_form and isinstance(surface, WalkingPlacement)
     face = np.full(n_nodes, -1, dtype=np.int64)
     if walking:
@@ -490,83 +561,25 @@ def drape(
         if na > 0 and nb > 0
     ]
     last_front = max((na + nb for _, _, na, nb in quadrants), default=1)
-    newton_iterations = 0
-    fronts = 0
-    # Node (i0 + sa·a, j0 + sb·b) with a + b = k has flat index
-    # i0·nj + j0 + sb·k + a·(sa·nj − sb): each quadrant's part of a front is an arithmetic run.
-    q_sa = np.array([q[0] for q in quadrants], dtype=np.int64)
-    q_sb = np.array([q[1] for q in quadrants], dtype=np.int64)
-    q_na = np.array([q[2] for q in quadrants], dtype=np.int64)
-    q_nb = np.array([q[3] for q in quadrants], dtype=np.int64)
-    q_step = q_sa * nj - q_sb
-    for k in range(2, last_front + 1):
-        a_lo = np.maximum(1, k - q_nb)
-        lens = np.maximum(np.minimum(q_na, k - 1) - a_lo + 1, 0)
-        total = int(lens.sum())
-        first = np.cumsum(lens) - lens
-        a_off = np.arange(total) + np.repeat(a_lo - first, lens)
-        node = np.repeat(start_flat + q_sb * k, lens) + a_off * np.repeat(q_step, lens)
-        da, db = np.repeat(q_sa * nj, lens), np.repeat(q_sb, lens)
-        ia, ib = node - da, node - db
-        ic = ia - db
-        ready = (
-            (status[node] == _NOT_REACHED)
-            & (status[ia] == _PLACED)
-            & (status[ib] == _PLACED)
-            & (status[ic] == _PLACED)
-        )
-        if not ready.any():
-            if k > 2:
-                # Every node of front k has a parent in front k − 1 off the generators.
-                break
-            continue
-        fronts += 1
-        node, ia, ib, ic = node[ready], ia[ready], ib[ready], ic[ready]
-        orient = np.sign(da[ready]) * db[ready]
-        a, b, c = pos[ia], pos[ib], pos[ic]
-        at_p: FacePlacement | None = None
-        if walking:
-            # an exact placement that walks from the parents' facets (meshes)
-            at_p = cast(WalkingPlacement, surface).place_nodes_from_faces(
-                a, b, c, d, face[ia], face[ib], face[ic]
-            )
-            p, st = at_p.points, at_p.status.copy()
-            face[node] = at_p.faces
-        elif closed_form:
-            # closed_form: the surface has its own exact placement (the sphere)
-            p, st = cast(Any, surface).place_nodes(a, b, c, d)
-            st = np.asarray(st, dtype=np.int8).copy()
-        else:
-            p, st, used = _solve_on_circle(surface, a, b, c, d, tol_m, max_iterations)
-            newton_iterations = max(newton_iterations, used)
-        ok = st == _PLACED
-        if ok.any():
-            p_ok = p[ok]
-            past = np.any((p_ok < lo_bound) | (p_ok > hi_bound), axis=1)
-            # The cell this node completes, oriented +u × +v whatever the quadrant.
-            cell_normal = orient[ok][:, None] * _cross(p_ok - c[ok], a[ok] - b[ok])
-            n_ok = surface.normal(p_ok) if at_p is None else at_p.normals[ok]
-            folded = _dot(cell_normal, n_ok) <= 0
-            sub = st[ok]
-            sub[folded] = NodeStatus.FOLDED
-            sub[past] = NodeStatus.OFF_TOOL
-            st[ok] = sub
-            ok = st == _PLACED
-            p_ok = p[ok]
-            if at_p is None:
-                res = np.maximum.reduce(
-                    [
-                        np.abs(_norm(p_ok - a[ok]) - d),
-                        np.abs(_norm(p_ok - b[ok]) - d),
-                        surface.closest_point(p_ok)[1],
-                    ]
-                )
-            else:
-                res = at_p.residual[ok]
-            pos[node[ok]] = p_ok
-            residual[node[ok]] = res
-        status[node] = st
+    q_sa, q_sb, q_na, q_nb = (
+        np.array([q[col] for q in quadrants], dtype=np.int64) for col in range(4)
+    )
+    if compiled and not walking and (not closed_form or _compiled_closed_form(surface)):
+        # The whole fill in one compiled loop (preform.drape.net_kernels).
+        kind, params = cast(CompiledQueries, surface).compiled_queries()
+        fronts, newton_iterations = kernels.fill_fronts(
+            pos, status, residual, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front, d, tol_m,
+            max_iterations, lo_bound, hi_bound, int(kind), np.asarray(params, dtype=float),
+            closed_form,
+        )  # fmt: skip
+    else:
+        fronts, newton_iterations = _fill_fronts_python(
+            surface, pos, status, residual, (nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front),
+            d, tol_m, max_iterations, lo_bound, hi_bound, closed_form, face if walking else None,
+        )  # fmt: skip
 
+    fill_seconds = time.perf_counter() - fill_clock
+    fill_cpu_seconds = time.process_time() - fill_cpu
     nodes = pos.reshape(ni, nj, 3)
     node_status = status.reshape(ni, nj)
     fields = cell_fields(nodes, node_status, trim=trim)
@@ -583,6 +596,8 @@ def drape(
         "newton_iterations_max": newton_iterations,
         "fronts": fronts,
         "seconds": time.perf_counter() - clock,
+        "fill_seconds": fill_seconds,
+        "fill_cpu_seconds": fill_cpu_seconds,
     }
     return DrapeResult(
         nodes=nodes,

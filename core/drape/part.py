@@ -146,36 +146,21 @@ def combine(parts: Sequence[Part]) -> Part | None:
     return Intersection(tuple(parts))
 
 
-def _triangle_inside_share(f0: FloatArray, f1: FloatArray, f2: FloatArray) -> FloatArray:
-    """Share (0..1) of a triangle where the linear function with corner values f0, f1, f2 is
-    ≥ 0. Vectorised. With the corners sorted a ≤ b ≤ c the zero set cuts off a corner
-    triangle, whose share is a product of the two edge fractions."""
-    s = np.sort(np.stack([f0, f1, f2]), axis=0)
-    a, b, c = s[0], s[1], s[2]
-    out = np.zeros_like(a)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # One corner inside (a ≤ b < 0 ≤ c): the inside is the triangle at c.
-        one = (b < 0) & (c >= 0)
-        share_one = (c / (c - a)) * (c / (c - b))
-        # Two corners inside (a < 0 ≤ b): the outside is the triangle at a.
-        two = (a < 0) & (b >= 0)
-        share_two = 1.0 - (a / (a - b)) * (a / (a - c))
-    out = np.where(a >= 0, 1.0, out)
-    out = np.where(one, np.nan_to_num(share_one), out)
-    out = np.where(two, np.nan_to_num(share_two, nan=1.0), out)
-    return np.clip(out, 0.0, 1.0)
-
-
 def cell_part_share(
     phi00: ArrayLike, phi10: ArrayLike, phi01: ArrayLike, phi11: ArrayLike
 ) -> FloatArray:
     """Share (0..1) of each cell's undeformed square inside the part, from φ at its corners
-    (i, j), (i+1, j), (i, j+1), (i+1, j+1) (module docstring: exact for an affine φ)."""
-    f00, f10, f01, f11 = (np.asarray(f, dtype=float) for f in (phi00, phi10, phi01, phi11))
-    # Split along (i, j)-(i+1, j+1), then along (i+1, j)-(i, j+1); average.
-    split_a = 0.5 * (_triangle_inside_share(f00, f10, f11) + _triangle_inside_share(f00, f11, f01))
-    split_b = 0.5 * (_triangle_inside_share(f00, f10, f01) + _triangle_inside_share(f10, f11, f01))
-    return np.asarray(0.5 * (split_a + split_b))
+    (i, j), (i+1, j), (i, j+1), (i+1, j+1) (module docstring: exact for an affine φ). Split
+    along (i, j)-(i+1, j+1), then along (i+1, j)-(i, j+1), and averaged; with the corners of a
+    triangle sorted a ≤ b ≤ c the zero set cuts off a corner triangle, whose share is a product
+    of two edge fractions (compiled: ``preform.drape.field_kernels``)."""
+    from preform.drape import field_kernels
+
+    corners = np.broadcast_arrays(
+        *(np.asarray(f, dtype=float) for f in (phi00, phi10, phi01, phi11))
+    )
+    flat = [np.ascontiguousarray(f).reshape(-1) for f in corners]
+    return np.asarray(field_kernels.corner_part_share(*flat)).reshape(corners[0].shape)
 
 
 __all__ = [

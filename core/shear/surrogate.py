@@ -62,20 +62,9 @@ class _SenseTable:
         h = self.nodes[k + 1] - self.nodes[k]
         return k, (u - self.nodes[k]) / h, h
 
-    def __call__(self, u: FloatArray) -> FloatArray:
-        """W(u) [J/m²] by cubic Hermite interpolation."""
-        k, t, h = self._locate(u)
-        t2, t3 = t * t, t * t * t
-        h00, h10 = 2 * t3 - 3 * t2 + 1, t3 - 2 * t2 + t
-        h01, h11 = -2 * t3 + 3 * t2, t3 - t2
-        w = (
-            h00 * self.energy[k]
-            + h10 * h * self.slope_left[k]
-            + h01 * self.energy[k + 1]
-            + h11 * h * self.slope_right[k]
-        )
-        # energy of a non-negative law never decreases: a cubic overshoot must not say so
-        return np.maximum(w, np.minimum(self.energy[k], self.energy[k + 1]))
+    def tables(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(W at the nodes [J/m²], limited slope at each interval's left and right end)."""
+        return self.energy, self.slope_left, self.slope_right
 
     def slope(self, u: FloatArray) -> FloatArray:
         """dW/du [N·m/m²] of the interpolant (consistent with ``__call__``, for gradients)."""
@@ -107,12 +96,20 @@ class TabulatedSurrogate:
         self.step_rad = float(step_rad)
         self.locking_angle = law.locking_angle
         self.failure_angle = law.failure_angle
+        # a stitch that also breaks shearing the other way (stitch_yarn): the energy field
+        # flags it from the law in hand, so the table must carry it
+        self.failure_angle_negative = getattr(law, "failure_angle_negative", None)
         count = math.ceil(_DOMAIN_END / step_rad)
         grid = np.linspace(0.0, _DOMAIN_END, count + 1)
         special = [
             a
             # the jamming (packing) angle too: the torque is held from there, a kink
-            for a in (law.locking_angle, law.failure_angle, getattr(law, "packing_angle", None))
+            for a in (
+                law.locking_angle,
+                law.failure_angle,
+                self.failure_angle_negative,
+                getattr(law, "packing_angle", None),
+            )
             if a is not None and 0 < a < _DOMAIN_END
         ]
         jam = getattr(law, "packing_angle", None)
@@ -150,10 +147,18 @@ class TabulatedSurrogate:
         )
 
     def energy(self, gamma: ArrayLike) -> FloatArray:
-        """Strain energy per unit area [J/m²] from the tables, at signed angles γ [rad]."""
+        """Strain energy per unit area [J/m²] from the tables, at signed angles γ [rad]: the
+        cubic Hermite interpolant of the sense γ shears in (compiled:
+        ``preform.shear.surrogate_kernels``)."""
+        from preform.shear import surrogate_kernels
+
         g = np.asarray(gamma, dtype=float)
-        u = np.abs(g)
-        return np.where(g >= 0, self._positive(u), self._negative(u))
+        flat = np.ascontiguousarray(g).reshape(-1)
+        values = np.empty(flat.shape)
+        surrogate_kernels.signed_energy(
+            self._positive.nodes, self._positive.tables(), self._negative.tables(), flat, values
+        )
+        return values.reshape(g.shape)
 
     def max_relative_error(
         self, max_angle_rad: float = math.radians(60), samples: int = 20001

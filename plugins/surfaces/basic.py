@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.drape.compiled_surface import SPHERE, TRIMMED_SPHERE
 from preform.drape.part import HeightCut
 from preform.drape.result import NodeStatus
 
@@ -156,15 +157,27 @@ class Sphere:
         rel /= length[:, None]
         return rel
 
+    def _queries(self, points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Closest tool points, the normals there and distances: compiled, the same queries
+        the net kernels use (``preform.drape.net_kernels._query``)."""
+        from preform.drape import net_kernels
+
+        p = np.ascontiguousarray(points, dtype=float)
+        kind, params = self.compiled_queries()
+        foot, normal, dist = net_kernels.query_points(kind, params, p.reshape(-1, 3))
+        shape = p.shape[:-1]
+        return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)
+
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the sphere [m] and distances (n,) [m] to points (n, 3) [m]."""
-        p = np.asarray(points, dtype=float)
-        q = self.centre + self.radius * self._radial(p)
-        return q, np.sqrt(_dot(p - q, p - q))
+        """Closest points on the tool [m] and distances (n,) [m] to points (n, 3) [m]; a point
+        at the centre gets the top (+z), any point being closest."""
+        foot, _, dist = self._queries(points)
+        return foot, dist
 
     def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at sphere points (n, 3) [m]."""
-        return self._radial(points)
+        """Unit outward normals (n, 3) at tool points (n, 3) [m] (for a point off the tool,
+        the normal at its closest tool point)."""
+        return self._queries(points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """The top of the sphere over plan positions (n, 2) [m], and which lie over it."""
@@ -185,29 +198,23 @@ class Sphere:
         """Net nodes (m, 3) [m] at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the side
         away from ``opposite``, with NodeStatus codes (m,).
 
-        Closed form (PHYSICS §6): relative to the centre, P·A = P·B = R² − d²/2 and |P| = R. P
-        lies in the plane spanned by A + B and n = A × B; the root on the far side of the
-        plane (0, A, B) from the opposite node is the new node.
+        Closed form (PHYSICS §6), compiled (``preform.drape.net_kernels._sphere_node``): relative
+        to the centre, P·A = P·B = R² − d²/2 and |P| = R. P lies in the plane spanned by A + B
+        and n = A × B; the root on the far side of the plane (0, A, B) from the opposite node is
+        the new node. A node below a trimmed sphere's floor is OFF_TOOL.
         """
-        r = self.radius
-        pa, pb, pc = a - self.centre, b - self.centre, opposite - self.centre
-        along = pa + pb
-        along_len = np.sqrt(_dot(along, along))
-        n = _cross(pa, pb)
-        n_len = np.sqrt(_dot(n, n))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            height = (2.0 * r * r - spacing * spacing) / along_len
-            off2 = r * r - height * height
-            ok = (off2 >= 0) & (n_len > 1e-12 * r * spacing)
-            away = np.where(_dot(pc, n) > 0, -1.0, 1.0)
-            p = (height / along_len)[:, None] * along + (
-                away * np.sqrt(np.where(ok, off2, 0.0)) / n_len
-            )[:, None] * n
-        p += self.centre
-        status = np.where(ok, NodeStatus.PLACED, NodeStatus.NO_INTERSECTION).astype(np.int8)
-        status[ok & ~self._on_tool(p, spacing)] = NodeStatus.OFF_TOOL
-        p[status != NodeStatus.PLACED] = np.nan
-        return p, status
+        from preform.drape import net_kernels
+
+        kind, params = self.compiled_queries()
+        ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
+        points, status = net_kernels.sphere_place_nodes(
+            kind, params, ends[0], ends[1], ends[2], float(spacing)
+        )
+        return np.asarray(points), np.asarray(status, dtype=np.int8)
+
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The sphere for the compiled net kernels: (SPHERE, (centre x, y, z, radius)) [m]."""
+        return SPHERE, np.array([*self.centre, self.radius], dtype=float)
 
     def geodesic_nodes(
         self, start: FloatArray, direction: FloatArray, spacing: float, count: int
@@ -269,27 +276,12 @@ class Hemisphere(Sphere):
         """The part this tool makes: the hemisphere above its rim, z ≥ centre z (area 2πR²)."""
         return HeightCut(float(self.centre[2]), area_m2=2.0 * np.pi * self.radius**2)
 
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the tool [m] (on its lower edge for points below it) and
-        distances."""
-        p = np.asarray(points, dtype=float)
-        radial = self._radial(p)
-        floor = -self.run_off / self.radius
-        below = radial[:, 2] < floor
-        if np.any(below):
-            flat = radial[below].copy()
-            flat[:, 2] = 0.0
-            length = np.sqrt(_dot(flat, flat))
-            flat = np.where(
-                length[:, None] > 0,
-                flat / np.where(length > 0, length, 1.0)[:, None],
-                np.array([1.0, 0.0, 0.0]),
-            )
-            # The edge circle at height floor·R: radial = (cos·flat, sin) with sin = floor.
-            radial[below] = np.sqrt(1.0 - floor * floor) * flat
-            radial[below, 2] = floor
-        q = self.centre + self.radius * radial
-        return q, np.sqrt(_dot(p - q, p - q))
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The tool for the compiled net kernels: (TRIMMED_SPHERE, (centre x, y, z, radius,
+        floor z)) [m]. Points below the floor have their closest tool point on the edge circle
+        there."""
+        floor = float(self.centre[2]) - self.run_off
+        return TRIMMED_SPHERE, np.array([*self.centre, self.radius, floor], dtype=float)
 
     def _on_tool(self, p: FloatArray, spacing: float) -> BoolArray:
         floor = self.centre[2] - self.run_off

@@ -1,0 +1,320 @@
+"""Compiled kernels of a draped net's fields: per-cell geometry, cut-cell shares, node shear.
+
+One pass over the net each, with no whole-net temporaries (a million-cell net's numpy
+temporaries cost more in page faults than in arithmetic). The definitions are those of
+``preform.drape.fields`` (cell shear, centroid, area, fibre directions; node shear) and
+``preform.drape.part`` (a cell's undeformed share inside the part); this module is their only
+implementation, imported when a net's fields are computed, so numba stays out of start-up.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from preform.drape.result import NodeStatus
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+_PLACED = np.int8(NodeStatus.PLACED)
+_HALF_PI = 0.5 * math.pi
+
+_jit = numba.njit(cache=True, error_model="numpy")
+
+
+@_jit
+def _angle(ax: float, ay: float, az: float, bx: float, by: float, bz: float) -> float:
+    """Angle [rad, 0..π] between two vectors; atan2 keeps it accurate near 0 and π too."""
+    cx = ay * bz - az * by
+    cy = az * bx - ax * bz
+    cz = ax * by - ay * bx
+    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
+
+
+@_jit
+def _cross_norm(ax: float, ay: float, az: float, bx: float, by: float, bz: float) -> float:
+    cx = ay * bz - az * by
+    cy = az * bx - ax * bz
+    cz = ax * by - ay * bx
+    return math.sqrt(cx * cx + cy * cy + cz * cz)
+
+
+@_jit
+def _pair_deviation(
+    ax: float,
+    ay: float,
+    az: float,
+    bx: float,
+    by: float,
+    bz: float,
+    cx: float,
+    cy: float,
+    cz: float,
+    dx: float,
+    dy: float,
+    dz: float,
+) -> float:
+    """(ω_ab − 90°) + (ω_cd − 90°) [rad] for the angles ω between a and b and between c and d.
+
+    ω − 90° is the argument of |a×b| − i(a·b), a number in [−90°, 90°] read accurately near
+    0 as near ±90° (as atan2 reads ω itself); two such arguments add up to the argument of the
+    product of the two numbers, which lies in [−180°, 180°], so one atan2 gives the sum. Half
+    the atan2 calls of summing four corner angles one by one, the cell kernel's largest cost."""
+    re1 = _cross_norm(ax, ay, az, bx, by, bz)
+    im1 = -(ax * bx + ay * by + az * bz)
+    re2 = _cross_norm(cx, cy, cz, dx, dy, dz)
+    im2 = -(cx * dx + cy * dy + cz * dz)
+    return math.atan2(re1 * im2 + im1 * re2, re1 * re2 - im1 * im2)
+
+
+@_jit
+def cell_geometry(
+    nodes: FloatArray,
+    valid: BoolArray,
+    shear: FloatArray,
+    centroid: FloatArray,
+    area: FloatArray,
+    fibre_u: FloatArray,
+    fibre_v: FloatArray,
+) -> None:
+    """Fill the cell arrays (ni−1, nj−1[, 3]) from node positions (ni, nj, 3) [m] on the
+    ``valid`` cells (``preform.drape.fields.cell_fields`` for the definitions); other cells get
+    0 (NaN for the centroid)."""
+    ci, cj = valid.shape
+    for i in range(ci):
+        for j in range(cj):
+            if not valid[i, j]:
+                shear[i, j] = 0.0
+                area[i, j] = 0.0
+                for k in range(3):
+                    centroid[i, j, k] = np.nan
+                    fibre_u[i, j, k] = 0.0
+                    fibre_v[i, j, k] = 0.0
+                continue
+            x00, x10 = nodes[i, j], nodes[i + 1, j]
+            x01, x11 = nodes[i, j + 1], nodes[i + 1, j + 1]
+            ulx, uly, ulz = x10[0] - x00[0], x10[1] - x00[1], x10[2] - x00[2]
+            uhx, uhy, uhz = x11[0] - x01[0], x11[1] - x01[1], x11[2] - x01[2]
+            vlx, vly, vlz = x01[0] - x00[0], x01[1] - x00[1], x01[2] - x00[2]
+            vrx, vry, vrz = x11[0] - x10[0], x11[1] - x10[1], x11[2] - x10[2]
+            # γ = mean of the four corner angles ω − 90°, paired across the diagonals so two
+            # atan2 serve four corners (``_pair_deviation``)
+            shear[i, j] = 0.25 * (
+                _pair_deviation(ulx, uly, ulz, vlx, vly, vlz, uhx, uhy, uhz, vrx, vry, vrz)
+                + _pair_deviation(ulx, uly, ulz, vrx, vry, vrz, uhx, uhy, uhz, vlx, vly, vlz)
+            )
+            for k in range(3):
+                centroid[i, j, k] = 0.25 * (x00[k] + x10[k] + x01[k] + x11[k])
+            dx, dy, dz = x11[0] - x00[0], x11[1] - x00[1], x11[2] - x00[2]
+            ax, ay, az = x01[0] - x10[0], x01[1] - x10[1], x01[2] - x10[2]
+            # Split along (i, j)-(i+1, j+1), then along (i+1, j)-(i, j+1); average.
+            split_a = _cross_norm(ulx, uly, ulz, dx, dy, dz) + _cross_norm(
+                dx, dy, dz, vlx, vly, vlz
+            )
+            split_b = _cross_norm(ulx, uly, ulz, ax, ay, az) + _cross_norm(
+                ax, ay, az, vrx, vry, vrz
+            )
+            area[i, j] = 0.25 * (split_a + split_b)
+            sx, sy, sz = ulx + uhx, uly + uhy, ulz + uhz
+            length = math.sqrt(sx * sx + sy * sy + sz * sz)
+            fibre_u[i, j, 0], fibre_u[i, j, 1], fibre_u[i, j, 2] = (
+                sx / length,
+                sy / length,
+                sz / length,
+            )
+            sx, sy, sz = vlx + vrx, vly + vry, vlz + vrz
+            length = math.sqrt(sx * sx + sy * sy + sz * sz)
+            fibre_v[i, j, 0], fibre_v[i, j, 1], fibre_v[i, j, 2] = (
+                sx / length,
+                sy / length,
+                sz / length,
+            )
+
+
+@_jit
+def _before(x: float, y: float) -> bool:
+    """Sort order with NaN last (as numpy sorts)."""
+    return x < y or (math.isnan(y) and not math.isnan(x))
+
+
+@_jit
+def _triangle_share(f0: float, f1: float, f2: float) -> float:
+    """Share (0..1) of a triangle where the linear function with corner values f0, f1, f2 is
+    ≥ 0. With the corners sorted a ≤ b ≤ c the zero set cuts off a corner triangle, whose
+    share is a product of the two edge fractions."""
+    a, b, c = f0, f1, f2
+    if _before(b, a):
+        a, b = b, a
+    if _before(c, b):
+        b, c = c, b
+    if _before(b, a):
+        a, b = b, a
+    if a >= 0.0:
+        return 1.0
+    if b < 0.0 and c >= 0.0:
+        # One corner inside (a ≤ b < 0 ≤ c): the inside is the triangle at c.
+        share = (c / (c - a)) * (c / (c - b))
+        if math.isnan(share):
+            share = 0.0
+    elif a < 0.0 and b >= 0.0:
+        # Two corners inside (a < 0 ≤ b): the outside is the triangle at a.
+        share = 1.0 - (a / (a - b)) * (a / (a - c))
+        if math.isnan(share):
+            share = 1.0
+    else:
+        return 0.0
+    return min(max(share, 0.0), 1.0)
+
+
+@_jit
+def _square_share(f00: float, f10: float, f01: float, f11: float) -> float:
+    """Share (0..1) of a cell's undeformed square inside the part from φ at its corners (i, j),
+    (i+1, j), (i, j+1), (i+1, j+1): the mean of the two ways of splitting it into triangles,
+    each exact for an affine φ (``preform.drape.part``)."""
+    split_a = 0.5 * (_triangle_share(f00, f10, f11) + _triangle_share(f00, f11, f01))
+    split_b = 0.5 * (_triangle_share(f00, f10, f01) + _triangle_share(f10, f11, f01))
+    return 0.5 * (split_a + split_b)
+
+
+@_jit
+def grid_part_share(phi: FloatArray, out: FloatArray) -> None:
+    """:func:`_square_share` of every cell into ``out`` (ni−1, nj−1), φ at the nodes (ni, nj)
+    (outputs are allocated by the caller, where numpy's memory accounting sees them)."""
+    ci, cj = phi.shape[0] - 1, phi.shape[1] - 1
+    for i in range(ci):
+        for j in range(cj):
+            out[i, j] = _square_share(phi[i, j], phi[i + 1, j], phi[i, j + 1], phi[i + 1, j + 1])
+
+
+@_jit
+def corner_part_share(
+    f00: FloatArray, f10: FloatArray, f01: FloatArray, f11: FloatArray
+) -> FloatArray:
+    """:func:`_square_share` elementwise over flat corner arrays."""
+    out = np.empty(f00.shape[0])
+    for i in range(f00.shape[0]):
+        out[i] = _square_share(f00[i], f10[i], f01[i], f11[i])
+    return out
+
+
+@_jit
+def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> None:
+    """Signed shear γ [rad] at every node (ni, nj), NaN where it cannot be formed: the mean of
+    the up to four corner angles ω between the ±u and ±v edges (each taken in its + sense)
+    minus 90° (``preform.drape.fields.node_shear``), written to ``out`` (ni, nj)."""
+    ni, nj = status.shape
+    u = np.empty((2, 3))
+    v = np.empty((2, 3))
+    for i in range(ni):
+        for j in range(nj):
+            if status[i, j] != _PLACED:
+                out[i, j] = np.nan
+                continue
+            have_u = (i + 1 < ni, i > 0)
+            have_v = (j + 1 < nj, j > 0)
+            if have_u[0]:
+                for k in range(3):
+                    u[0, k] = nodes[i + 1, j, k] - nodes[i, j, k]
+            if have_u[1]:
+                for k in range(3):
+                    u[1, k] = nodes[i, j, k] - nodes[i - 1, j, k]
+            if have_v[0]:
+                for k in range(3):
+                    v[0, k] = nodes[i, j + 1, k] - nodes[i, j, k]
+            if have_v[1]:
+                for k in range(3):
+                    v[1, k] = nodes[i, j, k] - nodes[i, j - 1, k]
+            if have_u[0] and have_u[1] and have_v[0] and have_v[1]:
+                interior = True
+                for k in range(3):
+                    interior = interior and math.isfinite(u[0, k]) and math.isfinite(u[1, k])
+                    interior = interior and math.isfinite(v[0, k]) and math.isfinite(v[1, k])
+                if interior:
+                    # all four corners: two atan2 for the four angles, as for a cell
+                    out[i, j] = 0.25 * (
+                        _pair_deviation(
+                            u[0, 0], u[0, 1], u[0, 2], v[0, 0], v[0, 1], v[0, 2],
+                            u[1, 0], u[1, 1], u[1, 2], v[1, 0], v[1, 1], v[1, 2],
+                        )
+                        + _pair_deviation(
+                            u[0, 0], u[0, 1], u[0, 2], v[1, 0], v[1, 1], v[1, 2],
+                            u[1, 0], u[1, 1], u[1, 2], v[0, 0], v[0, 1], v[0, 2],
+                        )
+                    )  # fmt: skip
+                    continue
+            total = 0.0
+            count = 0
+            for p in range(2):
+                if not have_u[p]:
+                    continue
+                for q in range(2):
+                    if not have_v[q]:
+                        continue
+                    omega = _angle(u[p, 0], u[p, 1], u[p, 2], v[q, 0], v[q, 1], v[q, 2])
+                    if math.isfinite(omega):
+                        total += omega
+                        count += 1
+            out[i, j] = total / count - _HALF_PI if count > 0 else np.nan
+
+
+@_jit
+def counted_values(values: FloatArray, counted: BoolArray) -> FloatArray:
+    """``values[counted]`` (flat, in row order) for a law evaluated on counted cells only."""
+    total = 0
+    for i in range(counted.shape[0]):
+        for j in range(counted.shape[1]):
+            if counted[i, j]:
+                total += 1
+    out = np.empty(total)
+    k = 0
+    for i in range(counted.shape[0]):
+        for j in range(counted.shape[1]):
+            if counted[i, j]:
+                out[k] = values[i, j]
+                k += 1
+    return out
+
+
+@_jit
+def energy_cells(
+    shear: FloatArray,
+    counted: BoolArray,
+    law_energy: FloatArray,
+    share: FloatArray,
+    locking: float,
+    failure: float,
+    failure_negative: float,
+    density: FloatArray,
+    thickness_ratio: FloatArray,
+    past_locking: BoolArray,
+    past_failure: BoolArray,
+) -> float:
+    """Fill the energy field's cell arrays and return Σ W·s over the counted cells [J/m²·cell]
+    (``preform.drape.fields.energy_field``): W from ``law_energy`` (the law at the counted
+    cells' shear, in row order), s from ``share`` (the part weight), t/t0 = 1/cos γ, and the
+    cells past the locking (|γ| > locking) and failure angles (γ > failure, or
+    γ < −failure_negative for a stitch that also breaks the other way) [rad] (inf for a law
+    without one). Cells not counted get W = 0, t/t0 = 1 and no flag."""
+    total = 0.0
+    k = 0
+    for i in range(shear.shape[0]):
+        for j in range(shear.shape[1]):
+            if not counted[i, j]:
+                density[i, j] = 0.0
+                thickness_ratio[i, j] = 1.0
+                past_locking[i, j] = False
+                past_failure[i, j] = False
+                continue
+            gamma = shear[i, j]
+            w = law_energy[k]
+            k += 1
+            density[i, j] = w
+            thickness_ratio[i, j] = 1.0 / max(math.cos(gamma), 1e-12)
+            past_locking[i, j] = abs(gamma) > locking
+            past_failure[i, j] = gamma > failure or gamma < -failure_negative
+            total += w * share[i, j]
+    return total
