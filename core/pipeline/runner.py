@@ -204,13 +204,19 @@ def _worker_host(case: Case) -> PluginHost:
 
 #: Libraries the default study's steps import when they first run (its figures and cells.csv):
 #: a process pool's fork server imports them once, so no worker pays them in its first case.
-#: A name that is not installed is skipped. Not scipy nor numba: the default study uses
-#: neither, and each costs a Dask worker seconds (measured 2.0 s and 0.3 s to import).
+#: A name that is not installed is skipped. The compiled net kernels (numba, 0.3 s to import)
+#: are there because every drape runs them; not scipy, which the default study does not use
+#: (2.0 s to import on a Dask worker).
 WORKER_PRELOAD = (
     "matplotlib.figure",
     "matplotlib.backends.backend_agg",
     "mpl_toolkits.mplot3d",
     "pandas",
+    "numba",
+    "preform.drape.net_kernels",
+    "preform.drape.generator_kernels",
+    "preform.drape.field_kernels",
+    "preform.shear.surrogate_kernels",
 )
 
 
