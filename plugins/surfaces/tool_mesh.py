@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from preform.drape.part import Part
-from preform.plugins.surfaces.mesh import TriangleMesh
+from preform.plugins.surfaces.mesh import DEFAULT_FEATURE_ANGLE_DEG, TriangleMesh
 from preform.plugins.surfaces.mesh_hygiene import HygieneReport, RepairedMesh
 
 FloatArray = NDArray[np.float64]
@@ -74,8 +74,14 @@ class ToolMesh(TriangleMesh):
     ) -> None:
         # Hygiene has welded and dropped what TriangleMesh would: nothing is merged again, so
         # the triangles stay in step with their labels.
-        options = {} if feature_angle_deg is None else {"feature_angle_deg": feature_angle_deg}
-        super().__init__(repaired.vertices, repaired.faces, merge_tolerance_rel=0.0, **options)
+        super().__init__(
+            repaired.vertices,
+            repaired.faces,
+            merge_tolerance_rel=0.0,
+            feature_angle_deg=(
+                DEFAULT_FEATURE_ANGLE_DEG if feature_angle_deg is None else feature_angle_deg
+            ),
+        )
         if self.n_triangles != repaired.faces.shape[0]:
             raise ValueError(
                 f"{source.file}: the mesh lost {repaired.faces.shape[0] - self.n_triangles} "
