@@ -66,11 +66,19 @@ class PreformResponse:
         grid = np.radians(np.arange(0.0, math.degrees(MAX_SHEAR), step_deg))
         marks = [flat.locking_angle, flat.jamming_angle, MAX_SHEAR]
         grid = np.unique(np.concatenate([grid, [m for m in marks if 0.0 <= m <= MAX_SHEAR]]))
-        cells = [fabric.sheared_cell(float(g)) for g in grid]
+        # Before the first family locks no tow changes: the thickness is the flat cell's and
+        # the fraction grows as 1/cos γ over the shrinking area (exact in the sheared cell),
+        # so only the angles from locking on need the cell itself (ms each for a satin).
+        free = grid < flat.locking_angle
+        cells = [fabric.sheared_cell(float(g)) for g in grid[~free]]
+        thickness = np.full(grid.shape, flat.thickness)
+        fraction = flat.fibre_volume_fraction / np.cos(grid)
+        thickness[~free] = [c.thickness for c in cells]
+        fraction[~free] = [c.fibre_volume_fraction for c in cells]
         return cls(
             shear=grid,
-            thickness=np.array([c.thickness for c in cells]),
-            fibre_volume_fraction=np.array([c.fibre_volume_fraction for c in cells]),
+            thickness=thickness,
+            fibre_volume_fraction=fraction,
             shares=flat.net_family_shares(),
             filament_radius=flat.filament_radius,
             locking_angle=flat.locking_angle,
