@@ -19,11 +19,18 @@ from preform.drape.result import NodeStatus
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+Vec = tuple[float, float, float]
 
 _PLACED = np.int8(NodeStatus.PLACED)
 _HALF_PI = 0.5 * math.pi
 
 _jit = numba.njit(cache=True, error_model="numpy")
+
+
+@_jit
+def _corner(nodes: FloatArray, i: int, j: int) -> tuple[float, float, float]:
+    """Node (i, j) of an (ni, nj, 3) array as a tuple."""
+    return nodes[i, j, 0], nodes[i, j, 1], nodes[i, j, 2]
 
 
 @_jit
@@ -44,31 +51,39 @@ def _cross_norm(ax: float, ay: float, az: float, bx: float, by: float, bz: float
 
 
 @_jit
-def _pair_deviation(
-    ax: float,
-    ay: float,
-    az: float,
-    bx: float,
-    by: float,
-    bz: float,
-    cx: float,
-    cy: float,
-    cz: float,
-    dx: float,
-    dy: float,
-    dz: float,
-) -> float:
-    """(ω_ab − 90°) + (ω_cd − 90°) [rad] for the angles ω between a and b and between c and d.
+def _pair_number(a: Vec, b: Vec, c: Vec, d: Vec):
+    """(re, im) of the product of |a×b| − i(a·b) and |c×d| − i(c·d): its argument is
+    (ω_ab − 90°) + (ω_cd − 90°) for the angles ω between a and b and between c and d.
 
     ω − 90° is the argument of |a×b| − i(a·b), a number in [−90°, 90°] read accurately near
     0 as near ±90° (as atan2 reads ω itself); two such arguments add up to the argument of the
-    product of the two numbers, which lies in [−180°, 180°], so one atan2 gives the sum. Half
-    the atan2 calls of summing four corner angles one by one, the cell kernel's largest cost."""
-    re1 = _cross_norm(ax, ay, az, bx, by, bz)
-    im1 = -(ax * bx + ay * by + az * bz)
-    re2 = _cross_norm(cx, cy, cz, dx, dy, dz)
-    im2 = -(cx * dx + cy * dy + cz * dz)
-    return math.atan2(re1 * im2 + im1 * re2, re1 * re2 - im1 * im2)
+    product of the two numbers, which lies in [−180°, 180°]."""
+    re1 = _cross_norm(a[0], a[1], a[2], b[0], b[1], b[2])
+    im1 = -(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+    re2 = _cross_norm(c[0], c[1], c[2], d[0], d[1], d[2])
+    im2 = -(c[0] * d[0] + c[1] * d[1] + c[2] * d[2])
+    return re1 * re2 - im1 * im2, re1 * im2 + im1 * re2
+
+
+@_jit
+def _four_corner_deviation(u0: Vec, v0: Vec, u1: Vec, v1: Vec) -> float:
+    """Σ (ω − 90°) [rad] over the four corners (u0, v0), (u1, v1), (u0, v1), (u1, v0).
+
+    The corners are paired across the diagonals (``_pair_number``); when both pairs' sums lie
+    within ±90° (positive real parts: a shear below 45° on either diagonal, every cell of a
+    drape that has not locked) the whole sum lies within ±180° and is the argument of the
+    product of the two pair numbers, one atan2 for four corners, the cell kernels' largest
+    cost; else one atan2 per pair. The pairs multiply in either order to the same bits, so a
+    mirrored net still gets the mirrored sum."""
+    ra, ia = _pair_number(u0, v0, u1, v1)
+    rb, ib = _pair_number(u0, v1, u1, v0)
+    if ra > 0.0 and rb > 0.0:
+        re = ra * rb - ia * ib
+        im = ra * ib + ia * rb
+        # the product of four corner numbers, each |a||b|: keep clear of underflow
+        if abs(re) + abs(im) > 1e-280:
+            return math.atan2(im, re)
+    return math.atan2(ia, ra) + math.atan2(ib, rb)
 
 
 @_jit
@@ -95,17 +110,16 @@ def cell_geometry(
                     fibre_u[i, j, k] = 0.0
                     fibre_v[i, j, k] = 0.0
                 continue
-            x00, x10 = nodes[i, j], nodes[i + 1, j]
-            x01, x11 = nodes[i, j + 1], nodes[i + 1, j + 1]
+            # corners as tuples, not array views (a view is reference counted per cell)
+            x00, x10 = _corner(nodes, i, j), _corner(nodes, i + 1, j)
+            x01, x11 = _corner(nodes, i, j + 1), _corner(nodes, i + 1, j + 1)
             ulx, uly, ulz = x10[0] - x00[0], x10[1] - x00[1], x10[2] - x00[2]
             uhx, uhy, uhz = x11[0] - x01[0], x11[1] - x01[1], x11[2] - x01[2]
             vlx, vly, vlz = x01[0] - x00[0], x01[1] - x00[1], x01[2] - x00[2]
             vrx, vry, vrz = x11[0] - x10[0], x11[1] - x10[1], x11[2] - x10[2]
-            # γ = mean of the four corner angles ω − 90°, paired across the diagonals so two
-            # atan2 serve four corners (``_pair_deviation``)
-            shear[i, j] = 0.25 * (
-                _pair_deviation(ulx, uly, ulz, vlx, vly, vlz, uhx, uhy, uhz, vrx, vry, vrz)
-                + _pair_deviation(ulx, uly, ulz, vrx, vry, vrz, uhx, uhy, uhz, vlx, vly, vlz)
+            # γ = mean of the four corner angles ω − 90°
+            shear[i, j] = 0.25 * _four_corner_deviation(
+                (ulx, uly, ulz), (vlx, vly, vlz), (uhx, uhy, uhz), (vrx, vry, vrz)
             )
             for k in range(3):
                 centroid[i, j, k] = 0.25 * (x00[k] + x10[k] + x01[k] + x11[k])
@@ -234,16 +248,10 @@ def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> 
                     interior = interior and math.isfinite(u[0, k]) and math.isfinite(u[1, k])
                     interior = interior and math.isfinite(v[0, k]) and math.isfinite(v[1, k])
                 if interior:
-                    # all four corners: two atan2 for the four angles, as for a cell
-                    out[i, j] = 0.25 * (
-                        _pair_deviation(
-                            u[0, 0], u[0, 1], u[0, 2], v[0, 0], v[0, 1], v[0, 2],
-                            u[1, 0], u[1, 1], u[1, 2], v[1, 0], v[1, 1], v[1, 2],
-                        )
-                        + _pair_deviation(
-                            u[0, 0], u[0, 1], u[0, 2], v[1, 0], v[1, 1], v[1, 2],
-                            u[1, 0], u[1, 1], u[1, 2], v[0, 0], v[0, 1], v[0, 2],
-                        )
+                    # all four corners, as for a cell
+                    out[i, j] = 0.25 * _four_corner_deviation(
+                        (u[0, 0], u[0, 1], u[0, 2]), (v[0, 0], v[0, 1], v[0, 2]),
+                        (u[1, 0], u[1, 1], u[1, 2]), (v[1, 0], v[1, 1], v[1, 2]),
                     )  # fmt: skip
                     continue
             total = 0.0
