@@ -20,7 +20,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from preform.drape import fields as fields_module
 from preform.drape import steps as steps_module
-from preform.drape.fields import cell_status
 from preform.drape.generators import (
     ClosedFormGeodesics,
     GeneratorNodes,
@@ -449,6 +448,23 @@ def _stack_unit(a: Vec, valid: BoolArray) -> FloatArray:
     out = np.zeros((*length.shape, 3))
     for k in range(3):
         np.divide(a[k], length, out=out[..., k], where=valid)
+    return out
+
+
+def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
+    """CellStatus per cell from its corners' NodeStatus (numpy, as before the kernels)."""
+    corners = [status[:-1, :-1], status[1:, :-1], status[:-1, 1:], status[1:, 1:]]
+    out = np.full(corners[0].shape, CellStatus.VALID, dtype=np.int8)
+    missing = np.zeros(out.shape, dtype=bool)
+    folded = np.zeros(out.shape, dtype=bool)
+    outside = np.zeros(out.shape, dtype=bool)
+    for corner in corners:
+        missing |= corner != NodeStatus.PLACED
+        folded |= corner == NodeStatus.FOLDED
+        outside |= corner == NodeStatus.OUTSIDE_PLY
+    out[missing] = CellStatus.INCOMPLETE
+    out[folded] = CellStatus.FOLDED
+    out[outside] = CellStatus.OUTSIDE_PLY
     return out
 
 

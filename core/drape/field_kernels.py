@@ -15,13 +15,19 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import NodeStatus
+from preform.drape.result import CellStatus, NodeStatus
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 Vec = tuple[float, float, float]
 
 _PLACED = np.int8(NodeStatus.PLACED)
+_NODE_FOLDED = np.int8(NodeStatus.FOLDED)
+_NODE_OUTSIDE = np.int8(NodeStatus.OUTSIDE_PLY)
+_VALID = np.int8(CellStatus.VALID)
+_INCOMPLETE = np.int8(CellStatus.INCOMPLETE)
+_CELL_FOLDED = np.int8(CellStatus.FOLDED)
+_CELL_OUTSIDE = np.int8(CellStatus.OUTSIDE_PLY)
 _HALF_PI = 0.5 * math.pi
 
 _jit = numba.njit(cache=True, error_model="numpy")
@@ -195,13 +201,40 @@ def _square_share(f00: float, f10: float, f01: float, f11: float) -> float:
 
 
 @_jit
-def grid_part_share(phi: FloatArray, out: FloatArray) -> None:
-    """:func:`_square_share` of every cell into ``out`` (ni−1, nj−1), φ at the nodes (ni, nj)
-    (outputs are allocated by the caller, where numpy's memory accounting sees them)."""
+def grid_part_share(phi: FloatArray, valid: BoolArray, out: FloatArray) -> None:
+    """:func:`_square_share` of every ``valid`` cell into ``out`` (ni−1, nj−1), φ at the nodes
+    (ni, nj); 0 for other cells and where φ is NaN (outputs are allocated by the caller, where
+    numpy's memory accounting sees them)."""
     ci, cj = phi.shape[0] - 1, phi.shape[1] - 1
     for i in range(ci):
         for j in range(cj):
-            out[i, j] = _square_share(phi[i, j], phi[i + 1, j], phi[i, j + 1], phi[i + 1, j + 1])
+            if not valid[i, j]:
+                out[i, j] = 0.0
+                continue
+            share = _square_share(phi[i, j], phi[i + 1, j], phi[i, j + 1], phi[i + 1, j + 1])
+            out[i, j] = 0.0 if math.isnan(share) else share
+
+
+@_jit
+def cell_status_codes(status: NDArray[np.int8], out: NDArray[np.int8]) -> None:
+    """CellStatus (ni−1, nj−1) into ``out`` from the NodeStatus of the corners (ni, nj), with
+    the precedence of ``preform.drape.fields.cell_status``: OUTSIDE_PLY, FOLDED, INCOMPLETE,
+    VALID."""
+    for i in range(status.shape[0] - 1):
+        for j in range(status.shape[1] - 1):
+            missing = folded = outside = False
+            for corner in (status[i, j], status[i + 1, j], status[i, j + 1], status[i + 1, j + 1]):
+                missing |= corner != _PLACED
+                folded |= corner == _NODE_FOLDED
+                outside |= corner == _NODE_OUTSIDE
+            if outside:
+                out[i, j] = _CELL_OUTSIDE
+            elif folded:
+                out[i, j] = _CELL_FOLDED
+            elif missing:
+                out[i, j] = _INCOMPLETE
+            else:
+                out[i, j] = _VALID
 
 
 @_jit

@@ -38,18 +38,11 @@ def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
     turning the net over; each cell is completed by exactly one node, its corner farthest from
     the start, so this is the cell that folds), INCOMPLETE (another corner missing), VALID.
     """
-    corners = [status[:-1, :-1], status[1:, :-1], status[:-1, 1:], status[1:, 1:]]
-    out = np.full(corners[0].shape, CellStatus.VALID, dtype=np.int8)
-    missing = np.zeros(out.shape, dtype=bool)
-    folded = np.zeros(out.shape, dtype=bool)
-    outside = np.zeros(out.shape, dtype=bool)
-    for corner in corners:
-        missing |= corner != NodeStatus.PLACED
-        folded |= corner == NodeStatus.FOLDED
-        outside |= corner == NodeStatus.OUTSIDE_PLY
-    out[missing] = CellStatus.INCOMPLETE
-    out[folded] = CellStatus.FOLDED
-    out[outside] = CellStatus.OUTSIDE_PLY
+    from preform.drape import field_kernels
+
+    status = np.ascontiguousarray(status, dtype=np.int8)
+    out = np.empty((max(status.shape[0] - 1, 0), max(status.shape[1] - 1, 0)), dtype=np.int8)
+    field_kernels.cell_status_codes(status, out)
     return out
 
 
@@ -80,18 +73,18 @@ def cell_fields(
         np.ascontiguousarray(nodes, dtype=float), valid, shear, centroid, area, fibre_u, fibre_v
     )
     in_part = valid.copy()
-    share = valid.astype(float)
     if isinstance(trim, Part):
         # Cut cells count by their undeformed area inside the part (preform.drape.part).
         with np.errstate(invalid="ignore"):
             phi = np.asarray(trim.level(nodes), dtype=float)
-            cut = np.empty(shape)
-            field_kernels.grid_part_share(np.ascontiguousarray(phi), cut)
-        share = np.where(valid, np.nan_to_num(cut, nan=0.0), 0.0)
+        share = np.empty(shape)
+        field_kernels.grid_part_share(np.ascontiguousarray(phi), valid, share)
         in_part &= share > 0.0
     elif trim is not None and valid.any():
         in_part[valid] &= np.asarray(trim(centroid[valid]), dtype=bool)
         share = in_part.astype(float)
+    else:
+        share = valid.astype(float)
     return {
         "part_share": share,
         "cell_status": c_status,
