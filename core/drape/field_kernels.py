@@ -31,9 +31,12 @@ _CELL_OUTSIDE = np.int8(CellStatus.OUTSIDE_PLY)
 _HALF_PI = 0.5 * math.pi
 
 _jit = numba.njit(cache=True, error_model="numpy")
+# Steps that take an array are inlined into their loop (numba's own inlining): an array handed
+# to a function that is not inlined is reference counted, an atomic add and subtract, per call.
+_per_cell = numba.njit(cache=True, error_model="numpy", inline="always")
 
 
-@_jit
+@_per_cell
 def _corner(nodes: FloatArray, i: int, j: int) -> tuple[float, float, float]:
     """Node (i, j) of an (ni, nj, 3) array as a tuple."""
     return nodes[i, j, 0], nodes[i, j, 1], nodes[i, j, 2]
