@@ -72,14 +72,12 @@ def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
     Per quadrant around the start node, a running OR along both indices away from the start:
     node (a, b) of a quadrant depends on exactly the nodes (a', b') with a' ≤ a, b' ≤ b.
     """
-    i0, j0 = start
-    out = np.zeros_like(mask, dtype=bool)
-    rows = (slice(i0, None), slice(i0, None, -1))
-    cols = (slice(j0, None), slice(j0, None, -1))
-    for r in rows:
-        for c in cols:
-            part = np.logical_or.accumulate(np.logical_or.accumulate(mask[r, c], axis=0), axis=1)
-            out[r, c] |= part
+    from preform.drape import field_kernels
+
+    out = np.empty(np.shape(mask), dtype=bool)
+    field_kernels.dependency_shadow(
+        np.ascontiguousarray(mask, dtype=bool), int(start[0]), int(start[1]), out
+    )
     return out
 
 
