@@ -3,8 +3,9 @@ speed ratios in ``bench_kernels.py``, measured in the same process.
 
 A frozen copy, reachable only from the benchmarks (never imported by preform or its tests): the
 wavefront fill with the sphere's vectorised closed form and the vectorised Newton placement,
-the cell fields, the node shear, the cut-cell share and the surrogate's Hermite evaluation,
-each as numpy code vectorised over a front or over the net. :func:`numpy_path` swaps them into
+the cell fields and cell status, the node shear, the cut-cell share, the surrogate's Hermite
+evaluation and the coverage's dependency shadow, each as numpy code vectorised over a front or
+over the net. :func:`numpy_path` swaps them into
 the drape step for the duration of a ``with`` block.
 """
 
@@ -20,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from preform.drape import fields as fields_module
 from preform.drape import steps as steps_module
+from preform.drape import verdict as verdict_module
 from preform.drape.generators import (
     ClosedFormGeodesics,
     GeneratorNodes,
@@ -961,6 +963,19 @@ def surrogate_energy(self: Any, gamma: ArrayLike) -> FloatArray:
     return np.where(g >= 0, _sense_energy(self._positive, u), _sense_energy(self._negative, u))
 
 
+def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
+    """``preform.drape.verdict.dependency_shadow`` as numpy accumulates (as before the kernels)."""
+    i0, j0 = start
+    out = np.zeros_like(mask, dtype=bool)
+    rows = (slice(i0, None), slice(i0, None, -1))
+    cols = (slice(j0, None), slice(j0, None, -1))
+    for r in rows:
+        for c in cols:
+            part = np.logical_or.accumulate(np.logical_or.accumulate(mask[r, c], axis=0), axis=1)
+            out[r, c] |= part
+    return out
+
+
 @contextlib.contextmanager
 def numpy_path() -> Iterator[None]:
     """Run the drape step (``preform.drape.steps.run_drape``) on this module's numpy code."""
@@ -969,11 +984,13 @@ def numpy_path() -> Iterator[None]:
         steps_module.energy_field,
         fields_module.node_shear,
         surrogate_module.TabulatedSurrogate.energy,
+        verdict_module.dependency_shadow,
     )
     steps_module.drape = drape  # type: ignore[assignment]
     steps_module.energy_field = energy_field
     fields_module.node_shear = node_shear
     surrogate_module.TabulatedSurrogate.energy = surrogate_energy  # type: ignore[method-assign]
+    verdict_module.dependency_shadow = dependency_shadow
     try:
         yield
     finally:
@@ -982,4 +999,5 @@ def numpy_path() -> Iterator[None]:
             steps_module.energy_field,
             fields_module.node_shear,
             surrogate_module.TabulatedSurrogate.energy,
+            verdict_module.dependency_shadow,
         ) = saved  # type: ignore[assignment]
