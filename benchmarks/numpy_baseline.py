@@ -3,10 +3,10 @@ speed ratios in ``bench_kernels.py``, measured in the same process.
 
 A frozen copy, reachable only from the benchmarks (never imported by preform or its tests): the
 wavefront fill with the sphere's vectorised closed form and the vectorised Newton placement,
-the cell fields and cell status, the node shear, the cut-cell share, the surrogate's Hermite
-evaluation and the coverage's dependency shadow, each as numpy code vectorised over a front or
-over the net. :func:`numpy_path` swaps them into
-the drape step for the duration of a ``with`` block.
+the cell fields and cell status, the node shear and the shear extremes, the cut-cell share,
+the surrogate's Hermite evaluation and the coverage's dependency shadow, each as numpy code
+vectorised over a front or over the net. :func:`numpy_path` swaps them into the drape step for
+the duration of a ``with`` block.
 """
 
 from __future__ import annotations
@@ -976,6 +976,22 @@ def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
     return out
 
 
+def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
+    """``preform.drape.fields.extremes`` in numpy, on this module's node shear (as before the
+    kernels)."""
+    counted = result.valid & result.in_part
+    cells = np.abs(result.shear[counted])
+    gamma = node_shear(result)
+    inside = np.isfinite(gamma)
+    if part is not None:
+        inside &= part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0))
+    nodes = np.abs(gamma[inside])
+    return {
+        "max_abs_shear_cells_deg": float(np.degrees(cells.max())) if cells.size else 0.0,
+        "max_abs_shear_nodes_deg": float(np.degrees(nodes.max())) if nodes.size else 0.0,
+    }
+
+
 @contextlib.contextmanager
 def numpy_path() -> Iterator[None]:
     """Run the drape step (``preform.drape.steps.run_drape``) on this module's numpy code."""
@@ -983,12 +999,14 @@ def numpy_path() -> Iterator[None]:
         steps_module.drape,
         steps_module.energy_field,
         fields_module.node_shear,
+        fields_module.extremes,
         surrogate_module.TabulatedSurrogate.energy,
         verdict_module.dependency_shadow,
     )
     steps_module.drape = drape  # type: ignore[assignment]
     steps_module.energy_field = energy_field
     fields_module.node_shear = node_shear
+    fields_module.extremes = extremes
     surrogate_module.TabulatedSurrogate.energy = surrogate_energy  # type: ignore[method-assign]
     verdict_module.dependency_shadow = dependency_shadow
     try:
@@ -998,6 +1016,7 @@ def numpy_path() -> Iterator[None]:
             steps_module.drape,
             steps_module.energy_field,
             fields_module.node_shear,
+            fields_module.extremes,
             surrogate_module.TabulatedSurrogate.energy,
             verdict_module.dependency_shadow,
         ) = saved  # type: ignore[assignment]

@@ -194,16 +194,27 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     - ``max_abs_shear_nodes_deg``: over the placed nodes inside ``part`` (every placed node
       when None), the shear at the node (:func:`node_shear`), which reaches the part's edge.
     """
-    counted = result.valid & result.in_part
-    cells = np.abs(result.shear[counted])
-    gamma = node_shear(result)
-    inside = np.isfinite(gamma)
+    from preform.drape import field_kernels
+
+    counted = np.ascontiguousarray(result.valid & result.in_part)
+    status = np.ascontiguousarray(result.status, dtype=np.int8)
     if part is not None:
-        inside &= part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0))
-    nodes = np.abs(gamma[inside])
+        inside = np.asarray(
+            part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0)), dtype=bool
+        )
+    else:
+        inside = np.ones(status.shape, dtype=bool)
+    # one compiled pass each, the node shear not kept (:func:`node_shear` for the field)
+    cells, nodes = field_kernels.shear_extremes(
+        np.ascontiguousarray(result.shear, dtype=float),
+        counted,
+        np.ascontiguousarray(result.nodes, dtype=float),
+        status,
+        np.ascontiguousarray(inside),
+    )
     return {
-        "max_abs_shear_cells_deg": float(np.degrees(cells.max())) if cells.size else 0.0,
-        "max_abs_shear_nodes_deg": float(np.degrees(nodes.max())) if nodes.size else 0.0,
+        "max_abs_shear_cells_deg": float(np.degrees(cells)),
+        "max_abs_shear_nodes_deg": float(np.degrees(nodes)),
     }
 
 
