@@ -251,75 +251,66 @@ def corner_part_share(
     return out
 
 
-@_per_cell
-def _node_shear_at(nodes: FloatArray, i: int, j: int, u: FloatArray, v: FloatArray) -> float:
-    """Signed shear γ [rad] at placed node (i, j), NaN where it cannot be formed: the mean of
-    the up to four corner angles ω between the ±u and ±v edges (each taken in its + sense)
-    minus 90° (``preform.drape.fields.node_shear``). ``u``, ``v`` (2, 3): scratch."""
-    ni, nj = nodes.shape[0], nodes.shape[1]
-    have_u = (i + 1 < ni, i > 0)
-    have_v = (j + 1 < nj, j > 0)
-    if have_u[0]:
-        for k in range(3):
-            u[0, k] = nodes[i + 1, j, k] - nodes[i, j, k]
-    if have_u[1]:
-        for k in range(3):
-            u[1, k] = nodes[i, j, k] - nodes[i - 1, j, k]
-    if have_v[0]:
-        for k in range(3):
-            v[0, k] = nodes[i, j + 1, k] - nodes[i, j, k]
-    if have_v[1]:
-        for k in range(3):
-            v[1, k] = nodes[i, j, k] - nodes[i, j - 1, k]
-    if have_u[0] and have_u[1] and have_v[0] and have_v[1]:
-        interior = True
-        for k in range(3):
-            interior = interior and math.isfinite(u[0, k]) and math.isfinite(u[1, k])
-            interior = interior and math.isfinite(v[0, k]) and math.isfinite(v[1, k])
-        if interior:
-            # all four corners, as for a cell
-            return 0.25 * _four_corner_deviation(
-                (u[0, 0], u[0, 1], u[0, 2]), (v[0, 0], v[0, 1], v[0, 2]),
-                (u[1, 0], u[1, 1], u[1, 2]), (v[1, 0], v[1, 1], v[1, 2]),
-            )  # fmt: skip
-    total = 0.0
-    count = 0
-    for p in range(2):
-        if not have_u[p]:
-            continue
-        for q in range(2):
-            if not have_v[q]:
-                continue
-            omega = _angle(u[p, 0], u[p, 1], u[p, 2], v[q, 0], v[q, 1], v[q, 2])
-            if math.isfinite(omega):
-                total += omega
-                count += 1
-    return total / count - _HALF_PI if count > 0 else np.nan
-
-
 @_jit
 def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> None:
-    """:func:`_node_shear_at` at every node (ni, nj) into ``out``, NaN where not placed."""
+    """Signed shear γ [rad] at every node (ni, nj), NaN where it cannot be formed: the mean of
+    the up to four corner angles ω between the ±u and ±v edges (each taken in its + sense)
+    minus 90° (``preform.drape.fields.node_shear``), written to ``out`` (ni, nj)."""
     ni, nj = status.shape
     u = np.empty((2, 3))
     v = np.empty((2, 3))
     for i in range(ni):
         for j in range(nj):
-            out[i, j] = _node_shear_at(nodes, i, j, u, v) if status[i, j] == _PLACED else np.nan
+            if status[i, j] != _PLACED:
+                out[i, j] = np.nan
+                continue
+            have_u = (i + 1 < ni, i > 0)
+            have_v = (j + 1 < nj, j > 0)
+            if have_u[0]:
+                for k in range(3):
+                    u[0, k] = nodes[i + 1, j, k] - nodes[i, j, k]
+            if have_u[1]:
+                for k in range(3):
+                    u[1, k] = nodes[i, j, k] - nodes[i - 1, j, k]
+            if have_v[0]:
+                for k in range(3):
+                    v[0, k] = nodes[i, j + 1, k] - nodes[i, j, k]
+            if have_v[1]:
+                for k in range(3):
+                    v[1, k] = nodes[i, j, k] - nodes[i, j - 1, k]
+            if have_u[0] and have_u[1] and have_v[0] and have_v[1]:
+                interior = True
+                for k in range(3):
+                    interior = interior and math.isfinite(u[0, k]) and math.isfinite(u[1, k])
+                    interior = interior and math.isfinite(v[0, k]) and math.isfinite(v[1, k])
+                if interior:
+                    # all four corners, as for a cell
+                    out[i, j] = 0.25 * _four_corner_deviation(
+                        (u[0, 0], u[0, 1], u[0, 2]), (v[0, 0], v[0, 1], v[0, 2]),
+                        (u[1, 0], u[1, 1], u[1, 2]), (v[1, 0], v[1, 1], v[1, 2]),
+                    )  # fmt: skip
+                    continue
+            total = 0.0
+            count = 0
+            for p in range(2):
+                if not have_u[p]:
+                    continue
+                for q in range(2):
+                    if not have_v[q]:
+                        continue
+                    omega = _angle(u[p, 0], u[p, 1], u[p, 2], v[q, 0], v[q, 1], v[q, 2])
+                    if math.isfinite(omega):
+                        total += omega
+                        count += 1
+            out[i, j] = total / count - _HALF_PI if count > 0 else np.nan
 
 
 @_jit
-def shear_extremes(
-    shear: FloatArray,
-    counted: BoolArray,
-    nodes: FloatArray,
-    status: NDArray[np.int8],
-    in_part: BoolArray,
-):
-    """(largest |γ| over the ``counted`` cells, largest |γ| over the placed nodes ``in_part``
-    where the node shear can be formed) [rad], 0 where there is none and NaN when a counted
-    cell's shear is NaN (as numpy's max): ``preform.drape.fields.extremes`` without the node
-    shear array."""
+def shear_extremes(shear: FloatArray, counted: BoolArray, gamma: FloatArray, in_part: BoolArray):
+    """(largest |γ| over the ``counted`` cells' shear, largest |γ| over the node shear
+    ``gamma`` at nodes ``in_part`` where it is finite) [rad], 0 where there is none and NaN
+    when a counted cell's shear is NaN (as numpy's max): ``preform.drape.fields.extremes``
+    without the boolean-indexed copies."""
     cells = 0.0
     for i in range(shear.shape[0]):
         for j in range(shear.shape[1]):
@@ -330,14 +321,11 @@ def shear_extremes(
                 elif value > cells:
                     cells = value
     largest = 0.0
-    u = np.empty((2, 3))
-    v = np.empty((2, 3))
-    for i in range(status.shape[0]):
-        for j in range(status.shape[1]):
-            if status[i, j] == _PLACED and in_part[i, j]:
-                value = abs(_node_shear_at(nodes, i, j, u, v))
-                if value > largest:  # NaN (no shear formed) is not a node's extreme
-                    largest = value
+    for i in range(gamma.shape[0]):
+        for j in range(gamma.shape[1]):
+            value = abs(gamma[i, j])
+            if in_part[i, j] and value > largest:  # NaN: no shear formed there
+                largest = value
     return cells, largest
 
 

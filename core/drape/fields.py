@@ -197,19 +197,17 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     from preform.drape import field_kernels
 
     counted = np.ascontiguousarray(result.valid & result.in_part)
-    status = np.ascontiguousarray(result.status, dtype=np.int8)
     if part is not None:
         inside = np.asarray(
             part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0)), dtype=bool
         )
     else:
-        inside = np.ones(status.shape, dtype=bool)
-    # one compiled pass each, the node shear not kept (:func:`node_shear` for the field)
+        inside = np.ones(np.shape(result.status), dtype=bool)
+    # the largest values in one compiled pass, without boolean-indexed copies
     cells, nodes = field_kernels.shear_extremes(
         np.ascontiguousarray(result.shear, dtype=float),
         counted,
-        np.ascontiguousarray(result.nodes, dtype=float),
-        status,
+        node_shear(result),
         np.ascontiguousarray(inside),
     )
     return {
