@@ -4,7 +4,7 @@ speed ratios in ``bench_kernels.py``, measured in the same process.
 A frozen copy, reachable only from the benchmarks (never imported by preform or its tests): the
 wavefront fill with the sphere's vectorised closed form and the vectorised Newton placement,
 the cell fields and cell status, the node shear and the shear extremes, the cut-cell share,
-the surrogate's Hermite evaluation and the coverage's dependency shadow, each as numpy code
+the surrogate's Hermite evaluation and the coverage with its dependency shadows, each as numpy code
 vectorised over a front or over the net. :func:`numpy_path` swaps them into the drape step for
 the duration of a ``with`` block.
 """
@@ -42,6 +42,12 @@ from preform.drape.part import Part
 from preform.drape.ply import PlyOutline
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.drape.surface import Surface
+from preform.drape.verdict import (
+    Coverage,
+    _fold_zones,
+    flat_plan_positions,
+    generator_stops_on_tool,
+)
 from preform.plugins.surfaces.basic import Hemisphere, Sphere
 from preform.shear import surrogate as surrogate_module
 from preform.shear.law import ShearLaw
@@ -992,6 +998,102 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     }
 
 
+def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float]) -> Coverage:
+    """``preform.drape.verdict.coverage`` as it was before the kernels: the plan positions of
+    every node, the dependency shadows as numpy accumulates."""
+    status = result.status
+    placed = status == NodeStatus.PLACED
+    in_ply = status != NodeStatus.OUTSIDE_PLY
+    start = result.start_index
+    stopped = generator_stops_on_tool(result, surface)
+    edge = (status == NodeStatus.OFF_TOOL) & ~stopped
+    past_edge = ~placed & in_ply & dependency_shadow(edge, start)
+    failed = (status == NodeStatus.NO_INTERSECTION) | (status == NodeStatus.FOLDED) | stopped
+    behind_failure = dependency_shadow(failed, start)
+    behind_outline = dependency_shadow(~in_ply, start)
+    lost = ~placed & in_ply & ~past_edge
+
+    plan = flat_plan_positions(result, start_xy_m)
+    over = np.zeros(status.shape, dtype=bool)
+    if lost.any():
+        _, mask = surface.point_at_plan(plan[lost])
+        over[lost] = np.asarray(mask, dtype=bool)
+    missing = lost & over
+    not_reached = missing & (status == NodeStatus.NOT_REACHED)
+    # The failed nodes themselves are counted wherever they lie (they say why the net stopped);
+    # the nodes behind them only where they lie over the tool (they are the coverage lost).
+    counts = {
+        "stopped_on_tool": int(np.count_nonzero(lost & stopped)),
+        "no_intersection": int(np.count_nonzero(lost & (status == NodeStatus.NO_INTERSECTION))),
+        "folded": int(np.count_nonzero(lost & (status == NodeStatus.FOLDED))),
+        "not_reached_behind_failure": int(np.count_nonzero(not_reached & behind_failure)),
+        "not_reached_behind_outline": int(
+            np.count_nonzero(not_reached & ~behind_failure & behind_outline)
+        ),
+    }
+    # A node that is missing for none of these reasons would be an engine bug; say so rather
+    # than let it pass as coverage.
+    other = int(np.count_nonzero(not_reached & ~behind_failure & ~behind_outline))
+    if other:
+        counts["not_reached_unexplained"] = other
+
+    # Cells: valid ones are covered; a non-valid cell inside the ply is asked for when one of
+    # its corners is missing and none is past the edge (so complete ⇔ nothing missing).
+    valid = result.cell_status == CellStatus.VALID
+    cell_in_ply = result.cell_status != CellStatus.OUTSIDE_PLY
+    edge_corner = past_edge[:-1, :-1] | past_edge[1:, :-1] | past_edge[:-1, 1:] | past_edge[1:, 1:]
+    missing_corner = missing[:-1, :-1] | missing[1:, :-1] | missing[:-1, 1:] | missing[1:, 1:]
+    asked = valid | (cell_in_ply & ~edge_corner & missing_corner)
+
+    # Uncovered fabric area by cause: each missing cell (asked, not valid) is d² of undeformed
+    # fabric, given to the first cause among its corners in this order.
+    lost_cells = asked & ~valid
+    causes = (
+        ("folded", lost & (status == NodeStatus.FOLDED)),
+        ("no_intersection", lost & (status == NodeStatus.NO_INTERSECTION)),
+        ("stopped_on_tool", lost & stopped),
+        ("behind_failure", missing & behind_failure),
+        ("behind_outline", missing & behind_outline),
+    )
+    uncovered: dict[str, float] = {}
+    left = lost_cells.copy()
+    for name, node_mask in causes:
+        corner = node_mask[:-1, :-1] | node_mask[1:, :-1] | node_mask[:-1, 1:] | node_mask[1:, 1:]
+        mine = left & corner
+        uncovered[name] = float(np.count_nonzero(mine)) * result.node_spacing**2
+        left &= ~mine
+    if left.any():
+        uncovered["other"] = float(np.count_nonzero(left)) * result.node_spacing**2
+
+    # The fold zone is all the fabric lost behind a fold, also where it would have hung past
+    # the tool's plan (a vertex's shadow on a tool with vertical walls lies wholly there).
+    fold_nodes = lost & dependency_shadow(status == NodeStatus.FOLDED, start)
+    fold_corner = (
+        fold_nodes[:-1, :-1] | fold_nodes[1:, :-1] | fold_nodes[:-1, 1:] | fold_nodes[1:, 1:]
+    )
+    zones = _fold_zones(
+        cell_in_ply & ~valid & ~edge_corner & fold_corner, plan, result.node_spacing
+    )
+
+    first: tuple[float, float] | None = None
+    if missing.any():
+        i0, j0 = start
+        ii, jj = np.nonzero(missing)
+        k = int(np.argmin(np.abs(ii - i0) + np.abs(jj - j0)))
+        first = (float(plan[ii[k], jj[k], 0]), float(plan[ii[k], jj[k], 1]))
+    return Coverage(
+        cells_asked=int(np.count_nonzero(asked)),
+        cells_covered=int(np.count_nonzero(valid)),
+        missing_nodes=counts,
+        nodes_overhang=int(np.count_nonzero(past_edge | (lost & ~over))),
+        nodes_missing=int(np.count_nonzero(missing)),
+        first_missing_xy_m=first,
+        node_spacing_m=result.node_spacing,
+        uncovered_area_m2=uncovered,
+        fold_zones=zones,
+    )
+
+
 @contextlib.contextmanager
 def numpy_path() -> Iterator[None]:
     """Run the drape step (``preform.drape.steps.run_drape``) on this module's numpy code."""
@@ -1002,6 +1104,7 @@ def numpy_path() -> Iterator[None]:
         fields_module.extremes,
         surrogate_module.TabulatedSurrogate.energy,
         verdict_module.dependency_shadow,
+        steps_module.coverage,
     )
     steps_module.drape = drape  # type: ignore[assignment]
     steps_module.energy_field = energy_field
@@ -1009,6 +1112,7 @@ def numpy_path() -> Iterator[None]:
     fields_module.extremes = extremes
     surrogate_module.TabulatedSurrogate.energy = surrogate_energy  # type: ignore[method-assign]
     verdict_module.dependency_shadow = dependency_shadow
+    steps_module.coverage = coverage
     try:
         yield
     finally:
@@ -1019,4 +1123,5 @@ def numpy_path() -> Iterator[None]:
             fields_module.extremes,
             surrogate_module.TabulatedSurrogate.energy,
             verdict_module.dependency_shadow,
+            steps_module.coverage,
         ) = saved  # type: ignore[assignment]

@@ -169,6 +169,20 @@ def flat_plan_positions(result: DrapeResult, start_xy_m: tuple[float, float]) ->
     )
 
 
+def plan_positions_at(
+    result: DrapeResult, start_xy_m: tuple[float, float], ii: NDArray[np.intp], jj: NDArray[np.intp]
+) -> FloatArray:
+    """:func:`flat_plan_positions` (m, 2) [m] of the nodes (ii, jj) only (the same numbers)."""
+    i0, j0 = result.start_index
+    d = result.node_spacing
+    theta, alpha = result.orientation, result.generator_angle
+    e_u = np.array([math.cos(theta), math.sin(theta)])
+    e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
+    xi = (np.asarray(ii) - i0) * d
+    eta = (np.asarray(jj) - j0) * d
+    return np.asarray(start_xy_m, dtype=float) + xi[:, None] * e_u + eta[:, None] * e_v
+
+
 @dataclass(frozen=True)
 class Coverage:
     """How much of what the scene asked (module docstring) a drape covers, and why not more."""
@@ -317,11 +331,13 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     behind_outline = dependency_shadow(~in_ply, start)
     lost = ~placed & in_ply & ~past_edge
 
-    plan = flat_plan_positions(result, start_xy_m)
+    # undeformed plan positions only where they are asked (the lost nodes): the whole net's
+    # would be a net-sized array for the few nodes a drape loses
     over = np.zeros(status.shape, dtype=bool)
     if lost.any():
-        _, mask = surface.point_at_plan(plan[lost])
-        over[lost] = np.asarray(mask, dtype=bool)
+        ii, jj = np.nonzero(lost)
+        _, mask = surface.point_at_plan(plan_positions_at(result, start_xy_m, ii, jj))
+        over[ii, jj] = np.asarray(mask, dtype=bool)
     missing = lost & over
     not_reached = missing & (status == NodeStatus.NOT_REACHED)
     # The failed nodes themselves are counted wherever they lie (they say why the net stopped);
@@ -375,8 +391,11 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     fold_corner = (
         fold_nodes[:-1, :-1] | fold_nodes[1:, :-1] | fold_nodes[:-1, 1:] | fold_nodes[1:, 1:]
     )
-    zones = _fold_zones(
-        cell_in_ply & ~valid & ~edge_corner & fold_corner, plan, result.node_spacing
+    fold_cells = cell_in_ply & ~valid & ~edge_corner & fold_corner
+    zones = (
+        _fold_zones(fold_cells, flat_plan_positions(result, start_xy_m), result.node_spacing)
+        if fold_cells.any()
+        else ()
     )
 
     first: tuple[float, float] | None = None
@@ -384,7 +403,8 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         i0, j0 = start
         ii, jj = np.nonzero(missing)
         k = int(np.argmin(np.abs(ii - i0) + np.abs(jj - j0)))
-        first = (float(plan[ii[k], jj[k], 0]), float(plan[ii[k], jj[k], 1]))
+        x, y = plan_positions_at(result, start_xy_m, ii[k : k + 1], jj[k : k + 1])[0]
+        first = (float(x), float(y))
     return Coverage(
         cells_asked=int(np.count_nonzero(asked)),
         cells_covered=int(np.count_nonzero(valid)),

@@ -20,13 +20,18 @@ from pydantic import BaseModel, ConfigDict
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
 from preform.drape.result import CellStatus, NodeStatus
-from preform.drape.verdict import coverage, dependency_shadow
+from preform.drape.verdict import (
+    coverage,
+    dependency_shadow,
+    flat_plan_positions,
+    plan_positions_at,
+)
 from preform.pipeline.planner import plan
 from preform.pipeline.scene import load_scene
 from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext
 from preform.plugin_manager import hookimpl
-from preform.plugins.surfaces.basic import Plane
+from preform.plugins.surfaces.basic import Hemisphere, Plane
 from preform.plugins.surfaces.mesh import tessellate_hemisphere, write_stl
 from preform.testing import PluginSandbox
 
@@ -397,6 +402,27 @@ def test_the_dependency_shadow_is_the_rectangle_to_the_start(seed: int) -> None:
             rows = range(min(i, i0), max(i, i0) + 1)
             cols = range(min(j, j0), max(j, j0) + 1)
             assert got[i, j] == any(mask[r, c] for r in rows for c in cols)
+
+
+def test_plan_positions_at_some_nodes_are_those_of_the_whole_flat_ply() -> None:
+    result = drape(
+        Hemisphere(0.1),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.3, 0.2)),
+        start_xy_m=(0.01, -0.02),
+        orientation_rad=0.3,
+        generator_angle_rad=1.3,
+    )
+    whole = flat_plan_positions(result, (0.01, -0.02))
+    rng = np.random.default_rng(5)
+    ii = rng.integers(0, result.shape[0], 40)
+    jj = rng.integers(0, result.shape[1], 40)
+    got = plan_positions_at(result, (0.01, -0.02), ii, jj)
+    np.testing.assert_array_equal(got, whole[ii, jj])
+    # and the plan geometry itself: a d step along +u is d along the orientation
+    step = plan_positions_at(result, (0.0, 0.0), np.array([1]), np.array([0]))
+    step -= plan_positions_at(result, (0.0, 0.0), np.array([0]), np.array([0]))
+    np.testing.assert_allclose(step[0], 0.01 * np.array([np.cos(0.3), np.sin(0.3)]), atol=1e-15)
 
 
 # --------------------------------------------------------------------------------------------
