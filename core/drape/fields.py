@@ -197,12 +197,16 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     from preform.drape import field_kernels
 
     counted = np.ascontiguousarray(result.valid & result.in_part)
+    shape = np.shape(result.status)
     if part is not None:
-        inside = np.asarray(
-            part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0)), dtype=bool
-        )
+        # the part asked only at the placed nodes (the node shear is NaN elsewhere)
+        placed = np.flatnonzero(np.asarray(result.status).ravel() == NodeStatus.PLACED)
+        inside = np.zeros(shape[0] * shape[1], dtype=bool)
+        at_placed = np.asarray(result.nodes, dtype=float).reshape(-1, 3)[placed]
+        inside[placed] = np.asarray(part.contains(at_placed), dtype=bool)
+        inside = inside.reshape(shape)
     else:
-        inside = np.ones(np.shape(result.status), dtype=bool)
+        inside = np.ones(shape, dtype=bool)
     # the largest values in one compiled pass, without boolean-indexed copies
     cells, nodes = field_kernels.shear_extremes(
         np.ascontiguousarray(result.shear, dtype=float),
