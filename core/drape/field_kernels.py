@@ -143,18 +143,20 @@ def cell_geometry(
             )
             area[i, j] = 0.25 * (split_a + split_b)
             sx, sy, sz = ulx + uhx, uly + uhy, ulz + uhz
-            length = math.sqrt(sx * sx + sy * sy + sz * sz)
+            # one division and three products a fibre (divisions and roots share one unit of
+            # the core and bound this kernel; the unit vector changes by an ulp at most)
+            inverse = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
             fibre_u[i, j, 0], fibre_u[i, j, 1], fibre_u[i, j, 2] = (
-                sx / length,
-                sy / length,
-                sz / length,
+                sx * inverse,
+                sy * inverse,
+                sz * inverse,
             )
             sx, sy, sz = vlx + vrx, vly + vry, vlz + vrz
-            length = math.sqrt(sx * sx + sy * sy + sz * sz)
+            inverse = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
             fibre_v[i, j, 0], fibre_v[i, j, 1], fibre_v[i, j, 2] = (
-                sx / length,
-                sy / length,
-                sz / length,
+                sx * inverse,
+                sy * inverse,
+                sz * inverse,
             )
 
 
