@@ -228,17 +228,19 @@ def summary(
     ``max_abs_shear_deg`` is the cell value ``max_abs_shear_cells_deg`` (kept under its old
     name); ``max_abs_shear_nodes_deg`` is read at the nodes inside ``part``
     (:func:`extremes`). ``mean_abs_shear_deg`` weighs each cell by its area in the part."""
-    counted = result.valid & result.in_part
+    valid = result.valid  # each a pass over the net: computed once here
+    counted = valid & result.in_part
     shear = np.abs(result.shear[counted])
-    weight = result.part_weight[counted]
+    part_weight = result.part_weight
+    weight = part_weight[counted]
     peaks = extremes(result, part)
     out: dict[str, object] = {
         "nodes_total": result.nodes_total,
         "nodes_placed": result.nodes_placed,
         "complete": result.complete,
-        "cells_valid": int(np.count_nonzero(result.valid)),
+        "cells_valid": int(np.count_nonzero(valid)),
         "cells_in_part": int(np.count_nonzero(counted)),
-        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (result.part_weight < 1.0))),
+        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (part_weight < 1.0))),
         "part_fabric_area_m2": float(weight.sum() * result.node_spacing**2),
         "part_draped_area_m2": float((result.area[counted] * weight).sum()),
         "max_abs_shear_deg": peaks["max_abs_shear_cells_deg"],
@@ -263,7 +265,7 @@ def summary(
         out["cells_past_locking"] = int(np.count_nonzero(energy.past_locking))
         # Counted by the fabric area they put inside the part (undeformed, d² per whole cell).
         out["part_area_past_locking_m2"] = float(
-            (result.part_weight * energy.past_locking).sum() * result.node_spacing**2
+            (part_weight * energy.past_locking).sum() * result.node_spacing**2
         )
         out["cells_past_failure"] = int(np.count_nonzero(energy.past_failure))
     return out
