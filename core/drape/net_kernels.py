@@ -169,6 +169,22 @@ def _sphere_node(kind: int, params: FloatArray, a: Vec, b: Vec, c: Vec, spacing:
     return px, py, pz, _PLACED
 
 
+@_per_node
+def _sphere_normal(kind: int, params: FloatArray, x: float, y: float, z: float):
+    """The outward normal direction at a point of a sphere's tool (any positive multiple of
+    the unit normal: the fold check reads only its sign) and the distance to the tool [m].
+
+    On the sphere itself (above a trimmed sphere's floor, with a margin) that is the offset
+    from the centre and | |p − o| − R |, one square root where the full query (``_query``)
+    takes two and three divisions; elsewhere the full query."""
+    ox, oy, oz, r = params[0], params[1], params[2], params[3]
+    if kind == TRIMMED_SPHERE and not z > params[4] + 1e-9 * r:
+        _, _, _, nx, ny, nz, dist = _query(kind, params, x, y, z)
+        return nx, ny, nz, dist
+    rx, ry, rz = x - ox, y - oy, z - oz
+    return rx, ry, rz, abs(math.sqrt(rx * rx + ry * ry + rz * rz) - r)
+
+
 @_jit
 def sphere_place_nodes(
     kind: int, params: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray, spacing: float
@@ -490,7 +506,7 @@ def _check_node(
     """The checks every new node p goes through, from its parents a (along u), b (along v)
     and the opposite corner c: (status, residual). OFF_TOOL past the tool's bounds, FOLDED
     where the cell it completes (oriented ``orient``·(+u × +v)) faces against the surface
-    normal (nx, ny, nz) at it, else PLACED with its residual max(|PA| − d, |PB| − d, distance
+    normal (nx, ny, nz) at it (any positive multiple of the unit normal), else PLACED with its residual max(|PA| − d, |PB| − d, distance
     ``dist`` to the tool) [m] (0 when not placed)."""
     px, py, pz = p
     if st == _PLACED:
@@ -611,7 +627,7 @@ def fill_fronts(
                     px, py, pz, st = _sphere_node(kind, par, a, b, c, spacing)
                     nx = ny = nz = dist = np.nan
                     if st == _PLACED:
-                        _, _, _, nx, ny, nz, dist = _query(kind, par, px, py, pz)
+                        nx, ny, nz, dist = _sphere_normal(kind, par, px, py, pz)
                 else:
                     px, py, pz, st, used, nx, ny, nz, dist = _newton_node(
                         kind, par, a, b, c, spacing, tolerance_m, max_iterations
