@@ -3,10 +3,10 @@ speed ratios in ``bench_kernels.py``, measured in the same process.
 
 A frozen copy, reachable only from the benchmarks (never imported by preform or its tests): the
 wavefront fill with the sphere's vectorised closed form and the vectorised Newton placement,
-the cell fields and cell status, the node shear and the shear extremes, the cut-cell share,
-the surrogate's Hermite evaluation and the coverage with its dependency shadows, each as numpy code
-vectorised over a front or over the net. :func:`numpy_path` swaps them into the drape step for
-the duration of a ``with`` block.
+the cell fields and cell status, the node shear, the shear extremes and the summary, the
+cut-cell share, the surrogate's Hermite evaluation and the coverage with its dependency
+shadows, each as numpy code vectorised over a front or over the net. :func:`numpy_path` swaps
+them into the drape step for the duration of a ``with`` block.
 """
 
 from __future__ import annotations
@@ -1094,6 +1094,54 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     )
 
 
+def summary(
+    result: DrapeResult, energy: EnergyField | None = None, part: Part | None = None
+) -> dict[str, object]:
+    """``preform.drape.fields.summary`` as numpy masks and sums (as before the kernels), on
+    this module's extremes."""
+    valid = result.valid  # each a pass over the net: computed once here
+    counted = valid & result.in_part
+    shear = np.abs(result.shear[counted])
+    part_weight = result.part_weight
+    weight = part_weight[counted]
+    peaks = extremes(result, part)
+    out: dict[str, object] = {
+        "nodes_total": result.nodes_total,
+        "nodes_placed": result.nodes_placed,
+        "complete": result.complete,
+        "cells_valid": int(np.count_nonzero(valid)),
+        "cells_in_part": int(np.count_nonzero(counted)),
+        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (part_weight < 1.0))),
+        "part_fabric_area_m2": float(weight.sum() * result.node_spacing**2),
+        "part_draped_area_m2": float((result.area[counted] * weight).sum()),
+        "max_abs_shear_deg": peaks["max_abs_shear_cells_deg"],
+        **peaks,
+        "mean_abs_shear_deg": (
+            float(np.degrees(np.average(shear, weights=weight)))
+            if shear.size and weight.sum() > 0
+            else 0.0
+        ),
+        "generator_angle_deg": float(np.degrees(result.generator_angle)),
+        "orientation_deg": float(np.degrees(result.orientation)),
+        "node_spacing_m": result.node_spacing,
+    }
+    for code in NodeStatus:
+        out[f"nodes_{code.name.lower()}"] = int(np.count_nonzero(result.status == code))
+    for cell_code in CellStatus:
+        out[f"cells_{cell_code.name.lower()}"] = int(
+            np.count_nonzero(result.cell_status == cell_code)
+        )
+    if energy is not None:
+        out["total_energy_J"] = energy.total_energy
+        out["cells_past_locking"] = int(np.count_nonzero(energy.past_locking))
+        # Counted by the fabric area they put inside the part (undeformed, d² per whole cell).
+        out["part_area_past_locking_m2"] = float(
+            (part_weight * energy.past_locking).sum() * result.node_spacing**2
+        )
+        out["cells_past_failure"] = int(np.count_nonzero(energy.past_failure))
+    return out
+
+
 @contextlib.contextmanager
 def numpy_path() -> Iterator[None]:
     """Run the drape step (``preform.drape.steps.run_drape``) on this module's numpy code."""
@@ -1105,6 +1153,7 @@ def numpy_path() -> Iterator[None]:
         surrogate_module.TabulatedSurrogate.energy,
         verdict_module.dependency_shadow,
         steps_module.coverage,
+        steps_module.summary,
     )
     steps_module.drape = drape  # type: ignore[assignment]
     steps_module.energy_field = energy_field
@@ -1113,6 +1162,7 @@ def numpy_path() -> Iterator[None]:
     surrogate_module.TabulatedSurrogate.energy = surrogate_energy  # type: ignore[method-assign]
     verdict_module.dependency_shadow = dependency_shadow
     steps_module.coverage = coverage
+    steps_module.summary = summary
     try:
         yield
     finally:
@@ -1124,4 +1174,5 @@ def numpy_path() -> Iterator[None]:
             surrogate_module.TabulatedSurrogate.energy,
             verdict_module.dependency_shadow,
             steps_module.coverage,
+            steps_module.summary,
         ) = saved  # type: ignore[assignment]

@@ -413,3 +413,49 @@ def dependency_shadow(mask: BoolArray, i0: int, j0: int, out: BoolArray) -> None
                     if j != j0:
                         value = value or out[i, j - sj]
                     out[i, j] = value
+
+
+@_jit
+def code_counts(codes: NDArray[np.int8], n_codes: int) -> NDArray[np.int64]:
+    """How many of ``codes`` (any shape, C order) equal 0, 1, …, n_codes − 1."""
+    out = np.zeros(n_codes, dtype=np.int64)
+    for code in codes.ravel():
+        if 0 <= code < n_codes:
+            out[code] += 1
+    return out
+
+
+@_jit
+def cell_sums(
+    cell_status: NDArray[np.int8],
+    in_part: BoolArray,
+    share: FloatArray,
+    has_share: bool,
+    shear: FloatArray,
+    area: FloatArray,
+    past_locking: BoolArray,
+    has_energy: bool,
+):
+    """The cell sums of ``preform.drape.fields.summary`` in one pass: (valid cells, counted
+    cells (valid and in the part), counted cells cut by the part's edge (weight < 1), Σ w,
+    Σ area·w [m²], Σ |γ|·w [rad], Σ w over cells past locking), w the part weight (``share``
+    on counted cells when ``has_share``, else 1 there; 0 elsewhere)."""
+    valid_cells = counted_cells = cut_cells = 0
+    weights = draped = shear_sum = locked = 0.0
+    for i in range(cell_status.shape[0]):
+        for j in range(cell_status.shape[1]):
+            if cell_status[i, j] != _VALID:
+                continue
+            valid_cells += 1
+            if not in_part[i, j]:
+                continue
+            counted_cells += 1
+            w = share[i, j] if has_share else 1.0
+            if w < 1.0:
+                cut_cells += 1
+            weights += w
+            draped += area[i, j] * w
+            shear_sum += abs(shear[i, j]) * w
+            if has_energy and past_locking[i, j]:
+                locked += w
+    return valid_cells, counted_cells, cut_cells, weights, draped, shear_sum, locked

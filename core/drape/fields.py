@@ -228,44 +228,57 @@ def summary(
     ``max_abs_shear_deg`` is the cell value ``max_abs_shear_cells_deg`` (kept under its old
     name); ``max_abs_shear_nodes_deg`` is read at the nodes inside ``part``
     (:func:`extremes`). ``mean_abs_shear_deg`` weighs each cell by its area in the part."""
-    valid = result.valid  # each a pass over the net: computed once here
-    counted = valid & result.in_part
-    shear = np.abs(result.shear[counted])
-    part_weight = result.part_weight
-    weight = part_weight[counted]
+    from preform.drape import field_kernels
+
+    node_counts = field_kernels.code_counts(
+        np.ascontiguousarray(result.status, dtype=np.int8), len(NodeStatus)
+    )
+    cell_status = np.ascontiguousarray(result.cell_status, dtype=np.int8)
+    cell_counts = field_kernels.code_counts(cell_status, len(CellStatus))
+    share = result.part_share
+    # the cell sums in one compiled pass (each numpy mask or sum would be a pass of its own)
+    valid, counted, cut, weights, draped, shear_sum, locked = field_kernels.cell_sums(
+        cell_status,
+        np.ascontiguousarray(result.in_part, dtype=bool),
+        np.ascontiguousarray(share if share is not None else np.zeros((0, 0)), dtype=float),
+        share is not None,
+        np.ascontiguousarray(result.shear, dtype=float),
+        np.ascontiguousarray(result.area, dtype=float),
+        np.ascontiguousarray(
+            energy.past_locking if energy is not None else np.zeros((0, 0), dtype=bool),
+            dtype=bool,
+        ),
+        energy is not None,
+    )
+    placed = int(node_counts[NodeStatus.PLACED])
     peaks = extremes(result, part)
     out: dict[str, object] = {
         "nodes_total": result.nodes_total,
-        "nodes_placed": result.nodes_placed,
-        "complete": result.complete,
-        "cells_valid": int(np.count_nonzero(valid)),
-        "cells_in_part": int(np.count_nonzero(counted)),
-        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (part_weight < 1.0))),
-        "part_fabric_area_m2": float(weight.sum() * result.node_spacing**2),
-        "part_draped_area_m2": float((result.area[counted] * weight).sum()),
+        "nodes_placed": placed,
+        # every node inside the ply placed (DrapeResult.complete)
+        "complete": placed == result.nodes_total - int(node_counts[NodeStatus.OUTSIDE_PLY]),
+        "cells_valid": int(valid),
+        "cells_in_part": int(counted),
+        "cells_cut_by_part_edge": int(cut),
+        "part_fabric_area_m2": float(weights * result.node_spacing**2),
+        "part_draped_area_m2": float(draped),
         "max_abs_shear_deg": peaks["max_abs_shear_cells_deg"],
         **peaks,
         "mean_abs_shear_deg": (
-            float(np.degrees(np.average(shear, weights=weight)))
-            if shear.size and weight.sum() > 0
-            else 0.0
+            float(np.degrees(shear_sum / weights)) if counted and weights > 0 else 0.0
         ),
         "generator_angle_deg": float(np.degrees(result.generator_angle)),
         "orientation_deg": float(np.degrees(result.orientation)),
         "node_spacing_m": result.node_spacing,
     }
     for code in NodeStatus:
-        out[f"nodes_{code.name.lower()}"] = int(np.count_nonzero(result.status == code))
+        out[f"nodes_{code.name.lower()}"] = int(node_counts[code])
     for cell_code in CellStatus:
-        out[f"cells_{cell_code.name.lower()}"] = int(
-            np.count_nonzero(result.cell_status == cell_code)
-        )
+        out[f"cells_{cell_code.name.lower()}"] = int(cell_counts[cell_code])
     if energy is not None:
         out["total_energy_J"] = energy.total_energy
         out["cells_past_locking"] = int(np.count_nonzero(energy.past_locking))
         # Counted by the fabric area they put inside the part (undeformed, d² per whole cell).
-        out["part_area_past_locking_m2"] = float(
-            (part_weight * energy.past_locking).sum() * result.node_spacing**2
-        )
+        out["part_area_past_locking_m2"] = float(locked * result.node_spacing**2)
         out["cells_past_failure"] = int(np.count_nonzero(energy.past_failure))
     return out

@@ -11,7 +11,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.fields import cell_fields, cell_status, extremes, node_shear
+from preform.drape.fields import (
+    cell_fields,
+    cell_status,
+    energy_field,
+    extremes,
+    node_shear,
+    summary,
+)
 from preform.drape.net import drape
 from preform.drape.part import HeightCut, cell_part_share
 from preform.drape.ply import PlyOutline
@@ -279,6 +286,60 @@ def test_shear_extremes_are_the_largest_of_the_loops_values(
     expected_nodes = math.degrees(at_nodes.max()) if at_nodes.size else 0.0
     assert got["max_abs_shear_cells_deg"] == pytest.approx(expected_cells, abs=1e-11)
     assert got["max_abs_shear_nodes_deg"] == pytest.approx(expected_nodes, abs=1e-11)
+
+
+@pytest.mark.parametrize("with_part", [True, False])
+def test_summary_sums_are_numpys_masks_and_sums(with_part: bool) -> None:
+    """The summary's compiled cell sums against the same quantities as numpy masks here."""
+    tool = Hemisphere(1.0, run_off_m=0.3)  # the net runs past the part's rim: cut cells
+    part = tool.part() if with_part else None
+    result = drape(
+        tool,
+        start_xy_m=(0.05, 0.0),
+        node_spacing_m=0.05,
+        ply=PlyOutline.rectangle((2.4, 2.2)),
+        orientation_rad=0.2,
+        generator_angle_rad=1.3,
+        trim=part,
+    )
+    energy = energy_field(result, _QuadraticLaw())  # type: ignore[arg-type]
+    got = summary(result, energy, part)
+    counted = result.valid & result.in_part
+    weight = result.part_weight
+    d2 = result.node_spacing**2
+    assert got["nodes_placed"] == np.count_nonzero(result.status == NodeStatus.PLACED)
+    assert got["complete"] == result.complete
+    assert got["cells_valid"] == np.count_nonzero(result.valid)
+    assert got["cells_in_part"] == np.count_nonzero(counted)
+    assert got["cells_cut_by_part_edge"] == np.count_nonzero(counted & (weight < 1.0))
+    assert got["cells_cut_by_part_edge"] > 0 if with_part else True
+    assert got["part_fabric_area_m2"] == pytest.approx(weight[counted].sum() * d2, rel=1e-12)
+    draped = (result.area[counted] * weight[counted]).sum()
+    assert got["part_draped_area_m2"] == pytest.approx(draped, rel=1e-12)
+    mean = np.degrees(np.average(np.abs(result.shear[counted]), weights=weight[counted]))
+    assert got["mean_abs_shear_deg"] == pytest.approx(mean, rel=1e-12)
+    for code in NodeStatus:
+        assert got[f"nodes_{code.name.lower()}"] == np.count_nonzero(result.status == code)
+    for cell_code in CellStatus:
+        expected = np.count_nonzero(result.cell_status == cell_code)
+        assert got[f"cells_{cell_code.name.lower()}"] == expected
+    locked = (weight * energy.past_locking).sum() * d2
+    assert np.count_nonzero(energy.past_locking) > 0
+    assert got["part_area_past_locking_m2"] == pytest.approx(locked, rel=1e-12)
+
+
+class _QuadraticLaw:
+    """W = γ² [J/m²] locking at 20°, so a hemisphere's net has cells past it."""
+
+    name = "quadratic"
+    locking_angle = math.radians(20.0)
+    failure_angle = None
+
+    def torque(self, gamma):  # type: ignore[no-untyped-def]
+        return 2.0 * np.asarray(gamma, dtype=float)
+
+    def energy(self, gamma):  # type: ignore[no-untyped-def]
+        return np.asarray(gamma, dtype=float) ** 2
 
 
 def test_part_share_of_a_cell_cut_by_a_plan_line_is_its_area_fraction() -> None:
