@@ -199,12 +199,8 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     counted = np.ascontiguousarray(result.valid & result.in_part)
     shape = np.shape(result.status)
     if part is not None:
-        # the part asked only at the placed nodes (the node shear is NaN elsewhere)
-        placed = np.flatnonzero(np.asarray(result.status).ravel() == NodeStatus.PLACED)
-        inside = np.zeros(shape[0] * shape[1], dtype=bool)
-        at_placed = np.asarray(result.nodes, dtype=float).reshape(-1, 3)[placed]
-        inside[placed] = np.asarray(part.contains(at_placed), dtype=bool)
-        inside = inside.reshape(shape)
+        # a missing node's NaN position is in no part (φ NaN; its node shear is NaN too)
+        inside = np.asarray(part.contains(result.nodes), dtype=bool)
     else:
         inside = np.ones(shape, dtype=bool)
     # the largest values in one compiled pass, without boolean-indexed copies
