@@ -16,9 +16,17 @@ The per-node steps are plain scalar functions:
 
 Two drivers use them. For a surface with compiled queries
 (:class:`~preform.drape.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
-net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a plugin's tool) the front loop
-stays in Python and calls the vectorised wrappers below once per front, with the surface's own
-vectorised ``closest_point``/``normal`` in between; the per-node arithmetic is the same code.
+net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a
+plugin's tool) the front loop stays in Python and calls the vectorised wrappers below once per
+front, with the surface's own vectorised ``closest_point``/``normal`` in between; the per-node
+arithmetic is the same code.
+
+The per-node steps are inlined into the loops (``_per_node``) and take points, frames and the
+tool's parameters as tuples, not arrays: numba reference-counts an array handed to a function
+(an atomic add and subtract), which at one call per node cost more than half of the fill. A
+new kind of compiled surface gets its code in ``compiled_surface`` and its branch in
+:func:`_query` (closest point, unit normal, distance), reading its parameters by constant
+index from the ``MAX_PARAMS``-tuple (:func:`_param_tuple`).
 """
 
 from __future__ import annotations
@@ -635,8 +643,8 @@ def fill_fronts(
                     most_used = max(most_used, used)
                 p = (px, py, pz)
                 st, res = _check_node(p, st, a, b, c, orient, nx, ny, nz, dist, spacing, low, high)
-                # written here, not by _write_node: arrays handed to a function are
-                # reference counted per call
+                # written here, not by _write_node: the arrays handed even to an inlined
+                # step were reference counted per node
                 if st == _PLACED:
                     pos[node, 0], pos[node, 1], pos[node, 2] = px, py, pz
                     residual[node] = res
