@@ -391,31 +391,6 @@ def energy_cells(
 
 
 @_jit
-def dependency_shadow(mask: BoolArray, i0: int, j0: int, out: BoolArray) -> None:
-    """``preform.drape.verdict.dependency_shadow`` into ``out`` (ni, nj): True where the
-    rectangle between a node and the start node (i0, j0) holds a True node of ``mask``.
-
-    Per quadrant, outward from the start, S(i, j) = mask(i, j) or S(i ∓ 1, j) or S(i, j ∓ 1)
-    (the rectangle's OR). On the start's row and column the rectangle is a segment of that
-    row or column whichever quadrant sweeps it, so the quadrants agree there."""
-    ni, nj = mask.shape
-    if ni == 0 or nj == 0:
-        return
-    for si in (1, -1):
-        i_end = ni if si > 0 else -1
-        for sj in (1, -1):
-            j_end = nj if sj > 0 else -1
-            for i in range(i0, i_end, si):
-                for j in range(j0, j_end, sj):
-                    value = mask[i, j]
-                    if i != i0:
-                        value = value or out[i - si, j]
-                    if j != j0:
-                        value = value or out[i, j - sj]
-                    out[i, j] = value
-
-
-@_jit
 def code_counts(codes: NDArray[np.int8], n_codes: int) -> NDArray[np.int64]:
     """How many of ``codes`` (any shape, C order) equal 0, 1, …, n_codes − 1."""
     out = np.zeros(n_codes, dtype=np.int64)
