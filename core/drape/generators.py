@@ -151,7 +151,7 @@ def _surface_queries(
     """Closest points, the normals there and distances for points (m, 3) [m]: compiled for a
     tool with compiled queries, else the tool's own vectorised methods."""
     if isinstance(surface, CompiledQueries):
-        from preform.drape import net_kernels
+        from preform.drape import surface_kernels
 
         kind, params = surface.compiled_queries()
         params = np.asarray(params, dtype=float)
@@ -159,7 +159,7 @@ def _surface_queries(
         def compiled(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
             return cast(
                 tuple[FloatArray, FloatArray, FloatArray],
-                net_kernels.query_points(int(kind), params, np.ascontiguousarray(points)),
+                surface_kernels.query_points(int(kind), params, np.ascontiguousarray(points)),
             )
 
         return compiled

@@ -280,9 +280,9 @@ def _generators(
 
 def _compiled_closed_form(surface: object) -> bool:
     """Whether a surface with compiled queries also has a compiled closed-form node."""
-    from preform.drape.compiled_surface import SPHERE, TRIMMED_SPHERE
+    from preform.drape.compiled_surface import CLOSED_FORM_KINDS
 
-    return cast(CompiledQueries, surface).compiled_queries()[0] in (SPHERE, TRIMMED_SPHERE)
+    return cast(CompiledQueries, surface).compiled_queries()[0] in CLOSED_FORM_KINDS
 
 
 def _fill_fronts_python(
