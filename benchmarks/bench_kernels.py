@@ -95,13 +95,14 @@ def nothing() -> Iterator[None]:
     yield
 
 
-def compare_drapes(n: int, closed_form: bool, repeat: int) -> None:
-    label = "closed-form sphere" if closed_form else "general Newton"
-    best = {"compiled": (np.inf, np.inf), "numpy": (np.inf, np.inf)}
+def race(label: str, n: int, repeat: int, runs: dict[str, Callable[[], Any]]) -> str:
+    """Best fill and drape processor times of the "compiled" and "numpy" drapes ``runs``,
+    alternated ``repeat`` times, and how their nets agree: the report line."""
+    best = {name: (np.inf, np.inf) for name in runs}
     results: dict[str, Any] = {}
     for _ in range(repeat):
-        for name, run in (("compiled", drape), ("numpy", numpy_drape)):
-            seconds, result = timed(lambda run=run: sphere_drape(run, n, closed_form))
+        for name, run in runs.items():
+            seconds, result = timed(run)
             fill = float(result.info["fill_cpu_seconds"])
             best[name] = (min(best[name][0], fill), min(best[name][1], seconds))
             results[name] = result
@@ -110,11 +111,20 @@ def compare_drapes(n: int, closed_form: bool, repeat: int) -> None:
     both = np.isfinite(a.nodes[..., 0]) & np.isfinite(b.nodes[..., 0])
     gap = float(np.max(np.linalg.norm(a.nodes[both] - b.nodes[both], axis=-1))) / a.node_spacing
     (fill_c, all_c), (fill_n, all_n) = best["compiled"], best["numpy"]
-    print(
+    return (
         f"{label:<20}{n:>6}  fill {fill_n:7.3f} s -> {fill_c:7.3f} s ({fill_n / fill_c:5.1f}x)"
         f"   drape {all_n:7.3f} s -> {all_c:7.3f} s ({all_n / all_c:5.1f}x)"
         f"   same statuses {same_status}, nodes within {gap:.1e} d"
     )
+
+
+def compare_drapes(n: int, closed_form: bool, repeat: int) -> None:
+    label = "closed-form sphere" if closed_form else "general Newton"
+    runs = {
+        "compiled": lambda: sphere_drape(drape, n, closed_form),
+        "numpy": lambda: sphere_drape(numpy_drape, n, closed_form),
+    }
+    print(race(label, n, repeat, runs))
 
 
 def compare_steps(n: int, repeat: int) -> None:
@@ -171,33 +181,17 @@ def tool_drape(tool: Any, n: int, start: tuple[float, float], side: float, close
     )
 
 
-def compare_tool(name: str, n: int, repeat: int, report: bool = True) -> None:
+def compare_tool(name: str, n: int, repeat: int) -> str:
+    """The report line of the analytic tool ``name`` at n × n nodes."""
     cls, args, kwargs, start, side, closed = TOOLS[name]
     module = basic if cls in ("Plane", "Cylinder") else domes
-    tools = {
-        "compiled": getattr(module, cls)(*args, **kwargs),
-        "numpy": getattr(numpy_surfaces, cls)(*args, **kwargs),
+    compiled = getattr(module, cls)(*args, **kwargs)
+    frozen = getattr(numpy_surfaces, cls)(*args, **kwargs)
+    runs = {
+        "compiled": lambda: tool_drape(compiled, n, start, side, closed),
+        "numpy": lambda: tool_drape(frozen, n, start, side, closed),
     }
-    best = {"compiled": (np.inf, np.inf), "numpy": (np.inf, np.inf)}
-    results: dict[str, Any] = {}
-    for _ in range(repeat):
-        for key, tool in tools.items():
-            seconds, result = timed(lambda tool=tool: tool_drape(tool, n, start, side, closed))
-            fill = float(result.info["fill_cpu_seconds"])
-            best[key] = (min(best[key][0], fill), min(best[key][1], seconds))
-            results[key] = result
-    a, b = results["compiled"], results["numpy"]
-    same_status = bool(np.array_equal(a.status, b.status))
-    both = np.isfinite(a.nodes[..., 0]) & np.isfinite(b.nodes[..., 0])
-    gap = float(np.max(np.linalg.norm(a.nodes[both] - b.nodes[both], axis=-1))) / a.node_spacing
-    (fill_c, all_c), (fill_n, all_n) = best["compiled"], best["numpy"]
-    if not report:
-        return
-    print(
-        f"{name:<20}{n:>6}  fill {fill_n:7.3f} s -> {fill_c:7.3f} s ({fill_n / fill_c:5.1f}x)"
-        f"   drape {all_n:7.3f} s -> {all_c:7.3f} s ({all_n / all_c:5.1f}x)"
-        f"   same statuses {same_status}, nodes within {gap:.1e} d"
-    )
+    return race(name, n, repeat, runs)
 
 
 def main() -> None:
@@ -226,11 +220,11 @@ def main() -> None:
         compare_steps(args.n, args.repeat)
     if args.only != "sphere":
         for name in TOOLS:
-            compare_tool(name, 21, 1, report=False)  # compile its queries first
+            compare_tool(name, 21, 1)  # compile its queries first
         for name in TOOLS:
-            compare_tool(name, args.tools_n, args.repeat)
+            print(compare_tool(name, args.tools_n, args.repeat))
         for name in filter(None, args.large_tools.split(",")):
-            compare_tool(name, args.tools_large_n, args.repeat)
+            print(compare_tool(name, args.tools_large_n, args.repeat))
 
 
 if __name__ == "__main__":
