@@ -43,6 +43,17 @@ ELLIPSOID_DOME = 7
 #: The paraboloid z = h (1 − r²/R²), r ≤ R. Parameters: R [m], h [m], h/R² [1/m].
 PARABOLOID_DOME = 8
 
+#: Every kind the compiled queries answer.
+KINDS = (
+    SPHERE,
+    TRIMMED_SPHERE,
+    PLANE,
+    CYLINDER,
+    FLANGED_HEMISPHERE,
+    CONE,
+    ELLIPSOID_DOME,
+    PARABOLOID_DOME,
+)
 #: The kinds whose net node has a compiled closed form (no Newton iteration).
 CLOSED_FORM_KINDS = (SPHERE, TRIMMED_SPHERE, PLANE)
 
@@ -54,6 +65,18 @@ class CompiledQueries(Protocol):
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """(kind, parameters): one of this module's codes and its parameter vector [m]."""
         ...
+
+
+def checked_kind(kind: int) -> int:
+    """``kind`` as an int when it is one of this module's codes (``KINDS``); else a ValueError
+    saying which are known (a tool's ``compiled_queries`` must name one of them)."""
+    if kind not in KINDS:
+        raise ValueError(
+            f"compiled_queries() gave kind {kind!r}, which is none of the compiled tools' "
+            f"codes {KINDS} (preform.drape.compiled_surface); return one of them, or drop "
+            "compiled_queries so the tool is queried through its own methods"
+        )
+    return int(kind)
 
 
 def query_tool(
@@ -68,7 +91,7 @@ def query_tool(
         raise ValueError(f"expected an (n, 3) array of positions [m], got {p.shape}")
     kind, params = surface.compiled_queries()
     foot, normal, dist = surface_kernels.query_points(
-        int(kind), np.asarray(params, dtype=float), p.reshape(-1, 3)
+        checked_kind(kind), np.asarray(params, dtype=float), p.reshape(-1, 3)
     )
     shape = p.shape[:-1]
     return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)

@@ -27,6 +27,7 @@ from preform.drape.compiled_surface import (
     FLANGED_HEMISPHERE,
     PARABOLOID_DOME,
     PLANE,
+    SPHERE,
     TRIMMED_SPHERE,
 )
 from preform.drape.result import NodeStatus
@@ -419,6 +420,8 @@ def _paraboloid_dome(params: FloatArray, x: float, y: float, z: float):
 def query(kind: int, params: FloatArray, x: float, y: float, z: float):
     """The closest point of the tool of ``kind`` to (x, y, z) [m], the unit outward normal
     there and the distance [m] (the tool's ``closest_point`` and ``normal`` at once)."""
+    if kind == SPHERE or kind == TRIMMED_SPHERE:
+        return _sphere(kind, params, x, y, z)
     if kind == PLANE:
         return _plane(params, x, y, z)
     if kind == CYLINDER:
@@ -431,7 +434,8 @@ def query(kind: int, params: FloatArray, x: float, y: float, z: float):
         return _ellipsoid_dome(params, x, y, z)
     if kind == PARABOLOID_DOME:
         return _paraboloid_dome(params, x, y, z)
-    return _sphere(kind, params, x, y, z)
+    # not a kind of preform.drape.compiled_surface: no answer
+    return np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan
 
 
 @_jit

@@ -68,6 +68,36 @@ def test_every_analytic_tool_has_compiled_queries_and_the_frozen_copy_has_none()
         assert not isinstance(numpy_tool, CompiledQueries), name
 
 
+class UnknownKind:
+    """A plugin's tool that names a kind code the compiled queries do not have."""
+
+    bounds = ((-1.0, -1.0, 0.0), (1.0, 1.0, 1.0))
+    size = 1.0
+
+    def compiled_queries(self) -> tuple[int, np.ndarray]:
+        return 99, np.zeros(3)
+
+    def closest_point(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return points, np.zeros(len(points))
+
+    def normal(self, points: np.ndarray) -> np.ndarray:
+        return np.tile([0.0, 0.0, 1.0], (len(points), 1))
+
+    def point_at_plan(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.column_stack((xy, np.zeros(len(xy)))), np.ones(len(xy), dtype=bool)
+
+
+def test_an_unknown_kind_is_refused_in_words_not_answered_with_nan() -> None:
+    from preform.drape.compiled_surface import query_tool
+
+    with pytest.raises(ValueError, match=r"kind 99.*compiled_queries"):
+        query_tool(UnknownKind(), np.zeros((1, 3)))
+    with pytest.raises(ValueError, match=r"kind 99"):
+        drape(
+            UnknownKind(), start_xy_m=(0, 0), node_spacing_m=0.1, ply=PlyOutline.rectangle((1, 1))
+        )  # type: ignore[arg-type]
+
+
 #: Coordinates in units of the tool's half extent about its centre: anywhere out to three
 #: extents, and the special values (the axis, the centre plane, subnormal offsets, the faces of
 #: the bounding box, far away).
