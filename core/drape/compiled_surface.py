@@ -54,6 +54,9 @@ KINDS = (
     ELLIPSOID_DOME,
     PARABOLOID_DOME,
 )
+#: Length of the parameter row of the tools other than the spheres (``kernel_parameters``).
+_ROW_LENGTH = 8
+
 #: The kinds whose net node has a compiled closed form (no Newton iteration).
 CLOSED_FORM_KINDS = (SPHERE, TRIMMED_SPHERE, PLANE)
 
@@ -79,6 +82,21 @@ def checked_kind(kind: int) -> int:
     return int(kind)
 
 
+def kernel_parameters(kind: int, params: FloatArray) -> FloatArray:
+    """A tool's parameters [m] as the compiled kernels take them: a sphere's as a vector, any
+    other tool's as one row (1, 8), padded with zeros. The rank picks the queries when the
+    kernels are compiled (``preform.drape.surface_kernels.query``), so the sphere's fill has
+    no dispatch on the other kinds and the other tools share one compilation."""
+    values = np.asarray(params, dtype=float).ravel()
+    if checked_kind(kind) in (SPHERE, TRIMMED_SPHERE):
+        return np.ascontiguousarray(values)
+    if len(values) > _ROW_LENGTH:
+        raise ValueError(f"a tool has at most {_ROW_LENGTH} kernel parameters, got {values}")
+    row = np.zeros((1, _ROW_LENGTH))
+    row[0, : len(values)] = values
+    return row
+
+
 def query_tool(
     surface: CompiledQueries, points: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -91,7 +109,7 @@ def query_tool(
         raise ValueError(f"expected an (n, 3) array of positions [m], got {p.shape}")
     kind, params = surface.compiled_queries()
     foot, normal, dist = surface_kernels.query_points(
-        checked_kind(kind), np.asarray(params, dtype=float), p.reshape(-1, 3)
+        checked_kind(kind), kernel_parameters(kind, params), p.reshape(-1, 3)
     )
     shape = p.shape[:-1]
     return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)

@@ -24,7 +24,7 @@ from typing import Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import CompiledQueries, checked_kind
+from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.result import NodeStatus
 from preform.drape.surface import Surface
 
@@ -154,12 +154,12 @@ def _surface_queries(
         from preform.drape import surface_kernels
 
         kind, params = surface.compiled_queries()
-        code, params = checked_kind(kind), np.asarray(params, dtype=float)
+        code, values = checked_kind(kind), kernel_parameters(kind, params)
 
         def compiled(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
             return cast(
                 tuple[FloatArray, FloatArray, FloatArray],
-                surface_kernels.query_points(code, params, np.ascontiguousarray(points)),
+                surface_kernels.query_points(code, values, np.ascontiguousarray(points)),
             )
 
         return compiled

@@ -34,7 +34,7 @@ from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import CompiledQueries, checked_kind
+from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.fields import cell_fields
 from preform.drape.generators import (
     GeneratorNodes,
@@ -569,7 +569,7 @@ def drape(
         kind, params = cast(CompiledQueries, surface).compiled_queries()
         fronts, newton_iterations = kernels.fill_fronts(
             pos, status, residual, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front, d, tol_m,
-            max_iterations, lo_bound, hi_bound, checked_kind(kind), np.asarray(params, dtype=float),
+            max_iterations, lo_bound, hi_bound, checked_kind(kind), kernel_parameters(kind, params),
             closed_form,
         )  # fmt: skip
     else:

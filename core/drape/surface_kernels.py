@@ -27,7 +27,6 @@ from preform.drape.compiled_surface import (
     FLANGED_HEMISPHERE,
     PARABOLOID_DOME,
     PLANE,
-    SPHERE,
     TRIMMED_SPHERE,
 )
 from preform.drape.result import NodeStatus
@@ -48,6 +47,7 @@ _EPS = float(np.finfo(float).eps)
 # error_model="numpy": a division by zero gives inf/NaN (handled where it can occur) instead
 # of raising, as in the vectorised numpy code these queries replace.
 _jit = numba.njit(cache=True, error_model="numpy", fastmath=False)
+_jit_inline = numba.njit(cache=True, error_model="numpy", fastmath=False, inline="always")
 
 
 @_jit
@@ -68,7 +68,10 @@ def _unit_scaled(x: float, y: float, z: float):
 # Sphere (SPHERE, TRIMMED_SPHERE): centre x, y, z, radius [, floor z]
 
 
-@_jit
+# Inlined where it is called (numba IR): ``query`` then holds the sphere's code itself, and the
+# fill as many call levels from it as before the other tools had queries (measured: one level
+# more made the closed-form sphere fill ~25 % slower).
+@_jit_inline
 def _sphere(kind: int, params: FloatArray, x: float, y: float, z: float):
     ux, uy, uz = _unit_scaled(x - params[0], y - params[1], z - params[2])
     radius = params[3]
@@ -417,11 +420,7 @@ def _paraboloid_dome(params: FloatArray, x: float, y: float, z: float):
 
 
 @_jit
-def query(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """The closest point of the tool of ``kind`` to (x, y, z) [m], the unit outward normal
-    there and the distance [m] (the tool's ``closest_point`` and ``normal`` at once)."""
-    if kind == SPHERE or kind == TRIMMED_SPHERE:
-        return _sphere(kind, params, x, y, z)
+def _other_kinds(kind: int, params: FloatArray, x: float, y: float, z: float):
     if kind == PLANE:
         return _plane(params, x, y, z)
     if kind == CYLINDER:
@@ -434,8 +433,23 @@ def query(kind: int, params: FloatArray, x: float, y: float, z: float):
         return _ellipsoid_dome(params, x, y, z)
     if kind == PARABOLOID_DOME:
         return _paraboloid_dome(params, x, y, z)
-    # not a kind of preform.drape.compiled_surface: no answer
+    # not a kind of preform.drape.compiled_surface (checked_kind refuses those before)
     return np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan
+
+
+@_jit
+def query(kind: int, params: FloatArray, x: float, y: float, z: float):
+    """The closest point of the tool of ``kind`` to (x, y, z) [m], the unit outward normal
+    there and the distance [m] (the tool's ``closest_point`` and ``normal`` at once).
+
+    ``params`` as ``kernel_parameters`` gives them: its rank picks the queries when the caller
+    is compiled (numba prunes the other branch), so the sphere's fill is compiled with the
+    sphere's query alone and carries no dispatch on the other tools (measured: a run-time
+    dispatch made the closed-form sphere fill 1.6x slower)."""
+    if params.ndim == 1:
+        return _sphere(kind, params, x, y, z)
+    else:
+        return _other_kinds(kind, params[0], x, y, z)
 
 
 @_jit

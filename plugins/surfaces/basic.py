@@ -15,7 +15,15 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import CYLINDER, PLANE, SPHERE, TRIMMED_SPHERE, query_tool
+from preform.drape.compiled_surface import (
+    CYLINDER,
+    PLANE,
+    SPHERE,
+    TRIMMED_SPHERE,
+    checked_kind,
+    kernel_parameters,
+    query_tool,
+)
 from preform.drape.part import HeightCut
 from preform.drape.result import NodeStatus
 
@@ -47,7 +55,7 @@ def _compiled_place_nodes(
     kind, params = tool.compiled_queries()
     ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
     points, status = net_kernels.closed_form_nodes(
-        kind, params, ends[0], ends[1], ends[2], float(spacing)
+        checked_kind(kind), kernel_parameters(kind, params), *ends, float(spacing)
     )
     return np.asarray(points), np.asarray(status, dtype=np.int8)
 
