@@ -55,7 +55,12 @@ def _compiled_place_nodes(
     kind, params = tool.compiled_queries()
     ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
     points, status = net_kernels.closed_form_nodes(
-        checked_kind(kind), kernel_parameters(kind, params), *ends, float(spacing)
+        checked_kind(kind),
+        kernel_parameters(kind, params),
+        ends[0],
+        ends[1],
+        ends[2],
+        float(spacing),
     )
     return np.asarray(points), np.asarray(status, dtype=np.int8)
 
