@@ -6,7 +6,9 @@ drape never import numba.
 
 The per-node steps are plain scalar functions:
 
-- :func:`_sphere_node`: the closed-form node on a sphere (PHYSICS §6);
+- :func:`_sphere_node`: the closed-form node on a sphere (PHYSICS §6); the plate's is
+  ``preform.drape.surface_kernels.plane_node``, and every tool's closest point and normal
+  ``preform.drape.surface_kernels`` (:func:`_query` picks them);
 - :func:`_circle_frame` and :func:`_newton_update`: the general placement on the circle where
   the two distance spheres meet (``preform.drape.net``'s module doc), one damped Newton step
   in the circle angle φ at a time, given the surface's closest point and normal;
@@ -24,9 +26,9 @@ arithmetic is the same code.
 The per-node steps are inlined into the loops (``_per_node``) and take points, frames and the
 tool's parameters as tuples, not arrays: numba reference-counts an array handed to a function
 (an atomic add and subtract), which at one call per node cost more than half of the fill. A
-new kind of compiled surface gets its code in ``compiled_surface`` and its branch in
-:func:`_query` (closest point, unit normal, distance), reading its parameters by constant
-index from the ``MAX_PARAMS``-tuple (:func:`_param_tuple`).
+new kind of compiled surface gets its code in ``compiled_surface`` and its query in
+``surface_kernels`` (closest point, unit normal, distance), reading its parameters by
+constant index: the fill hands it the ``MAX_PARAMS``-tuple of :func:`_param_tuple`.
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.compiled_surface import TRIMMED_SPHERE
+from preform.drape import surface_kernels
+from preform.drape.compiled_surface import PLANE, SPHERE, TRIMMED_SPHERE
 from preform.drape.result import NodeStatus
 
 FloatArray = NDArray[np.float64]
@@ -79,13 +82,15 @@ MAX_PARAMS = 16
 
 @_jit
 def _param_tuple(params: FloatArray):
-    """A surface's parameters as a tuple of ``MAX_PARAMS`` numbers (NaN past its own): what
-    the fill hands its per-node steps, held in registers (an array would be reference counted
-    at every node). The queries index it as they would the array."""
-    if params.shape[0] > MAX_PARAMS:
+    """A surface's parameters (as ``compiled_surface.kernel_parameters`` gives them) as a
+    tuple of ``MAX_PARAMS`` numbers (NaN past its own): what the fill hands its per-node steps,
+    held in registers (an array would be reference counted at every node). The queries index
+    it as they would the array."""
+    values = params.ravel()  # a sphere's vector or another tool's row (kernel_parameters)
+    if values.shape[0] > MAX_PARAMS:
         raise ValueError("a compiled surface takes at most MAX_PARAMS parameters")
     p = np.full(MAX_PARAMS, np.nan)
-    p[: params.shape[0]] = params
+    p[: values.shape[0]] = values
     return (
         p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7],
         p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15],
@@ -97,43 +102,13 @@ def _param_tuple(params: FloatArray):
 
 
 @_per_node
-def _radial(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """Unit direction from a sphere's centre (+z for the centre itself)."""
-    rx, ry, rz = x - params[0], y - params[1], z - params[2]
-    length = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if length < 1e-100:
-        # squares this small are subnormal (or zero) and their root inexact: scale by the
-        # largest component first so the direction stays a unit vector
-        largest = max(abs(rx), abs(ry), abs(rz))
-        if largest == 0.0:
-            return 0.0, 0.0, 1.0
-        rx, ry, rz = rx / largest, ry / largest, rz / largest
-        length = math.sqrt(rx * rx + ry * ry + rz * rz)
-    return rx / length, ry / length, rz / length
-
-
-@_per_node
-def _query(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """The closest surface point to (x, y, z), the unit outward normal there and the distance
-    [m] (the surface's ``closest_point`` and ``normal`` at once)."""
-    ux, uy, uz = _radial(kind, params, x, y, z)
-    radius = params[3]
-    if kind == TRIMMED_SPHERE:
-        floor = (params[4] - params[2]) / radius
-        if uz < floor:
-            # Below the floor: the nearest point is on the edge circle at height floor·R.
-            flat = math.sqrt(ux * ux + uy * uy)
-            if flat > 0.0:
-                fx, fy = ux / flat, uy / flat
-            else:
-                fx, fy = 1.0, 0.0
-            ring = math.sqrt(1.0 - floor * floor)
-            ux, uy, uz = ring * fx, ring * fy, floor
-    qx = params[0] + radius * ux
-    qy = params[1] + radius * uy
-    qz = params[2] + radius * uz
-    dx, dy, dz = x - qx, y - qy, z - qz
-    return qx, qy, qz, ux, uy, uz, math.sqrt(dx * dx + dy * dy + dz * dz)
+def _query(kind: int, params, x: float, y: float, z: float):
+    """The closest point of the tool of ``kind`` to (x, y, z) [m], the unit outward normal
+    there and the distance [m], from its parameters as a tuple (:func:`_param_tuple`): the
+    sphere's query inlined here, any other tool's called (``surface_kernels``)."""
+    if kind == SPHERE or kind == TRIMMED_SPHERE:
+        return surface_kernels._sphere(kind, params, x, y, z)
+    return surface_kernels._other_kinds(kind, params, x, y, z)
 
 
 # --------------------------------------------------------------------------------------------
@@ -178,32 +153,44 @@ def _sphere_node(kind: int, params: FloatArray, a: Vec, b: Vec, c: Vec, spacing:
 
 
 @_per_node
-def _sphere_normal(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """The outward normal direction at a point of a sphere's tool (any positive multiple of
-    the unit normal: the fold check reads only its sign) and the distance to the tool [m].
+def _closed_form_normal(kind: int, params, x: float, y: float, z: float):
+    """The outward normal direction at a closed-form node (any positive multiple of the unit
+    normal: the fold check reads only its sign) and the distance to the tool [m].
 
-    On the sphere itself (above a trimmed sphere's floor, with a margin) that is the offset
-    from the centre and | |p − o| − R |, one square root where the full query (``_query``)
-    takes two and three divisions; elsewhere the full query."""
+    On a sphere (above a trimmed sphere's floor, with a margin) that is the offset from the
+    centre and | |p − o| − R |, one square root where the full query (``_query``) takes two
+    and three divisions; elsewhere (below the floor, the plate) the full query."""
     ox, oy, oz, r = params[0], params[1], params[2], params[3]
-    if kind == TRIMMED_SPHERE and not z > params[4] + 1e-9 * r:
+    if kind != SPHERE and not (kind == TRIMMED_SPHERE and z > params[4] + 1e-9 * r):
         _, _, _, nx, ny, nz, dist = _query(kind, params, x, y, z)
         return nx, ny, nz, dist
     rx, ry, rz = x - ox, y - oy, z - oz
     return rx, ry, rz, abs(math.sqrt(rx * rx + ry * ry + rz * rz) - r)
 
 
+@_per_node
+def _closed_form_node(kind: int, params, a: Vec, b: Vec, c: Vec, spacing: float):
+    """The closed-form node of a tool that has one (``CLOSED_FORM_KINDS``): the sphere's, or
+    the plate's (``surface_kernels.plane_node``); parameters as :func:`_param_tuple` gives."""
+    if kind == PLANE:
+        return surface_kernels.plane_node(
+            params, a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], spacing
+        )
+    return _sphere_node(kind, params, a, b, c, spacing)
+
+
 @_jit
-def sphere_place_nodes(
+def closed_form_nodes(
     kind: int, params: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray, spacing: float
 ):
-    """:meth:`Sphere.place_nodes` over m nodes: points (m, 3) [m] (NaN unless placed) and
-    NodeStatus codes (m,)."""
+    """The tools' ``place_nodes`` (sphere, plate) over m nodes: points (m, 3) [m] (NaN unless
+    placed) and NodeStatus codes (m,); ``params`` as ``kernel_parameters`` gives them."""
+    par = _param_tuple(params)
     m = a.shape[0]
     points = np.empty((m, 3))
     status = np.empty(m, dtype=np.int8)
     for i in range(m):
-        px, py, pz, st = _sphere_node(kind, params, _row(a, i), _row(b, i), _row(c, i), spacing)
+        px, py, pz, st = _closed_form_node(kind, par, _row(a, i), _row(b, i), _row(c, i), spacing)
         points[i, 0], points[i, 1], points[i, 2] = px, py, pz
         status[i] = st
     return points, status
@@ -601,7 +588,7 @@ def fill_fronts(
     closed_form: bool,
 ):
     """Every front of the net on a surface with compiled queries, in place on ``pos``,
-    ``status`` and ``residual`` (flat, ni·nj). ``closed_form``: the sphere's closed-form node,
+    ``status`` and ``residual`` (flat, ni·nj). ``closed_form``: the tool's closed-form node,
     else Newton on the constraint circle. Returns (fronts placed, most Newton passes over a
     front), as the Python loop counts them.
 
@@ -632,10 +619,10 @@ def fill_fronts(
                 ready_on_front[a_off + b_off] = True
                 a, b, c = _row(pos, ia), _row(pos, ib), _row(pos, ic)
                 if closed_form:
-                    px, py, pz, st = _sphere_node(kind, par, a, b, c, spacing)
+                    px, py, pz, st = _closed_form_node(kind, par, a, b, c, spacing)
                     nx = ny = nz = dist = np.nan
                     if st == _PLACED:
-                        nx, ny, nz, dist = _sphere_normal(kind, par, px, py, pz)
+                        nx, ny, nz, dist = _closed_form_normal(kind, par, px, py, pz)
                 else:
                     px, py, pz, st, used, nx, ny, nz, dist = _newton_node(
                         kind, par, a, b, c, spacing, tolerance_m, max_iterations
@@ -661,24 +648,3 @@ def fill_fronts(
     # the vectorised loop makes one more pass over a front to find no node left, unless capped
     newton_max = 0 if closed_form or fronts == 0 else min(most_used + 1, max_iterations)
     return fronts, newton_max
-
-
-@_jit
-def query_points(kind: int, params: FloatArray, points: FloatArray):
-    """Closest surface points (m, 3) [m], unit normals there (m, 3) and distances (m,) [m] of a
-    surface with compiled queries, for the vectorised callers (generator marching)."""
-    m = points.shape[0]
-    foot = np.empty((m, 3))
-    normal = np.empty((m, 3))
-    dist = np.empty(m)
-    for i in range(m):
-        (
-            foot[i, 0],
-            foot[i, 1],
-            foot[i, 2],
-            normal[i, 0],
-            normal[i, 1],
-            normal[i, 2],
-            dist[i],
-        ) = _query(kind, params, points[i, 0], points[i, 1], points[i, 2])
-    return foot, normal, dist
