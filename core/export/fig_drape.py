@@ -3,7 +3,9 @@
 
 from __future__ import annotations
 
+import math
 import os
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -142,6 +144,83 @@ def _top_view(ax: Axes, result: DrapeResult, tow_every: int, edge: np.ndarray | 
     ax.legend(loc="upper right", fontsize="small")
 
 
+#: Most quads the 3D shear view draws. A finer net is drawn one quad per k × k block of cells
+#: (k the smallest that fits, where the whole block is drawn): matplotlib makes one Path per
+#: polygon, which was half of a default case's figure time, and at the default 1600 × 800 px the
+#: 3D panel is ~700 px across, so a standard 145² net's cells are 3–5 px there, about their
+#: outlines' width. A modelling-free drawing choice; measured in benchmarks/README.md (k).
+SHEAR_VIEW_MAX_QUADS = 2500
+
+
+@dataclass(frozen=True)
+class ShearViewQuads:
+    """What the 3D shear view draws: quads (n, 4, 3) [mm], their signed shear (n,) [deg] and
+    whether each is past locking (n,) (None without an energy field); ``block`` cells a side."""
+
+    quads_mm: np.ndarray
+    shear_deg: np.ndarray
+    locked: np.ndarray | None
+    block: int
+
+
+def shear_view_quads(
+    result: DrapeResult,
+    drawn: np.ndarray,
+    past_locking: np.ndarray | None,
+    max_quads: int = SHEAR_VIEW_MAX_QUADS,
+) -> ShearViewQuads:
+    """The quads of the 3D shear view for the cells ``drawn`` (ni-1, nj-1).
+
+    With more drawn cells than ``max_quads``, every k × k block of cells whose cells are all
+    drawn becomes one quad through the block's four corner nodes, coloured by the signed shear
+    of its cell of largest |γ| (so the extremes the colour bar spans stay visible) and past
+    locking when any of its cells is; cells of blocks only partly drawn (along the part's edge,
+    next to unplaced nodes) are drawn one by one, so the drawn area keeps its outline.
+    """
+    nodes_mm = 1e3 * np.asarray(result.nodes, dtype=float)
+    shear = np.degrees(np.asarray(result.shear, dtype=float))
+    drawn = np.asarray(drawn, dtype=bool)
+    k = max(1, math.ceil(math.sqrt(np.count_nonzero(drawn) / max(max_quads, 1))))
+    whole_cells = np.zeros_like(drawn)
+    block_quads: list[np.ndarray] = []
+    block_shear = np.empty(0)
+    block_locked = np.empty(0, dtype=bool)
+    if k > 1:
+        ci_n, cj_n = drawn.shape
+        bi_n, bj_n = ci_n // k, cj_n // k  # whole blocks only; the ragged rim goes cell by cell
+
+        def blocks(a: np.ndarray) -> np.ndarray:
+            trimmed = a[: bi_n * k, : bj_n * k]
+            return (
+                trimmed.reshape(bi_n, k, bj_n, k).transpose(0, 2, 1, 3).reshape(bi_n, bj_n, k * k)
+            )
+
+        whole = blocks(drawn).all(axis=2)
+        whole_cells[: bi_n * k, : bj_n * k] = np.repeat(np.repeat(whole, k, axis=0), k, axis=1)
+        bi, bj = np.nonzero(whole)
+        in_block = blocks(np.where(drawn, shear, 0.0))[bi, bj]
+        block_shear = in_block[np.arange(len(bi)), np.argmax(np.abs(in_block), axis=1)]
+        if past_locking is not None:
+            block_locked = blocks(np.asarray(past_locking, dtype=bool))[bi, bj].any(axis=1)
+        i0, j0 = k * bi, k * bj
+        block_quads = [nodes_mm[i0, j0], nodes_mm[i0 + k, j0], nodes_mm[i0 + k, j0 + k]]
+        block_quads.append(nodes_mm[i0, j0 + k])
+    ci, cj = np.nonzero(drawn & ~whole_cells)
+    cell_quads = np.stack(
+        [nodes_mm[ci, cj], nodes_mm[ci + 1, cj], nodes_mm[ci + 1, cj + 1], nodes_mm[ci, cj + 1]],
+        axis=1,
+    )
+    quads = (
+        np.concatenate([np.stack(block_quads, axis=1), cell_quads]) if block_quads else cell_quads
+    )
+    locked = None
+    if past_locking is not None:
+        locked = np.concatenate([block_locked, np.asarray(past_locking, dtype=bool)[ci, cj]])
+    return ShearViewQuads(
+        quads.reshape(-1, 4, 3), np.concatenate([block_shear, shear[ci, cj]]), locked, k
+    )
+
+
 def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyField | None) -> None:
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
@@ -152,13 +231,9 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
     if result.part_share is not None:
         # Only the part: the net draped past its edge would hide it.
         valid &= np.asarray(result.part_weight) > 0
-    ci, cj = np.nonzero(valid)
-    nodes_mm = 1e3 * np.asarray(result.nodes, dtype=float)
-    quads = np.stack(
-        [nodes_mm[ci, cj], nodes_mm[ci + 1, cj], nodes_mm[ci + 1, cj + 1], nodes_mm[ci, cj + 1]],
-        axis=1,
-    )
-    shear_deg = np.degrees(np.asarray(result.shear, dtype=float)[ci, cj])
+    locked_cells = None if energy is None else np.asarray(energy.past_locking, dtype=bool)
+    view = shear_view_quads(result, valid, locked_cells)
+    quads, shear_deg = view.quads_mm, view.shear_deg
     # Symmetric colour range centred on zero so positive and negative shear read alike.
     half_range = max(float(np.max(np.abs(shear_deg))) if shear_deg.size else 0.0, 1.0)
     norm = CenteredNorm(vcenter=0.0, halfrange=half_range)
@@ -166,11 +241,10 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
     if len(quads):
         edge = np.tile([0.3, 0.3, 0.3, 0.6], (len(quads), 1))
         widths = np.full(len(quads), 0.15)
-        if energy is not None:
+        if view.locked is not None:
             # Cells past locking get a black outline: that is where wrinkles are expected.
-            locked = np.asarray(energy.past_locking, dtype=bool)[ci, cj]
-            edge[locked] = (0.0, 0.0, 0.0, 1.0)
-            widths[locked] = 0.8
+            edge[view.locked] = (0.0, 0.0, 0.0, 1.0)
+            widths[view.locked] = 0.8
         ax.add_collection3d(
             Poly3DCollection(
                 quads, facecolors=cmap(norm(shear_deg)), edgecolors=edge, linewidths=widths
@@ -197,7 +271,10 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")
-    ax.set_title("Shear angle" + (" (black outline: past locking)" if energy is not None else ""))
+    title = "Shear angle" + (" (black outline: past locking)" if energy is not None else "")
+    if view.block > 1:
+        title += f"\none quad per {view.block} × {view.block} cells (their largest |γ|)"
+    ax.set_title(title)
     colour_bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.7, pad=0.12)
     colour_bar.set_label("signed shear angle γ [deg]")
 
@@ -219,7 +296,8 @@ def fibre_pattern_figure(
     through the start node, the generators, always and in bold), broken wherever a node is not
     placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
     colour bar in degrees; with ``energy``, cells past locking are outlined and the total energy
-    [J] goes into the title. Where the net folded (a sharp vertex's shadow), the cell that would
+    [J] goes into the title. A net of more than ``SHEAR_VIEW_MAX_QUADS`` cells is drawn one quad
+    per k × k block there, and the panel's title says k (``shear_view_quads``). Where the net folded (a sharp vertex's shadow), the cell that would
     turn over is filled orange in both views and the count goes into the title. Axes in mm. ``size_px`` is the saved (width, height) [pixels].
     A net clipped to a part is drawn over the part only (cells with area in it, and their
     nodes); with ``part`` its edge is drawn dashed in the top view.

@@ -1,10 +1,20 @@
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
-from preform.export.fig_drape import fibre_lines, fibre_pattern_figure
+from preform.export.fig_drape import (
+    SHEAR_VIEW_MAX_QUADS,
+    fibre_lines,
+    fibre_pattern_figure,
+    shear_view_quads,
+)
 from preform.export.fig_unit_cell import refine_polyline, tow_ribbon, unit_cell_figure
 
 
@@ -153,3 +163,80 @@ def test_energy_vs_angle_figure_marks_optima(tmp_path, read_png):
     # Sorted by angle, NaN dropped.
     second = fig.axes[0].get_lines()[2].get_xydata()
     assert np.all(np.diff(second[:, 0]) > 0) and np.all(np.isfinite(second))
+
+
+def _blocks_by_loop(net, drawn, locked, k):
+    """A second implementation of the 3D view's quads: loop over k × k blocks, a whole block
+    one quad (its largest-|γ| cell's shear, locked if any cell is), every other cell alone."""
+    nodes = 1e3 * net.nodes
+    shear = np.degrees(net.shear)
+    quads, values, flags, covered = [], [], [], np.zeros_like(drawn)
+    for bi in range(drawn.shape[0] // k):
+        for bj in range(drawn.shape[1] // k):
+            cells = [(bi * k + a, bj * k + b) for a in range(k) for b in range(k)]
+            if k > 1 and all(drawn[c] for c in cells):
+                i, j = bi * k, bj * k
+                quads.append([nodes[i, j], nodes[i + k, j], nodes[i + k, j + k], nodes[i, j + k]])
+                values.append(max((shear[c] for c in cells), key=abs))
+                flags.append(any(locked[c] for c in cells))
+                for c in cells:
+                    covered[c] = True
+    for i, j in zip(*np.nonzero(drawn & ~covered), strict=True):
+        quads.append([nodes[i, j], nodes[i + 1, j], nodes[i + 1, j + 1], nodes[i, j + 1]])
+        values.append(shear[i, j])
+        flags.append(locked[i, j])
+    return np.asarray(quads).reshape(-1, 4, 3), np.asarray(values), np.asarray(flags, dtype=bool)
+
+
+def _quad_area(quads):
+    """Area [mm²] of planar quads (two triangles; exact for the flat nets below)."""
+    a = np.cross(quads[:, 1] - quads[:, 0], quads[:, 2] - quads[:, 0])
+    b = np.cross(quads[:, 2] - quads[:, 0], quads[:, 3] - quads[:, 0])
+    return 0.5 * (np.linalg.norm(a, axis=1) + np.linalg.norm(b, axis=1))
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    ni=st.integers(3, 24),
+    nj=st.integers(3, 24),
+    alpha=st.floats(35.0, 145.0),
+    max_quads=st.integers(1, 400),
+    seed=st.integers(0, 2**31),
+)
+def test_shear_view_blocks_keep_area_extremes_and_locking(make_net, ni, nj, alpha, max_quads, seed):
+    """Coarser quads on big nets: the drawn area is the drawn cells' area (a flat net's blocks
+    are exact parallelograms), the largest |γ| is kept, every locked cell stays outlined, and a
+    loop over the blocks gives the same quads."""
+    rng = np.random.default_rng(seed)
+    net = make_net(ni, nj, generator_angle_deg=alpha)
+    net_shear = np.asarray(net.shear) + rng.normal(0.0, 0.1, net.shear.shape)  # cells differ
+    net = dataclasses.replace(net, shear=net_shear)
+    drawn = np.asarray(net.valid) & (rng.random(net.shear.shape) > 0.15)
+    locked = drawn & (rng.random(net.shear.shape) > 0.8)
+    view = shear_view_quads(net, drawn, locked, max_quads=max_quads)
+    count = np.count_nonzero(drawn)
+    assert view.block == max(1, math.ceil(math.sqrt(count / max_quads)))
+    quads, values, flags = _blocks_by_loop(net, drawn, locked, view.block)
+    np.testing.assert_allclose(view.quads_mm, quads)
+    np.testing.assert_array_equal(view.shear_deg, values)
+    np.testing.assert_array_equal(view.locked, flags)
+    cell_area = (1e3 * net.node_spacing) ** 2 * abs(np.sin(np.radians(alpha)))
+    assert _quad_area(view.quads_mm).sum() == pytest.approx(count * cell_area, rel=1e-9)
+    if count:
+        assert np.max(np.abs(view.shear_deg)) == np.max(np.abs(np.degrees(net_shear[drawn])))
+    assert np.count_nonzero(view.locked) >= (1 if locked.any() else 0)
+
+
+def test_fibre_pattern_of_a_fine_net_draws_blocks_and_says_so(
+    tmp_path, make_net, make_energy, read_png
+):
+    net = make_net(120, 120, dome=True)
+    fig = fibre_pattern_figure(net, make_energy(net), tmp_path / "fine.png", size_px=(800, 400))
+    shear_view = fig.axes[1]
+    cells = np.count_nonzero(np.asarray(net.valid) & (np.asarray(net.part_weight) > 0))
+    drawn = len(shear_view.collections[0].get_paths())
+    assert drawn <= SHEAR_VIEW_MAX_QUADS < cells
+    assert "one quad per 3 × 3 cells" in shear_view.get_title()
+    assert_real_picture(read_png(tmp_path / "fine.png"), (800, 400), min_colours=30)
