@@ -59,22 +59,28 @@ def part_edge_segments(result: DrapeResult, part: Part) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         phi = np.asarray(part.level(np.where(np.isfinite(nodes), nodes, 0.0)), dtype=float)
     valid = np.asarray(result.cell_status == CellStatus.VALID)
-    corners = ((0, 0), (1, 0), (1, 1), (0, 1))
-    segments = []
-    for ci, cj in zip(*np.nonzero(valid), strict=True):
-        values = [phi[ci + a, cj + b] for a, b in corners]
-        if min(values) >= 0 or max(values) < 0:
-            continue
-        points = []
+    ni, nj = phi.shape
+    corners = ((0, 0), (1, 0), (1, 1), (0, 1))  # round the cell; side k runs corner k -> k+1
+    values = [phi[a : ni - 1 + a, b : nj - 1 + b] for a, b in corners]
+    points = [nodes[a : ni - 1 + a, b : nj - 1 + b] for a, b in corners]
+    low = np.minimum.reduce(values)
+    cut = valid & (low < 0) & (np.maximum.reduce(values) >= 0)
+    first = np.full((*cut.shape, 3), np.nan)
+    second = np.full((*cut.shape, 3), np.nan)
+    found = np.zeros(cut.shape, dtype=int)
+    with np.errstate(invalid="ignore", divide="ignore"):
         for k in range(4):
-            (a0, b0), (a1, b1) = corners[k], corners[(k + 1) % 4]
             f0, f1 = values[k], values[(k + 1) % 4]
-            if (f0 >= 0) != (f1 >= 0):
-                t = f0 / (f0 - f1)
-                points.append((1 - t) * nodes[ci + a0, cj + b0] + t * nodes[ci + a1, cj + b1])
-        if len(points) >= 2:
-            segments.append(points[:2])
-    return 1e3 * np.asarray(segments, dtype=float).reshape(-1, 2, 3)
+            crosses = cut & ((f0 >= 0) != (f1 >= 0))
+            t = (f0 / (f0 - f1))[..., None]
+            point = (1 - t) * points[k] + t * points[(k + 1) % 4]
+            # The first two sides crossed, in order round the cell, make the segment.
+            first = np.where((crosses & (found == 0))[..., None], point, first)
+            second = np.where((crosses & (found == 1))[..., None], point, second)
+            found += crosses
+    ci, cj = np.nonzero(cut & (found >= 2))
+    segments = np.stack([first[ci, cj], second[ci, cj]], axis=1)
+    return 1e3 * segments.reshape(-1, 2, 3)
 
 
 def _polyline_xy(result: DrapeResult, family: str, lines: list[int]) -> np.ndarray:

@@ -8,11 +8,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from preform.drape.result import CellStatus
 from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
 from preform.export.fig_drape import (
     SHEAR_VIEW_MAX_QUADS,
     fibre_lines,
     fibre_pattern_figure,
+    part_edge_segments,
     shear_view_quads,
 )
 from preform.export.fig_unit_cell import refine_polyline, tow_ribbon, unit_cell_figure
@@ -240,3 +242,62 @@ def test_fibre_pattern_of_a_fine_net_draws_blocks_and_says_so(
     assert drawn <= SHEAR_VIEW_MAX_QUADS < cells
     assert "one quad per 3 × 3 cells" in shear_view.get_title()
     assert_real_picture(read_png(tmp_path / "fine.png"), (800, 400), min_colours=30)
+
+
+def _edge_by_loop(net, phi):
+    """A second implementation of the part's edge: cell by cell, side by side round the cell."""
+    nodes = 1e3 * net.nodes
+    corners = ((0, 0), (1, 0), (1, 1), (0, 1))
+    segments = []
+    for ci, cj in zip(*np.nonzero(net.cell_status == CellStatus.VALID), strict=True):
+        values = [phi[ci + a, cj + b] for a, b in corners]
+        if min(values) >= 0 or max(values) < 0:
+            continue
+        points = []
+        for k in range(4):
+            (a0, b0), (a1, b1) = corners[k], corners[(k + 1) % 4]
+            f0, f1 = values[k], values[(k + 1) % 4]
+            if (f0 >= 0) != (f1 >= 0):
+                t = f0 / (f0 - f1)
+                points.append((1 - t) * nodes[ci + a0, cj + b0] + t * nodes[ci + a1, cj + b1])
+        segments.append(points[:2])
+    return np.asarray(segments, dtype=float).reshape(-1, 2, 3)
+
+
+@dataclasses.dataclass
+class _Disc:
+    """A part whose level function is a disc in plan [m] (positive inside)."""
+
+    x: float
+    y: float
+    radius: float
+
+    saddle: bool = False
+
+    def level(self, points):
+        dx, dy = points[..., 0] - self.x, points[..., 1] - self.y
+        if self.saddle:  # cells where all four sides cross: the first two sides make the line
+            return dx * dy
+        return self.radius - np.hypot(dx, dy)
+
+
+@settings(
+    max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    x=st.floats(-0.03, 0.03),
+    y=st.floats(-0.03, 0.03),
+    radius=st.floats(0.0, 0.06),
+    dome=st.booleans(),
+    saddle=st.booleans(),
+)
+def test_the_part_edge_matches_a_cell_by_cell_loop(make_net, x, y, radius, dome, saddle):
+    net = make_net(12, 14, dome=dome, unplaced=[(0, 0), (6, 7)], folded=[(3, 3)])
+    part = _Disc(x, y, radius, saddle)
+    phi = part.level(np.where(np.isfinite(net.nodes), net.nodes, 0.0))
+    edge = part_edge_segments(net, part)
+    np.testing.assert_allclose(edge, _edge_by_loop(net, phi), rtol=0, atol=1e-12)
+    # Every end lies on the disc's edge where the net is flat (linear along a straight side).
+    if not dome and not saddle and len(edge):
+        ends = 1e-3 * edge.reshape(-1, 3)
+        np.testing.assert_allclose(part.level(ends), 0.0, atol=0.006 * 0.006 / max(radius, 1e-3))
