@@ -265,3 +265,62 @@ def test_builtin_lazy_names_still_win_over_a_third_party_plugin(monkeypatch):
     record = host.add(Intruder(), "intruder")
     assert "step 'drape' is already registered by built-in plugin 'core'" in record.error
     assert host.registry.entries("steps")["drape"].plugin == "core"
+
+
+class BrokenModels:
+    """A law, a surface and an architecture registered by import paths that do not load."""
+
+    @hookimpl
+    def preform_register_architectures(self, register):
+        register.add_lazy("ghostweave", model="nosuchmodule_xyz:Fabric")
+
+    @hookimpl
+    def preform_register_shear_laws(self, register):
+        register.add_lazy("ghost_law", params="nosuchmodule_xyz:P", build="nosuchmodule_xyz:b")
+
+    @hookimpl
+    def preform_register_surfaces(self, register):
+        register.add_lazy("ghost_tool", params="nosuchmodule_xyz:P", build="nosuchmodule_xyz:b")
+
+
+def test_a_law_surface_or_architecture_that_does_not_load_is_a_located_input_error(
+    tmp_path, third_party_site
+):
+    import toyplug
+
+    from preform.library import LibraryError, load_library
+    from preform.pipeline.scene import SceneError, load_scene
+
+    host = PluginHost()
+    host.add(toyplug, "toy")
+    host.add(BrokenModels(), "broken_models")
+    lib = tmp_path / "lib.yaml"
+    lib.write_text(
+        "- {name: a, architecture: ghostweave, source: s, note: n}\n"
+        "- name: b\n"
+        "  architecture: toy\n"
+        "  areal_density_g_m2: 100\n"
+        "  shear_law: {law: ghost_law}\n"
+    )
+    with pytest.raises(LibraryError) as info:
+        load_library([lib], bundled=False, registry=host.registry)
+    errors = [str(e) for e in info.value.errors]
+    assert errors[0].startswith(f"{lib}:1:")
+    assert (
+        "plugin 'broken_models': architecture 'ghostweave' could not be loaded from " in (errors[0])
+    )
+    assert any(
+        e.startswith(f"{lib}:5:")
+        and "shear_law.law" in e
+        and "shear law 'ghost_law' could not be loaded from nosuchmodule_xyz:P" in e
+        for e in errors
+    )
+    scene = tmp_path / "s.yaml"
+    scene.write_text("name: s\ntool: {surface: ghost_tool}\noutputs: [nothing]\n")
+    with pytest.raises(SceneError) as info:
+        load_scene(scene, host.registry)
+    assert any(
+        str(e).startswith(f"{scene}:2:")
+        and "plugin 'broken_models': surface 'ghost_tool' could not be loaded" in str(e)
+        for e in info.value.errors
+    )
