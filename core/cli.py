@@ -106,6 +106,8 @@ class PreformGroup(click.Group):
             return super().invoke(ctx)
         except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
             raise
+        except BrokenPipeError:  # `preform ... | head`: the reader left; `main` ends quietly
+            raise
         except Exception as exc:
             if ctx.meta.get("preform.debug") or os.environ.get("PREFORM_DEBUG") == "1":
                 raise

@@ -111,3 +111,20 @@ def test_the_probe_sees_what_a_command_imports() -> None:
     """The probe itself can fail: ``materials list`` validates fabrics, so it must see the
     models, pydantic and numpy loaded."""
     assert _loaded(["materials", "list"], MODELS_AND_ARRAYS) == sorted(MODELS_AND_ARRAYS)
+
+
+def test_a_reader_leaving_the_pipe_is_not_reported_as_a_bug() -> None:
+    """``preform materials list | head -1`` where ``head`` has left: a quiet end, not the
+    "bug in preform" message (the reader here leaves before the first line is written)."""
+    code = "import sys; from preform.cli import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, "materials", "list"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout is not None
+    proc.stdout.close()  # the reader leaves at once
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    assert "bug" not in err and "Traceback" not in err, err
