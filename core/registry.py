@@ -218,6 +218,18 @@ class Registry:
             for product in entry.obj.provides
         }
 
+    def load_all(self) -> list[str]:
+        """Import every lazy entry now; the messages of those that do not load (each is also
+        recorded among its plugin's problems)."""
+        failures = []
+        for kind in self.KINDS:
+            for name in list(self._entries[kind]):
+                try:
+                    self.get(kind, name)
+                except LazyLoadError as exc:
+                    failures.append(str(exc))
+        return failures
+
     def is_loaded(self, kind: str, name: str) -> bool:
         """Whether the entry's object is imported (False while a lazy entry waits)."""
         return not isinstance(self._entries[kind][name].obj, _LAZY)

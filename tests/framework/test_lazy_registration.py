@@ -324,3 +324,28 @@ def test_a_law_surface_or_architecture_that_does_not_load_is_a_located_input_err
         and "plugin 'broken_models': surface 'ghost_tool' could not be loaded" in str(e)
         for e in info.value.errors
     )
+
+
+def test_plugins_list_check_loads_every_entry_and_shows_what_does_not_load(lazy_module):
+    import json
+
+    from click.testing import CliRunner
+
+    from preform.cli import cli
+    from preform.plugin_manager import reset_default_host
+
+    host = PluginHost()
+    host.add(LazyPlugin(), "lazyplug")
+    reset_default_host(host)
+    try:
+        plain = CliRunner().invoke(cli, ["plugins", "list", "--json"])
+        assert "lazystuff" not in sys.modules  # listing alone imports nothing
+        checked = CliRunner().invoke(cli, ["plugins", "list", "--json", "--check"])
+    finally:
+        reset_default_host(None)
+    assert plain.exit_code == 0 and checked.exit_code == 0, checked.output
+    assert json.loads(plain.stdout)[0]["problems"] == []
+    (record,) = json.loads(checked.stdout)
+    assert record["error"] is None
+    failing = sorted(p.split("'")[3] for p in record["problems"])
+    assert failing == ["ghost", "liar", "misnamed", "missing", "number", "report", "wrong_law"]
