@@ -1,8 +1,9 @@
 """Start-up of the ``preform`` command against ``python -c "import numpy"``, as ratios.
 
 Each command runs in a fresh interpreter (the installed ``preform`` entry point, i.e.
-``preform.cli:main``, with this interpreter), best of ``--repeat`` wall-clock runs, all in the
-same run so the ratios hold on a shared machine. Goal (issue 15): every ratio ≤ 2.
+``preform.cli:main``, with this interpreter), best of ``--repeat`` wall-clock runs, the commands
+taking turns within each round so the ratios hold on a shared machine. Goal (issue 15): every
+ratio ≤ 2.
 
 Bytecode: an installed package has its modules compiled (``pip install`` writes the ``.pyc``
 files), and so do numpy's; an editable checkout run with ``PYTHONDONTWRITEBYTECODE=1`` (as on
@@ -47,8 +48,14 @@ def run(argv: list[str], env: dict[str, str] | None) -> float:
     return time.perf_counter() - start
 
 
-def best_of(argv: list[str], repeat: int, env: dict[str, str] | None) -> float:
-    return min(run(argv, env) for _ in range(repeat))
+def best_of_each(repeat: int, env: dict[str, str] | None) -> dict[str, float]:
+    """Best time of each command over ``repeat`` rounds, every round running each command
+    once in turn: a burst of load on the shared machine then falls on all of them alike."""
+    best = dict.fromkeys(COMMANDS, float("inf"))
+    for _ in range(repeat):
+        for name, argv in COMMANDS.items():
+            best[name] = min(best[name], run(argv, env))
+    return best
 
 
 def main() -> None:
@@ -68,7 +75,7 @@ def main() -> None:
             env["PYTHONPYCACHEPREFIX"] = cache
             for argv in COMMANDS.values():  # untimed: fills the bytecode cache
                 run(argv, env)
-        times = {name: best_of(argv, args.repeat, env) for name, argv in COMMANDS.items()}
+        times = best_of_each(args.repeat, env)
     base = times["import numpy"]
     print(f"{'command':<38}{'x import numpy':>16}{'ms':>8}")
     for name, seconds in times.items():
