@@ -17,13 +17,6 @@ from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
-from preform.material import FabricBase, Location
-from preform.pipeline.status import CaseFailure, CaseStatus
-from preform.plugin_manager import PluginHost, default_host, hookimpl
-from preform.registry import RegistrationError, Registry
-from preform.shear.law import ShearLaw, force_per_length_N_per_mm
-from preform.step import CaseContext, Step
-
 if TYPE_CHECKING:
     from preform.api import (
         CaseRun,
@@ -37,6 +30,12 @@ if TYPE_CHECKING:
         run,
         scene,
     )
+    from preform.material import FabricBase, Location
+    from preform.pipeline.status import CaseFailure, CaseStatus
+    from preform.plugin_manager import PluginHost, default_host, hookimpl
+    from preform.registry import RegistrationError, Registry
+    from preform.shear.law import ShearLaw, force_per_length_N_per_mm
+    from preform.step import CaseContext, Step
 
 #: Names served by ``preform.api``, imported when first asked for. ``preform.drape`` is the
 #: subpackage of that name, callable as ``preform.api.drape`` (see ``preform/drape/__init__``).
@@ -55,18 +54,37 @@ _API = frozenset(
 )
 
 
+#: The plugin contract's names, by the module serving each, also imported when first asked for:
+#: ``preform --version`` needs neither numpy (``preform.shear.law``) nor pydantic
+#: (``preform.material``), and ``import preform`` alone pays for neither.
+_CONTRACT = {
+    "FabricBase": "preform.material",
+    "Location": "preform.material",
+    "CaseFailure": "preform.pipeline.status",
+    "CaseStatus": "preform.pipeline.status",
+    "PluginHost": "preform.plugin_manager",
+    "default_host": "preform.plugin_manager",
+    "hookimpl": "preform.plugin_manager",
+    "RegistrationError": "preform.registry",
+    "Registry": "preform.registry",
+    "ShearLaw": "preform.shear.law",
+    "force_per_length_N_per_mm": "preform.shear.law",
+    "CaseContext": "preform.step",
+    "Step": "preform.step",
+}
+
+
 def __getattr__(name: str) -> Any:
+    import importlib
+
     if name == "drape":  # the callable subpackage
-        import importlib
-
         return importlib.import_module("preform.drape")
-    if name in _API:
-        from preform import api
-
-        value = getattr(api, name)
-        globals()[name] = value  # once imported, a plain attribute
-        return value
-    raise AttributeError(f"module 'preform' has no attribute {name!r}")
+    module = "preform.api" if name in _API else _CONTRACT.get(name)
+    if module is None:
+        raise AttributeError(f"module 'preform' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # once imported, a plain attribute
+    return value
 
 
 def __dir__() -> list[str]:

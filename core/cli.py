@@ -106,6 +106,8 @@ class PreformGroup(click.Group):
             return super().invoke(ctx)
         except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
             raise
+        except BrokenPipeError:  # `preform ... | head`: the reader left; `main` ends quietly
+            raise
         except Exception as exc:
             if ctx.meta.get("preform.debug") or os.environ.get("PREFORM_DEBUG") == "1":
                 raise
@@ -179,12 +181,20 @@ def plugins() -> None:
 
 @plugins.command("list")
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def plugins_list(as_json: bool) -> None:
+@click.option(
+    "--check",
+    is_flag=True,
+    help="Also import everything registered by import path (add_lazy) and list what does "
+    "not load among each plugin's problems.",
+)
+def plugins_list(as_json: bool, check: bool) -> None:
     """Each plugin, its version, what it registered, and its error if it failed."""
     root = click.get_current_context().find_root().command
     if isinstance(root, PreformGroup):  # a plugin's commands can fail it: show that too
         root.load_plugin_commands()
     host = _host()
+    if check:
+        host.registry.load_all()
     records = [r.as_json() for r in host.records.values()]
     if as_json:
         _echo_json(records)

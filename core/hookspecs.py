@@ -4,6 +4,9 @@ Hooks *register*; they do not compute. Each ``preform_register_*`` hook receives
 registrar and calls ``register.add(...)`` once per thing it provides; preform then calls the
 registered objects directly. That keeps errors attributable to a plugin, keeps everything
 picklable for worker processes, and lets each registry entry carry its plugin's name and version.
+Every registrar but the commands' also has ``register.add_lazy(...)``, which registers by
+import path (``"package.module:ATTRIBUTE"``) so the plugin's modules load only when first used
+(see ``preform.registry``: what is checked at once, and what when the entry is loaded).
 
 A plugin is a module (or object) with functions decorated by ``preform.hookimpl`` and named
 exactly as below; a misspelled name is an error that fails that plugin, and so is a hook wrapper

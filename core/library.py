@@ -22,7 +22,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from preform.material import FabricBase, Location, plausibility_checks
-from preform.registry import Registry
+from preform.registry import LazyLoadError, Registry
 from preform.validation import format_path, located_errors
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
 
@@ -175,7 +175,10 @@ def validate_entry(
             ],
             [],
         )
-    model = registry.architecture(tag)
+    try:
+        model = registry.architecture(tag)
+    except LazyLoadError as exc:  # a plugin's lazily registered model that does not load
+        return None, [err(("architecture",), str(exc))], []
     errors: list[SourceError] = []
     law_params: BaseModel | None = None
     raw_law = entry.get("shear_law")
@@ -297,7 +300,11 @@ def _validate_law(
                 f"{', '.join(known) or 'none'}",
             )
         ]
-    params_model = registry.shear_law_type(str(law)).params
+    try:
+        params_model = registry.shear_law_type(str(law)).params
+    except LazyLoadError as exc:  # a plugin's lazily registered law that does not load
+        line, column = doc.locate((*where, "law"))
+        return None, [SourceError(doc.file, line, column, f"{label}.shear_law.law", str(exc))]
     try:
         return params_model.model_validate(raw), []
     except ValidationError as exc:

@@ -464,6 +464,20 @@ class PluginHost:
         )
 
     # -- calling hooks ------------------------------------------------------------------------
+    def call_contained(
+        self, plugin: str, function: Callable[..., Any], *args: Any
+    ) -> tuple[Any, BaseException | None]:
+        """Call plugin code on behalf of the registry (a lazy entry's import): contained and
+        attributed as every other call into a plugin (see ``call_plugin``)."""
+        return call_plugin(plugin, function, *args)
+
+    def record_problem(self, plugin: str, message: str) -> None:
+        """Note a failure of a loaded plugin's code (it stays loaded; the failure was raised
+        where it happened), shown by ``plugins list``."""
+        record = self.records.get(plugin)
+        if record is not None:
+            record.add_problem(message)
+
     def plugin_modules(self) -> list[tuple[str, str]]:
         """(name, module) of every working plugin, for re-loading in worker processes."""
         return [(r.name, r.module) for r in self.records.values() if r.error is None and r.module]
@@ -550,19 +564,35 @@ class PluginHost:
 
 
 def _distribution(ep: metadata.EntryPoint) -> tuple[str | None, str | None]:
-    """(name, version) of an entry point's distribution; None for what its metadata lacks."""
+    """(name, version) of an entry point's distribution; None for what its metadata lacks.
+
+    One parse of the distribution's metadata per distribution and process (each entry point
+    carries its own Distribution object; preform's four share one): parsing is the slow part
+    of discovery.
+    """
     dist = getattr(ep, "dist", None)
     if dist is None:
         return None, None
+    key = str(getattr(dist, "_path", "")) or None
+    if key is not None and key in _DISTRIBUTIONS:
+        return _DISTRIBUTIONS[key]
     try:
-        name = dist.metadata["Name"]
+        meta = dist.metadata
     except Exception:
-        name = None
-    try:
-        version = dist.version
-    except Exception:
-        version = None
-    return (str(name) if name else None), (str(version) if version else None)
+        meta = None
+    name = version = None
+    with contextlib.suppress(Exception):
+        name = meta["Name"] if meta is not None else None
+    with contextlib.suppress(Exception):
+        version = meta["Version"] if meta is not None else None
+    found = (str(name) if name else None), (str(version) if version else None)
+    if key is not None:
+        _DISTRIBUTIONS[key] = found
+    return found
+
+
+#: (name, version) by distribution path, filled by ``_distribution``.
+_DISTRIBUTIONS: dict[str, tuple[str | None, str | None]] = {}
 
 
 _default_host: PluginHost | None = None

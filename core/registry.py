@@ -2,24 +2,45 @@
 
 Each kind of thing has a registrar whose ``add`` validates the object at once, so a plugin that
 registers something invalid fails (and is reported) while every other plugin keeps working.
+
+Lazy registration: steps, exporters, shear laws and surfaces may instead be registered by
+import path (``add_lazy``), so that starting the plugin host imports none of their modules
+(``preform --help`` and ``materials list`` would otherwise import every drape, search and
+export module). What the registry lists and checks between plugins is given in the call and
+checked at once: the name and, for a step, the products it provides (the product conflicts
+between plugins are found at registration, as for an ordinary step). The object itself is
+imported when first asked for (``Registry.step``, ``shear_law_type``, ``surface_type``: a run
+that plans the step, a fabric whose ``shear_law`` block names the law, a scene's tool) and is
+then checked as ``add`` would have checked it, and against what was declared. A lazy entry that
+cannot be loaded raises :class:`LazyLoadError` naming the plugin, the entry and its import path,
+and is recorded among the plugin's problems; every other entry keeps working.
 """
 
 from __future__ import annotations
 
+import importlib
 import inspect
 import typing
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
-from pydantic import BaseModel
-
-from preform.material import FabricBase
 from preform.step import Step
+
+if TYPE_CHECKING:
+    # imported where a check needs them: the plugin host starts (``preform --help``) without
+    # pydantic or the fabric models
+    from pydantic import BaseModel
+
+    from preform.material import FabricBase
 
 
 class RegistrationError(ValueError):
     """A plugin tried to register something invalid or already taken."""
+
+
+class LazyLoadError(RegistrationError):
+    """A lazily registered entry could not be imported, or is not what its plugin declared."""
 
 
 class NameConflict(RegistrationError):
@@ -61,6 +82,70 @@ class SurfaceType:
     build: Callable[..., Any]
 
 
+@dataclass(frozen=True)
+class LazyStep:
+    """A step (or exporter) registered by import path, before its module is imported.
+
+    ``target`` is ``"package.module:ATTRIBUTE"``; the attribute is the ``Step`` itself or a
+    sequence of steps holding the one named ``name``. ``provides`` is what the step declares
+    it provides: the registry checks product conflicts with it, and the planner finds the step
+    by it, without importing the module.
+    """
+
+    name: str
+    provides: tuple[str, ...]
+    target: str
+    writes_files: bool = False
+
+
+@dataclass(frozen=True)
+class LazyArchitecture:
+    """An architecture registered by the import path of its fabric model (``"package.module:
+    ATTRIBUTE"``), imported when a library first has a fabric of its tag."""
+
+    name: str
+    model: str
+
+
+@dataclass(frozen=True)
+class LazyTagged:
+    """A shear law or surface registered by import paths (``"package.module:ATTRIBUTE"``) of its
+    params model and its builder, imported when the law or surface is first asked for."""
+
+    name: str
+    params: str
+    build: str
+
+
+def _check_target(what: str, target: Any) -> str:
+    """An import path ``"package.module:attribute"`` (checked for shape, not imported)."""
+    if not isinstance(target, str) or target.count(":") != 1:
+        raise RegistrationError(
+            f"{what}: import path must be a string 'package.module:attribute', got {target!r}"
+        )
+    module, attribute = target.split(":")
+    parts = [*module.split("."), attribute]
+    if not all(p.isidentifier() for p in parts):
+        raise RegistrationError(
+            f"{what}: import path {target!r} is not 'package.module:attribute' "
+            "(dotted identifiers, one colon)"
+        )
+    return target
+
+
+def import_target(target: str) -> Any:
+    """The object an import path ``"package.module:attribute"`` names (imports its module)."""
+    module, attribute = target.split(":")
+    value = getattr(importlib.import_module(module), attribute, _MISSING)
+    if value is _MISSING:
+        raise AttributeError(f"module {module!r} has no attribute {attribute!r}")
+    return value
+
+
+_MISSING = object()
+_LAZY = (LazyStep, LazyArchitecture, LazyTagged)
+
+
 def _literal_tag(model: type[BaseModel], field: str) -> str:
     """The single value of a ``Literal[...]`` discriminator field, or a RegistrationError."""
     info = model.model_fields.get(field)
@@ -95,6 +180,9 @@ class Registry:
         self.host: Any = None
         #: Plugins shipped with preform; their names cannot be taken by any other plugin.
         self.builtin_plugins: set[str] = set()
+        #: Why a lazy entry could not be loaded, by (kind, name): asked again, it fails the same
+        #: way without importing again.
+        self._load_failures: dict[tuple[str, str], str] = {}
 
     # -- reading ------------------------------------------------------------------------------
     def entries(self, kind: str) -> dict[str, Entry]:
@@ -104,12 +192,111 @@ class Registry:
         return sorted(self._entries[kind])
 
     def get(self, kind: str, name: str) -> Any:
+        """The registered object, imported first if it was registered lazily."""
         try:
-            return self._entries[kind][name].obj
+            entry = self._entries[kind][name]
         except KeyError:
             known = ", ".join(self.names(kind)) or "none"
             label = kind.rstrip("s").replace("_", " ")
             raise KeyError(f"unknown {label} {name!r}; registered: {known}") from None
+        if isinstance(entry.obj, _LAZY):
+            entry = self._load(entry)
+        return entry.obj
+
+    def step(self, name: str) -> Step:
+        """The step or exporter ``name`` (its module imported now if registered lazily)."""
+        kind = "exporters" if name in self._entries["exporters"] else "steps"
+        step: Step = self.get(kind, name)
+        return step
+
+    def providers(self) -> dict[str, str]:
+        """Which step (by name) provides each product, without importing any step module."""
+        return {
+            product: entry.name
+            for kind in ("steps", "exporters")
+            for entry in self._entries[kind].values()
+            for product in entry.obj.provides
+        }
+
+    def load_all(self) -> list[str]:
+        """Import every lazy entry now; the messages of those that do not load (each is also
+        recorded among its plugin's problems)."""
+        failures = []
+        for kind in self.KINDS:
+            for name in list(self._entries[kind]):
+                try:
+                    self.get(kind, name)
+                except LazyLoadError as exc:
+                    failures.append(str(exc))
+        return failures
+
+    def is_loaded(self, kind: str, name: str) -> bool:
+        """Whether the entry's object is imported (False while a lazy entry waits)."""
+        return not isinstance(self._entries[kind][name].obj, _LAZY)
+
+    def _load(self, entry: Entry) -> Entry:
+        """Import a lazy entry, check it as its registrar would, and keep the loaded entry.
+
+        The import is plugin code: it runs contained by the host (its output kept off stdout,
+        any exception caught) and a failure is recorded against the plugin, then raised as a
+        LazyLoadError naming the plugin, the entry and the import path.
+        """
+        lazy = entry.obj
+        label = f"{entry.kind[:-1].replace('_', ' ')} {entry.name!r}"
+        where = f"plugin {entry.plugin!r}: {label}"
+        failure = self._load_failures.get((entry.kind, entry.name))
+        if failure is not None:
+            raise LazyLoadError(failure)
+
+        def load() -> Any:
+            if isinstance(lazy, LazyStep):
+                step = _pick_step(import_target(lazy.target), lazy.name, lazy.target)
+                _check_step(step, entry.kind)
+                declared, got = set(lazy.provides), set(step.provides)
+                if declared != got:
+                    raise RegistrationError(
+                        f"registered as providing {sorted(declared)}, but the step at "
+                        f"{lazy.target} provides {sorted(got)}"
+                    )
+                return step
+            if isinstance(lazy, LazyArchitecture):
+                model = import_target(lazy.model)
+                tag = _check_architecture(model)
+                if tag != lazy.name:
+                    raise RegistrationError(
+                        f"registered as {lazy.name!r}, but {lazy.model} has architecture "
+                        f"Literal[{tag!r}]"
+                    )
+                return model
+            params, build = import_target(lazy.params), import_target(lazy.build)
+            tag_field = "law" if entry.kind == "shear_laws" else "surface"
+            _check_tagged(label.split(" ")[0], lazy.name, params, tag_field, build)
+            made = ShearLawType if entry.kind == "shear_laws" else SurfaceType
+            return made(lazy.name, params, build)
+
+        if self.host is not None:
+            obj, exc = self.host.call_contained(entry.plugin, load)
+        else:
+            try:
+                obj, exc = load(), None
+            except Exception as error:
+                obj, exc = None, error
+        if exc is not None:
+            target = (
+                lazy.target
+                if isinstance(lazy, LazyStep)
+                else lazy.model
+                if isinstance(lazy, LazyArchitecture)
+                else f"{lazy.params}, {lazy.build}"
+            )
+            message = f"{where} could not be loaded from {target}: {_error_text(exc)}"
+            self._load_failures[(entry.kind, entry.name)] = message
+            if self.host is not None:
+                self.host.record_problem(entry.plugin, message)
+            raise LazyLoadError(message) from exc
+        loaded = Entry(entry.kind, entry.name, obj, entry.plugin, entry.version)
+        self._entries[entry.kind][entry.name] = loaded
+        return loaded
 
     def architecture(self, tag: str) -> type[FabricBase]:
         model: type[FabricBase] = self.get("architectures", tag)
@@ -124,9 +311,11 @@ class Registry:
         return surface
 
     def all_steps(self) -> Iterator[Step]:
+        """Every step and exporter, importing each lazily registered one (use ``providers``
+        and ``step`` to reach only the steps a run needs)."""
         for kind in ("steps", "exporters"):
-            for entry in self._entries[kind].values():
-                yield entry.obj
+            for name in list(self._entries[kind]):
+                yield self.get(kind, name)
 
     def by_plugin(self, plugin: str) -> dict[str, list[str]]:
         out: dict[str, list[str]] = {}
@@ -166,9 +355,10 @@ class Registry:
 
     def remove_plugin(self, plugin: str) -> None:
         """Undo everything a plugin registered (used when its registration fails midway)."""
-        for entries in self._entries.values():
+        for kind, entries in self._entries.items():
             for name in [n for n, e in entries.items() if e.plugin == plugin]:
                 del entries[name]
+                self._load_failures.pop((kind, name), None)
 
 
 class Registrar(Generic[T]):
@@ -185,15 +375,27 @@ class Registrar(Generic[T]):
         self._registry._add(Entry(self.kind, name, obj, self._plugin, self._version))
 
 
-class ArchitectureRegistrar(Registrar[type[FabricBase]]):
+class ArchitectureRegistrar(Registrar["type[FabricBase] | LazyArchitecture"]):
     kind = "architectures"
 
     def add(self, model: type[FabricBase]) -> None:
         """Register a fabric model; its ``architecture`` Literal is the YAML tag."""
-        if not (inspect.isclass(model) and issubclass(model, FabricBase)):
-            raise RegistrationError(f"{model!r} is not a subclass of preform.FabricBase")
-        fabric_model: type[FabricBase] = model
-        self._put(_literal_tag(fabric_model, "architecture"), fabric_model)
+        self._put(_check_architecture(model), model)
+
+    def add_lazy(self, tag: str, *, model: str) -> None:
+        """Register a fabric model by import path (``"package.module:ATTRIBUTE"``) under its
+        YAML tag; it is imported, and checked as ``add`` checks it, when first asked for."""
+        label = f"architecture {_check_name('architecture', tag)!r}"
+        self._put(tag, LazyArchitecture(tag, _check_target(label, model)))
+
+
+def _check_architecture(model: Any) -> str:
+    """A subclass of FabricBase with an ``architecture`` Literal; its tag."""
+    from preform.material import FabricBase
+
+    if not (inspect.isclass(model) and issubclass(model, FabricBase)):
+        raise RegistrationError(f"{model!r} is not a subclass of preform.FabricBase")
+    return _literal_tag(model, "architecture")
 
 
 def _check_callable(build: Any, what: str, arity: int) -> None:
@@ -205,8 +407,44 @@ def _check_callable(build: Any, what: str, arity: int) -> None:
         raise RegistrationError(f"{what}: build must accept {arity} arguments ({exc})") from None
 
 
+def _error_text(exc: BaseException) -> str:
+    if isinstance(exc, RegistrationError):
+        return str(exc)
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _pick_step(value: Any, name: str, target: str) -> Any:
+    """The step named ``name`` at an import path: the object itself, or one of a sequence."""
+    if isinstance(value, list | tuple):
+        found = [s for s in value if getattr(s, "name", None) == name]
+        if len(found) != 1:
+            raise RegistrationError(
+                f"{target} is a sequence holding {len(found)} steps named {name!r} (needs one)"
+            )
+        return found[0]
+    if isinstance(value, Step) and value.name != name:
+        raise RegistrationError(f"the step at {target} is named {value.name!r}, not {name!r}")
+    return value
+
+
+def _check_step(step: Any, kind: str) -> None:
+    """What every step must be, whether added directly or loaded from an import path."""
+    if not isinstance(step, Step):
+        raise RegistrationError(f"{step!r} is not a preform.Step")
+    if not step.provides:
+        raise RegistrationError(f"step {step.name!r} provides nothing")
+    if not callable(step.run) or getattr(step.run, "__name__", "") == "<lambda>":
+        raise RegistrationError(
+            f"step {step.name!r}: run must be a module-level function (picklable)"
+        )
+    if kind == "exporters" and not step.writes_files:
+        raise RegistrationError(f"exporter {step.name!r} must have writes_files=True")
+
+
 def _check_tagged(what: str, name: str, params: Any, tag_field: str, build: Any) -> None:
     """A params model tagged ``tag_field: Literal[name]`` and a two-argument builder."""
+    from pydantic import BaseModel
+
     label = f"{what} {name!r}"
     if not (inspect.isclass(params) and issubclass(params, BaseModel)):
         raise RegistrationError(f"{label}: params must be a pydantic model")
@@ -216,8 +454,31 @@ def _check_tagged(what: str, name: str, params: Any, tag_field: str, build: Any)
     _check_callable(build, label, 2)
 
 
-class ShearLawRegistrar(Registrar[ShearLawType]):
+def _check_name(what: str, name: Any) -> str:
+    if not isinstance(name, str) or not name:
+        raise RegistrationError(f"{what} name must be a non-empty string, got {name!r}")
+    return name
+
+
+class _TaggedRegistrar(Registrar[Any]):
+    """Shear laws and surfaces: a name, a params model tagged with it, a builder."""
+
+    what = ""
+    tag_field = ""
+
+    def add_lazy(self, name: str, *, params: str, build: str) -> None:
+        """Register by import paths (``"package.module:ATTRIBUTE"``) of the params model and the
+        builder; both are imported, and checked as ``add`` checks them, when first asked for."""
+        label = f"{self.what} {_check_name(self.what, name)!r}"
+        self._put(
+            name,
+            LazyTagged(name, _check_target(label, params), _check_target(label, build)),
+        )
+
+
+class ShearLawRegistrar(_TaggedRegistrar):
     kind = "shear_laws"
+    what = "shear law"
 
     def add(self, name: str, params: type[BaseModel], build: Callable[..., Any]) -> None:
         """Register a law: ``params`` validates the YAML block (``law: Literal[name]``);
@@ -226,8 +487,9 @@ class ShearLawRegistrar(Registrar[ShearLawType]):
         self._put(name, ShearLawType(name, params, build))
 
 
-class SurfaceRegistrar(Registrar[SurfaceType]):
+class SurfaceRegistrar(_TaggedRegistrar):
     kind = "surfaces"
+    what = "surface"
 
     def add(self, name: str, params: type[BaseModel], build: Callable[..., Any]) -> None:
         """Register a tool surface: ``params`` validates the scene's ``tool`` block
@@ -236,42 +498,55 @@ class SurfaceRegistrar(Registrar[SurfaceType]):
         self._put(name, SurfaceType(name, params, build))
 
 
-class StepRegistrar(Registrar[Step]):
+class StepRegistrar(Registrar[Step | LazyStep]):
     kind = "steps"
 
     def add(self, step: Step) -> None:
         """Register a pipeline step."""
-        if not isinstance(step, Step):
-            raise RegistrationError(f"{step!r} is not a preform.Step")
-        if not step.provides:
-            raise RegistrationError(f"step {step.name!r} provides nothing")
-        if not callable(step.run) or getattr(step.run, "__name__", "") == "<lambda>":
+        _check_step(step, self.kind)
+        self._check_products(step.name, step.provides)
+        self._put(step.name, step)
+
+    def add_lazy(self, name: str, *, provides: tuple[str, ...] | list[str], target: str) -> None:
+        """Register a step by import path without importing it: ``target`` is
+        ``"package.module:ATTRIBUTE"``, the ``Step`` or a sequence of steps holding the one
+        named ``name``; ``provides`` is what it provides (checked for conflicts now, and against
+        the step when it is imported, on first use)."""
+        label = f"{self.kind[:-1]} {_check_name(self.kind[:-1], name)!r}"
+        if isinstance(provides, str) or not (
+            isinstance(provides, tuple | list)
+            and provides
+            and all(isinstance(p, str) and p for p in provides)
+        ):
             raise RegistrationError(
-                f"step {step.name!r}: run must be a module-level function (picklable)"
+                f"{label}: provides must be a non-empty list of product names, got {provides!r}"
             )
-        for product in step.provides:
+        self._check_products(name, tuple(provides))
+        lazy = LazyStep(
+            name, tuple(provides), _check_target(label, target), self.kind == "exporters"
+        )
+        self._put(name, lazy)
+
+    def _check_products(self, name: str, provides: tuple[str, ...]) -> None:
+        for product in provides:
             for kind in ("steps", "exporters"):
                 for other in self._registry.entries(kind).values():
                     if product in other.obj.provides:
                         raise NameConflict(
-                            f"step {step.name!r}: product {product!r} is already provided by "
+                            f"step {name!r}: product {product!r} is already provided by "
                             f"step {other.name!r} of "
                             f"{self._registry.describe_owner(other.plugin, self._plugin)}",
                             kind="products",
                             name=product,
                             owner=other.plugin,
                         )
-        self._put(step.name, step)
 
 
 class ExporterRegistrar(StepRegistrar):
-    kind = "exporters"
+    """Exporters: steps with ``writes_files=True`` (checked by ``add``, and on loading a lazy
+    one)."""
 
-    def add(self, step: Step) -> None:
-        """Register an exporter (a step with ``writes_files=True``)."""
-        if isinstance(step, Step) and not step.writes_files:
-            raise RegistrationError(f"exporter {step.name!r} must have writes_files=True")
-        super().add(step)
+    kind = "exporters"
 
 
 REGISTRARS: dict[str, type[Registrar[Any]]] = {

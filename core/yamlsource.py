@@ -390,6 +390,46 @@ class _Open:
     key: Node | None = None  # a mapping key waiting for its value
 
 
+class _ParsedEvents(yaml.SafeLoader):
+    """Events already parsed, served as ``SafeLoader`` serves its own (and its resolver)."""
+
+    def __init__(self, events: list[Any]) -> None:
+        super().__init__("")
+        self._events = events
+        self._next = 0
+
+    def check_event(self, *choices: Any) -> bool:
+        return self._next < len(self._events)
+
+    def get_event(self) -> Any:
+        event = self._events[self._next]
+        self._next += 1
+        return event
+
+
+def _event_source(text: str) -> Any:
+    """The parser events of ``text``: libyaml's (some 40 times faster, so reading the bundled
+    library is not most of ``preform materials list``) when it parses the whole text, else
+    PyYAML's own parser, whose syntax errors and partial trees the messages here are built on.
+
+    The events of the two agree, marks included, on every file libyaml parses (checked on
+    the project's files in tests/test_yamlsource.py); libyaml is only the faster way to them.
+    """
+    fast = getattr(yaml, "CSafeLoader", None)
+    if fast is not None:
+        parser = fast(text)
+        try:
+            events = []
+            while parser.check_event():
+                events.append(parser.get_event())
+            return _ParsedEvents(events)
+        except yaml.YAMLError:
+            pass  # read it again with PyYAML's parser, for its located message
+        finally:
+            parser.dispose()
+    return yaml.SafeLoader(text)
+
+
 class _Composer:
     """Builds the node tree of each document from parser events, without recursion.
 
@@ -400,7 +440,7 @@ class _Composer:
     def __init__(
         self, text: str, file: str, max_depth: int, max_nodes: int, errors: list[SourceError]
     ) -> None:
-        self._loader = yaml.SafeLoader(text)  # its parser and resolver only; nothing constructed
+        self._loader = _event_source(text)  # a parser and resolver only; nothing constructed
         self._file = file
         self._max_depth = max_depth
         self._max_nodes = max_nodes

@@ -446,3 +446,59 @@ def test_floats_round_trip_exactly() -> None:
     for value in (0.1, -0.0, 1e300, 5e-324, math.pi):
         (document,) = load_yaml_text(yaml.safe_dump({"x": value}))
         assert document.data["x"] == value
+
+
+def _events(loader: type[Any], text: str) -> list[tuple[Any, ...]]:
+    """A parser's events as plain tuples, marks as (line, column); a plain scalar's style is
+    None in PyYAML and '' in libyaml, the same thing."""
+    parser = loader(text)
+    try:
+        out = []
+        while parser.check_event():
+            e = parser.get_event()
+            out.append(
+                (
+                    type(e).__name__,
+                    getattr(e, "value", None),
+                    getattr(e, "implicit", None),
+                    getattr(e, "anchor", None),
+                    getattr(e, "tag", None),
+                    getattr(e, "style", None) or None,
+                    (e.start_mark.line, e.start_mark.column),
+                    (e.end_mark.line, e.end_mark.column),
+                )
+            )
+        return out
+    finally:
+        parser.dispose()
+
+
+PROJECT_YAML = sorted(
+    p
+    for p in Path(__file__).resolve().parents[1].glob("**/*.yaml")
+    if not any(part.startswith(".") for part in p.parts)
+)
+
+
+@pytest.mark.skipif(not yaml.__with_libyaml__, reason="PyYAML built without libyaml")
+@pytest.mark.parametrize("path", PROJECT_YAML, ids=lambda p: p.name)
+def test_libyaml_events_are_pyyaml_events_on_the_project_files(path: Path) -> None:
+    """libyaml only reads faster: on every YAML file of the project (library, scenes, tools,
+    examples) its events and their marks are PyYAML's, non-ASCII text included."""
+    text = path.read_text(encoding="utf-8")
+    assert _events(yaml.CSafeLoader, text) == _events(yaml.SafeLoader, text)
+
+
+@pytest.mark.skipif(not yaml.__with_libyaml__, reason="PyYAML built without libyaml")
+@settings(max_examples=60, deadline=None)
+@given(
+    st.recursive(
+        st.none() | st.booleans() | st.integers() | st.text(max_size=8),
+        lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner),
+        max_leaves=12,
+    ),
+    st.booleans(),
+)
+def test_libyaml_and_pyyaml_agree_on_dumped_data(data: Any, flow: bool) -> None:
+    text = yaml.safe_dump({"entry": data}, default_flow_style=flow, allow_unicode=True)
+    assert _events(yaml.CSafeLoader, text) == _events(yaml.SafeLoader, text)

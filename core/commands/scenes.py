@@ -51,12 +51,19 @@ def bundled_scenes() -> list[dict[str, Any]]:
 
 def scene_outputs() -> list[dict[str, Any]]:
     """Every output a scene may list under ``outputs``: the products of the registered steps
-    and exporters, with what each needs and whether it writes files."""
+    and exporters, with what each needs and whether it writes files. A lazily registered step
+    that cannot be loaded is left out, with a warning on stderr naming its plugin."""
+    from preform.registry import LazyLoadError
+
     registry = _registry()
     rows = []
     for kind in ("steps", "exporters"):
-        for entry in registry.entries(kind).values():
-            step = entry.obj
+        for entry in list(registry.entries(kind).values()):
+            try:  # imports a lazily registered step's module
+                step = registry.step(entry.name)
+            except LazyLoadError as exc:
+                click.echo(f"warning: {exc}", err=True)
+                continue
             for product in step.provides:
                 rows.append(
                     {

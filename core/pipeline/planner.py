@@ -10,7 +10,7 @@ import difflib
 import graphlib
 from typing import TYPE_CHECKING
 
-from preform.registry import Registry
+from preform.registry import LazyLoadError, Registry
 from preform.step import Step
 
 if TYPE_CHECKING:
@@ -25,9 +25,9 @@ class PlanError(ValueError):
         super().__init__("; ".join(m for _, m in problems))
 
 
-def providers(registry: Registry) -> dict[str, Step]:
-    """Which step provides each product."""
-    return {product: step for step in registry.all_steps() for product in step.provides}
+def providers(registry: Registry) -> dict[str, str]:
+    """Which step (by name) provides each product; no step module is imported for it."""
+    return registry.providers()
 
 
 def requirements(step: Step, scene: Scene) -> tuple[str, ...]:
@@ -44,8 +44,8 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
     graph: dict[str, set[str]] = {}
 
     def visit(product: str, index: int, chain: tuple[str, ...]) -> None:
-        step = by_product.get(product)
-        if step is None:
+        name = by_product.get(product)
+        if name is None:
             close = difflib.get_close_matches(product, by_product, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             via = f" (needed by {' <- '.join(reversed(chain))})" if chain else ""
@@ -56,6 +56,11 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
                     f"outputs: {', '.join(sorted(by_product))}",
                 )
             )
+            return
+        try:  # a lazily registered step is imported here, when a plan first needs it
+            step = registry.step(name)
+        except LazyLoadError as exc:
+            problems.append((index, str(exc)))
             return
         for section in step.scene_sections:
             if getattr(scene, section, None) is None:
@@ -74,7 +79,7 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
         for dep in deps:
             visit(dep, index, (*chain, product))
             if dep in by_product:
-                graph[step.name].add(by_product[dep].name)
+                graph[step.name].add(by_product[dep])
 
     for index, output in enumerate(scene.outputs):
         visit(output, index, ())

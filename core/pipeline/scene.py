@@ -16,7 +16,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
 from preform.pipeline.export_section import ExportSection
-from preform.registry import Registry
+from preform.registry import LazyLoadError, Registry
 from preform.validation import located_errors
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
 
@@ -362,11 +362,15 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
                 )
             )
         else:
-            params = registry.surface_type(str(name)).params
             try:
-                scene = scene.model_copy(update={"tool": params.model_validate(tool)})
-            except ValidationError as exc:
-                errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
+                params = registry.surface_type(str(name)).params
+            except LazyLoadError as exc:  # a plugin's lazily registered surface
+                errors.append(err(("tool", "surface"), "tool.surface", str(exc)))
+            else:
+                try:
+                    scene = scene.model_copy(update={"tool": params.model_validate(tool)})
+                except ValidationError as exc:
+                    errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
     if not errors:
         errors += _preflight(scene, err)
     from preform.pipeline.planner import PlanError, plan

@@ -14,15 +14,20 @@ from preform.registry import ArchitectureRegistrar, ShearLawRegistrar
 
 @hookimpl
 def preform_register_architectures(register: ArchitectureRegistrar) -> None:
-    from preform.plugins.warpknit.model import WarpKnitFabric
-
-    register.add(WarpKnitFabric)
+    # by import path: the model (and pydantic) loads when a library first reads such a fabric
+    register.add_lazy("warp_knit", model="preform.plugins.warpknit.model:WarpKnitFabric")
 
 
 @hookimpl
 def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
-    from preform.plugins.warpknit.shear import SHEAR_LAWS
-    from preform.plugins.warpknit.stitch_law import SHEAR_LAWS as STITCH_YARN_LAWS
-
-    for name, params, build in [*SHEAR_LAWS, *STITCH_YARN_LAWS]:
-        register.add(name, params, build)
+    # by import path: each law's module loads when a fabric first names it
+    register.add_lazy(
+        "stitch_polynomial",
+        params="preform.plugins.warpknit.shear:StitchPolynomialParams",
+        build="preform.plugins.warpknit.shear:build_stitch_polynomial",
+    )
+    register.add_lazy(
+        "stitch_yarn",
+        params="preform.plugins.warpknit.stitch_law:StitchYarnParams",
+        build="preform.plugins.warpknit.stitch_law:build_stitch_yarn",
+    )

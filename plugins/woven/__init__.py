@@ -13,14 +13,15 @@ from preform.registry import ArchitectureRegistrar, ShearLawRegistrar
 
 @hookimpl
 def preform_register_architectures(register: ArchitectureRegistrar) -> None:
-    from preform.plugins.woven.model import WovenFabric
-
-    register.add(WovenFabric)
+    # by import path: the model (and pydantic) loads when a library first reads such a fabric
+    register.add_lazy("woven", model="preform.plugins.woven.model:WovenFabric")
 
 
 @hookimpl
 def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
-    from preform.plugins.woven.shear import SHEAR_LAWS
-
-    for name, params, build in SHEAR_LAWS:
-        register.add(name, params, build)
+    # by import path: the law's module loads when a fabric first names it
+    register.add_lazy(
+        "friction_compaction",
+        params="preform.plugins.woven.shear:FrictionCompactionParams",
+        build="preform.plugins.woven.shear:build_friction_compaction",
+    )

@@ -25,6 +25,33 @@ HEAVY = (
     "gmsh",
 )
 
+#: preform's own modules that no start-up command imports: the step, search and export modules
+#: (registered by import path, loaded when a run plans them) and the tool surfaces.
+PREFORM_KEPT_OUT = (
+    "preform.drape",
+    "preform.optimise",
+    "preform.export",
+    "preform.pipeline.core_steps",
+    "preform.pipeline.runner",
+    "preform.plugins.surfaces.tools",
+    "preform.plugins.surfaces.mesh",
+    "preform.plugins.surfaces.cad",
+    "preform.api",
+)
+
+#: What ``--version`` and ``--help`` need neither of: numpy, pydantic and the fabric models
+#: (``import preform`` serves its names lazily; architectures and laws register by import path).
+MODELS_AND_ARRAYS = (
+    "numpy",
+    "pydantic",
+    "yaml",
+    "preform.material",
+    "preform.library",
+    "preform.shear",
+    "preform.plugins.woven.model",
+    "preform.plugins.warpknit.model",
+)
+
 PROBE = """
 import contextlib, io, json, sys
 heavy = {heavy!r}
@@ -50,3 +77,54 @@ def test_cli_start_up_imports_no_heavy_library(argv: list[str] | None) -> None:
     )
     loaded = json.loads(done.stdout.strip().splitlines()[-1])
     assert loaded == [], f"imported at start-up: {loaded}"
+
+
+def _loaded(argv: list[str] | None, names: tuple[str, ...]) -> list[str]:
+    probe = PROBE.replace(
+        "m in sys.modules", "any(k == m or k.startswith(m + '.') for k in sys.modules)"
+    )
+    code = probe.format(heavy=names, argv=argv)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    loaded: list[str] = json.loads(done.stdout.strip().splitlines()[-1])
+    return loaded
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [None, ["--version"], ["--help"], ["materials", "list"]],
+    ids=["import", "version", "help", "materials-list"],
+)
+def test_cli_start_up_imports_no_step_module(argv: list[str] | None) -> None:
+    assert _loaded(argv, PREFORM_KEPT_OUT) == []
+
+
+@pytest.mark.parametrize(
+    "argv", [None, ["--version"], ["--help"]], ids=["import", "version", "help"]
+)
+def test_version_and_help_import_no_model_nor_numpy(argv: list[str] | None) -> None:
+    assert _loaded(argv, MODELS_AND_ARRAYS) == []
+
+
+def test_the_probe_sees_what_a_command_imports() -> None:
+    """The probe itself can fail: ``materials list`` validates fabrics, so it must see the
+    models, pydantic and numpy loaded."""
+    assert _loaded(["materials", "list"], MODELS_AND_ARRAYS) == sorted(MODELS_AND_ARRAYS)
+
+
+def test_a_reader_leaving_the_pipe_is_not_reported_as_a_bug() -> None:
+    """``preform materials list | head -1`` where ``head`` has left: a quiet end, not the
+    "bug in preform" message (the reader here leaves before the first line is written)."""
+    code = "import sys; from preform.cli import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, "materials", "list"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout is not None
+    proc.stdout.close()  # the reader leaves at once
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    assert "bug" not in err and "Traceback" not in err, err
