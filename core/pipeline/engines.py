@@ -22,11 +22,12 @@ and each pays its imports itself.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, Future
 from typing import Any, TypeVar
 
@@ -49,6 +50,8 @@ class Engine:
     #: Cases the runner keeps submitted at a time (more only queue, and a queued case would
     #: have to be cancelled on an interrupt).
     capacity: int = 1
+    #: Cases the engine computes at the same time (its worker processes or threads).
+    workers: int = 1
     #: Whether ``submit(..., timeout_s=)`` is enforced by the engine itself.
     enforces_timeout: bool = False
 
@@ -82,29 +85,42 @@ def _raise_timeout(_signum: int, _frame: Any) -> None:
     raise CaseTimeout()
 
 
+def can_alarm() -> bool:
+    """Whether this thread can stop its own call at a time limit (SIGALRM: the main thread of
+    a process, where the platform has it)."""
+    return hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
+
+
+@contextlib.contextmanager
+def time_limit(timeout_s: float | None) -> Iterator[None]:
+    """Raise ``CaseTimeout`` in this thread after ``timeout_s`` [s] (SIGALRM; no limit with
+    None or where ``can_alarm`` is false). It interrupts Python code; a single long call into
+    compiled code ends before it fires."""
+    if timeout_s is None or not can_alarm():
+        yield
+        return
+    previous = signal.signal(signal.SIGALRM, _raise_timeout)
+    signal.setitimer(signal.ITIMER_REAL, timeout_s)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 class SerialEngine(Engine):
-    """In this process, one case at a time. A time limit uses SIGALRM (main thread only), so
-    it interrupts Python code; a single long call into compiled code ends before it fires.
+    """In this process, one case at a time, with ``time_limit``.
     A crash of this process ends the run; what finished is already recorded."""
 
     capacity = 1
 
     def __init__(self) -> None:
         self._executor = SerialExecutor()
-        self.enforces_timeout = (
-            hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
-        )
+        self.enforces_timeout = can_alarm()
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
-        if timeout_s is None or not self.enforces_timeout:
+        with time_limit(timeout_s):
             return self._executor.submit(fn, *args)
-        previous = signal.signal(signal.SIGALRM, _raise_timeout)
-        signal.setitimer(signal.ITIMER_REAL, timeout_s)
-        try:
-            return self._executor.submit(fn, *args)
-        finally:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, previous)
 
 
 def _alive(pid: int) -> bool:
@@ -201,6 +217,7 @@ class ProcessEngine(Engine):
         from pebble import ProcessPool
 
         n = workers or max(1, os.cpu_count() or 1)
+        self.workers = n
         self.capacity = 2 * n  # one running and one queued per worker keeps them busy
         self._pool = ProcessPool(
             max_workers=n,
@@ -259,7 +276,7 @@ class DaskEngine(Engine):
                 )
             self._client = Client(self._cluster)
         threads = sum(self._client.nthreads().values()) or 1
-        self.capacity = max(1, threads)
+        self.capacity = self.workers = max(1, threads)
         self._running: dict[Future[Any], Any] = {}
         # each worker imports and loads what the cases need, all at once, in a task pinned to
         # it; waited for (a failure only costs the first case its imports): cases submitted
