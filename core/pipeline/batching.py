@@ -25,10 +25,11 @@ T = TypeVar("T")
 #: Batches per worker the automatic batch size leaves at least, so that the last batches can
 #: still be shared out evenly: with fewer, the tail is a whole batch long.
 BATCHES_PER_WORKER = 4
-#: Largest automatic batch [cases]. Past about 8 cases a batch, the per-case cost of sending
-#: and recording stops falling measurably (benchmarks/README.md, section k), while a worker
-#: that dies mid-batch makes more cases run twice.
-MAX_AUTO_BATCH = 8
+#: Largest automatic batch [cases]. Measured on 120 small cases, 2 workers: 79 ms a case
+#: alone, 27 in batches of 8, 23 of 16, 25 of 32 (``benchmarks/bench_batches.py``, README
+#: section k): past 16 nothing is gained, while a worker that dies mid-batch makes more cases
+#: run twice.
+MAX_AUTO_BATCH = 16
 #: A case estimated to take longer than this runs alone [s]: its own dispatch and
 #: bookkeeping (a few ms) are negligible beside it, and alone it can be balanced and recovered.
 SMALL_CASE_S = 0.5

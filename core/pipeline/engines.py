@@ -199,6 +199,20 @@ def pool_context(preload: tuple[str, ...] = ()) -> Any:
     return context
 
 
+def start_fork_server(preload: tuple[str, ...]) -> None:
+    """Start the process pool's fork server now, importing ``preload``, so that its imports
+    overlap what this process does before it opens the pool (a no-op where there is none, or
+    when it already runs: the first start fixes what it imported)."""
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return
+    from multiprocessing import forkserver
+
+    pool_context(preload)
+    forkserver.ensure_running()
+
+
 class ProcessEngine(Engine):
     """A pebble process pool of ``workers`` processes, forked from a fork server that imported
     ``preload`` (see the module docstring); ``warm_up`` runs once in each worker."""

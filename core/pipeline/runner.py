@@ -29,7 +29,14 @@ from typing import Any, TypeVar
 from preform import __version__
 from preform.library import Library, fabric_from_data
 from preform.pipeline.batching import plan_batches, recorded_wall_time_s
-from preform.pipeline.engines import CaseTimeout, Engine, SerialEngine, open_engine, time_limit
+from preform.pipeline.engines import (
+    CaseTimeout,
+    Engine,
+    SerialEngine,
+    open_engine,
+    start_fork_server,
+    time_limit,
+)
 from preform.pipeline.planner import plan
 from preform.pipeline.rundir import (
     RunDirectory,
@@ -235,6 +242,13 @@ def worker_preload() -> tuple[str, ...]:
 
     own = [m for m in list(sys.modules) if m == "preform" or m.startswith("preform.")]
     return (*sorted(own), *WORKER_PRELOAD)
+
+
+def start_workers_early() -> None:
+    """Start the process pool's fork server before the run's library and scenes are read (the
+    command line calls it first): it imports the runner and ``WORKER_PRELOAD`` meanwhile, and
+    the workers of the pool the run opens later are forked from it."""
+    start_fork_server(tuple(dict.fromkeys(("preform.pipeline.runner", *worker_preload()))))
 
 
 def warm_worker(hosts: tuple[tuple[bool, tuple[tuple[str, str], ...]], ...]) -> None:
