@@ -24,7 +24,7 @@ from typing import Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import CompiledQueries
+from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.result import NodeStatus
 from preform.drape.surface import Surface
 
@@ -151,15 +151,15 @@ def _surface_queries(
     """Closest points, the normals there and distances for points (m, 3) [m]: compiled for a
     tool with compiled queries, else the tool's own vectorised methods."""
     if isinstance(surface, CompiledQueries):
-        from preform.drape import net_kernels
+        from preform.drape import surface_kernels
 
         kind, params = surface.compiled_queries()
-        params = np.asarray(params, dtype=float)
+        code, values = checked_kind(kind), kernel_parameters(kind, params)
 
         def compiled(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
             return cast(
                 tuple[FloatArray, FloatArray, FloatArray],
-                net_kernels.query_points(int(kind), params, np.ascontiguousarray(points)),
+                surface_kernels.query_points(code, values, np.ascontiguousarray(points)),
             )
 
         return compiled

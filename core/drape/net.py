@@ -34,7 +34,7 @@ from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import CompiledQueries
+from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.fields import cell_fields
 from preform.drape.generators import (
     GeneratorNodes,
@@ -280,9 +280,9 @@ def _generators(
 
 def _compiled_closed_form(surface: object) -> bool:
     """Whether a surface with compiled queries also has a compiled closed-form node."""
-    from preform.drape.compiled_surface import SPHERE, TRIMMED_SPHERE
+    from preform.drape.compiled_surface import CLOSED_FORM_KINDS
 
-    return cast(CompiledQueries, surface).compiled_queries()[0] in (SPHERE, TRIMMED_SPHERE)
+    return cast(CompiledQueries, surface).compiled_queries()[0] in CLOSED_FORM_KINDS
 
 
 def _fill_fronts_python(
@@ -569,7 +569,7 @@ def drape(
         kind, params = cast(CompiledQueries, surface).compiled_queries()
         fronts, newton_iterations = kernels.fill_fronts(
             pos, status, residual, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front, d, tol_m,
-            max_iterations, lo_bound, hi_bound, int(kind), np.asarray(params, dtype=float),
+            max_iterations, lo_bound, hi_bound, checked_kind(kind), kernel_parameters(kind, params),
             closed_form,
         )  # fmt: skip
     else:

@@ -6,7 +6,9 @@ drape never import numba.
 
 The per-node steps are plain scalar functions:
 
-- :func:`_sphere_node`: the closed-form node on a sphere (PHYSICS §6);
+- :func:`_sphere_node`: the closed-form node on a sphere (PHYSICS §6); the plate's is
+  ``preform.drape.surface_kernels.plane_node``, and every tool's closest point and normal
+  ``preform.drape.surface_kernels.query``;
 - :func:`_circle_frame` and :func:`_newton_update`: the general placement on the circle where
   the two distance spheres meet (``preform.drape.net``'s module doc), one damped Newton step
   in the circle angle φ at a time, given the surface's closest point and normal;
@@ -31,6 +33,8 @@ from numpy.typing import NDArray
 
 from preform.drape.compiled_surface import TRIMMED_SPHERE
 from preform.drape.result import NodeStatus
+from preform.drape.surface_kernels import plane_node
+from preform.drape.surface_kernels import query as _query
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -52,54 +56,12 @@ _jit = numba.njit(cache=True, error_model="numpy", fastmath=False)
 
 
 # --------------------------------------------------------------------------------------------
-# Compiled surface queries
-
-
-@_jit
-def _radial(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """Unit direction from a sphere's centre (+z for the centre itself)."""
-    rx, ry, rz = x - params[0], y - params[1], z - params[2]
-    length = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if length < 1e-100:
-        # squares this small are subnormal (or zero) and their root inexact: scale by the
-        # largest component first so the direction stays a unit vector
-        largest = max(abs(rx), abs(ry), abs(rz))
-        if largest == 0.0:
-            return 0.0, 0.0, 1.0
-        rx, ry, rz = rx / largest, ry / largest, rz / largest
-        length = math.sqrt(rx * rx + ry * ry + rz * rz)
-    return rx / length, ry / length, rz / length
-
-
-@_jit
-def _query(kind: int, params: FloatArray, x: float, y: float, z: float):
-    """The closest surface point to (x, y, z), the unit outward normal there and the distance
-    [m] (the surface's ``closest_point`` and ``normal`` at once)."""
-    ux, uy, uz = _radial(kind, params, x, y, z)
-    radius = params[3]
-    if kind == TRIMMED_SPHERE:
-        floor = (params[4] - params[2]) / radius
-        if uz < floor:
-            # Below the floor: the nearest point is on the edge circle at height floor·R.
-            flat = math.sqrt(ux * ux + uy * uy)
-            if flat > 0.0:
-                fx, fy = ux / flat, uy / flat
-            else:
-                fx, fy = 1.0, 0.0
-            ring = math.sqrt(1.0 - floor * floor)
-            ux, uy, uz = ring * fx, ring * fy, floor
-    qx = params[0] + radius * ux
-    qy = params[1] + radius * uy
-    qz = params[2] + radius * uz
-    dx, dy, dz = x - qx, y - qy, z - qz
-    return qx, qy, qz, ux, uy, uz, math.sqrt(dx * dx + dy * dy + dz * dz)
-
-
-# --------------------------------------------------------------------------------------------
 # The closed-form node on a sphere
 
 
-@_jit
+# Inlined into ``_closed_form_node`` (numba IR), which the fill calls: one call level, as
+# before the plate had its closed form (one level more made the sphere fill ~25 % slower).
+@numba.njit(cache=True, error_model="numpy", fastmath=False, inline="always")
 def _sphere_node(
     kind: int,
     params: FloatArray,
@@ -148,16 +110,40 @@ def _sphere_node(
 
 
 @_jit
-def sphere_place_nodes(
+def _closed_form_node(
+    kind: int,
+    params: FloatArray,
+    ax: float,
+    ay: float,
+    az: float,
+    bx: float,
+    by: float,
+    bz: float,
+    cx: float,
+    cy: float,
+    cz: float,
+    spacing: float,
+):
+    """The closed-form node of a tool that has one (``CLOSED_FORM_KINDS``): the sphere's for
+    a sphere's parameters (1-D), else the plate's (``surface_kernels.plane_node``), picked when
+    compiled by the rank of ``params`` (as ``surface_kernels.query``)."""
+    if params.ndim == 1:
+        return _sphere_node(kind, params, ax, ay, az, bx, by, bz, cx, cy, cz, spacing)
+    else:
+        return plane_node(params[0], ax, ay, az, bx, by, bz, cx, cy, cz, spacing)
+
+
+@_jit
+def closed_form_nodes(
     kind: int, params: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray, spacing: float
 ):
-    """:meth:`Sphere.place_nodes` over m nodes: points (m, 3) [m] (NaN unless placed) and
-    NodeStatus codes (m,)."""
+    """The tools' ``place_nodes`` (sphere, plate) over m nodes: points (m, 3) [m] (NaN unless
+    placed) and NodeStatus codes (m,)."""
     m = a.shape[0]
     points = np.empty((m, 3))
     status = np.empty(m, dtype=np.int8)
     for i in range(m):
-        px, py, pz, st = _sphere_node(
+        px, py, pz, st = _closed_form_node(
             kind,
             params,
             a[i, 0],
@@ -550,7 +536,7 @@ def fill_fronts(
     closed_form: bool,
 ):
     """Every front of the net on a surface with compiled queries, in place on ``pos``,
-    ``status`` and ``residual`` (flat, ni·nj). ``closed_form``: the sphere's closed-form node,
+    ``status`` and ``residual`` (flat, ni·nj). ``closed_form``: the tool's closed-form node,
     else Newton on the constraint circle. Returns (fronts placed, most Newton passes over a
     front), as the Python loop counts them.
 
@@ -582,7 +568,7 @@ def fill_fronts(
                 ready_on_front[a_off + b_off] = True
                 member[0], member[1], member[2], member[3] = node, ia, ib, ic
                 if closed_form:
-                    px, py, pz, st = _sphere_node(
+                    px, py, pz, st = _closed_form_node(
                         kind,
                         params,
                         pos[ia, 0],
@@ -642,24 +628,3 @@ def fill_fronts(
     # the vectorised loop makes one more pass over a front to find no node left, unless capped
     newton_max = 0 if closed_form or fronts == 0 else min(most_used + 1, max_iterations)
     return fronts, newton_max
-
-
-@_jit
-def query_points(kind: int, params: FloatArray, points: FloatArray):
-    """Closest surface points (m, 3) [m], unit normals there (m, 3) and distances (m,) [m] of a
-    surface with compiled queries, for the vectorised callers (generator marching)."""
-    m = points.shape[0]
-    foot = np.empty((m, 3))
-    normal = np.empty((m, 3))
-    dist = np.empty(m)
-    for i in range(m):
-        (
-            foot[i, 0],
-            foot[i, 1],
-            foot[i, 2],
-            normal[i, 0],
-            normal[i, 1],
-            normal[i, 2],
-            dist[i],
-        ) = _query(kind, params, points[i, 0], points[i, 1], points[i, 2])
-    return foot, normal, dist

@@ -1,6 +1,8 @@
 """Analytic tool surfaces: a flat plate, a sphere (and the upper hemisphere), a cylinder.
 
-Each implements the ``preform.drape.surface.Surface`` protocol vectorised over (n, 3) points.
+Each implements the ``preform.drape.surface.Surface`` protocol vectorised over (n, 3) points,
+through its compiled queries (``compiled_queries``: ``preform.drape.surface_kernels``, imported
+when first asked), so its drape runs the compiled fill in one loop.
 ``Plane`` and ``Sphere``/``Hemisphere`` also offer the drape engine's optional closed forms
 (``place_nodes`` for a net node, ``geodesic_nodes`` for a generator), so draping them needs no
 iteration. Lengths in metres.
@@ -13,7 +15,15 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import SPHERE, TRIMMED_SPHERE
+from preform.drape.compiled_surface import (
+    CYLINDER,
+    PLANE,
+    SPHERE,
+    TRIMMED_SPHERE,
+    checked_kind,
+    kernel_parameters,
+    query_tool,
+)
 from preform.drape.part import HeightCut
 from preform.drape.result import NodeStatus
 
@@ -30,18 +40,29 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.einsum("...i,...i->...", a, b)
 
 
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    # Written out: np.cross has a large fixed cost on the small arrays of one wavefront.
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out
-
-
 def _unit(a: FloatArray) -> FloatArray:
     with np.errstate(invalid="ignore", divide="ignore"):
         return a / np.sqrt(_dot(a, a))[..., None]
+
+
+def _compiled_place_nodes(
+    tool: Plane | Sphere, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
+) -> tuple[FloatArray, StatusArray]:
+    """The tool's closed-form nodes through the compiled kernel (one implementation for the
+    compiled fill and the vectorised callers)."""
+    from preform.drape import net_kernels
+
+    kind, params = tool.compiled_queries()
+    ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
+    points, status = net_kernels.closed_form_nodes(
+        checked_kind(kind),
+        kernel_parameters(kind, params),
+        ends[0],
+        ends[1],
+        ends[2],
+        float(spacing),
+    )
+    return np.asarray(points), np.asarray(status, dtype=np.int8)
 
 
 class Plane:
@@ -63,19 +84,19 @@ class Plane:
     def __repr__(self) -> str:
         return f"Plane(size_m={tuple(2 * self.half)}, centre_m={tuple(self.centre)})"
 
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The plate for the compiled kernels: (PLANE, (centre x, y, z, half size x, y)) [m]."""
+        return PLANE, np.array([*self.centre, *self.half], dtype=float)
+
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the plate [m] and distances (n,) [m] to points (n, 3) [m]."""
-        p = np.asarray(points, dtype=float)
-        q = np.empty_like(p)
-        q[:, :2] = np.clip(p[:, :2], self.centre[:2] - self.half, self.centre[:2] + self.half)
-        q[:, 2] = self.centre[2]
-        return q, np.sqrt(_dot(p - q, p - q))
+        """Closest points on the plate [m] and distances (n,) [m] to points (n, 3) [m]
+        (compiled: ``preform.drape.surface_kernels``)."""
+        foot, _, dist = query_tool(self, points)
+        return foot, dist
 
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3): +z everywhere."""
-        n = np.zeros((len(points), 3))
-        n[:, 2] = 1.0
-        return n
+        return query_tool(self, points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Plate points over plan positions (n, 2) [m], and which positions are over the plate."""
@@ -93,21 +114,10 @@ class Plane:
         self, a: FloatArray, b: FloatArray, opposite: FloatArray, spacing: float
     ) -> tuple[FloatArray, StatusArray]:
         """Net nodes (m, 3) [m] at distance ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the
-        side away from ``opposite``, with NodeStatus codes (m,)."""
-        mid = 0.5 * (a + b)
-        chord = b - a
-        half2 = 0.25 * _dot(chord, chord)
-        radius2 = spacing * spacing - half2
-        ok = radius2 > 0
-        e = _unit(chord)
-        side = _unit(np.column_stack([-e[:, 1], e[:, 0], np.zeros(len(e))]))
-        away = np.where(_dot(opposite - mid, side) > 0, -1.0, 1.0)
-        p = mid + (away * np.sqrt(np.where(ok, radius2, 0.0)))[:, None] * side
-        p[:, 2] = self.centre[2]
-        status = np.where(ok, NodeStatus.PLACED, NodeStatus.NO_INTERSECTION).astype(np.int8)
-        status[ok & ~self._on_plate(p, spacing)] = NodeStatus.OFF_TOOL
-        p[status != NodeStatus.PLACED] = np.nan
-        return p, status
+        side away from ``opposite``, with NodeStatus codes (m,): in the plate, on the
+        perpendicular bisector of ab (compiled: ``preform.drape.surface_kernels.plane_node``).
+        """
+        return _compiled_place_nodes(self, a, b, opposite, spacing)
 
     def geodesic_nodes(
         self, start: FloatArray, direction: FloatArray, spacing: float, count: int
@@ -157,27 +167,16 @@ class Sphere:
         rel /= length[:, None]
         return rel
 
-    def _queries(self, points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Closest tool points, the normals there and distances: compiled, the same queries
-        the net kernels use (``preform.drape.net_kernels._query``)."""
-        from preform.drape import net_kernels
-
-        p = np.ascontiguousarray(points, dtype=float)
-        kind, params = self.compiled_queries()
-        foot, normal, dist = net_kernels.query_points(kind, params, p.reshape(-1, 3))
-        shape = p.shape[:-1]
-        return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)
-
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest points on the tool [m] and distances (n,) [m] to points (n, 3) [m]; a point
         at the centre gets the top (+z), any point being closest."""
-        foot, _, dist = self._queries(points)
+        foot, _, dist = query_tool(self, points)
         return foot, dist
 
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3) at tool points (n, 3) [m] (for a point off the tool,
         the normal at its closest tool point)."""
-        return self._queries(points)[1]
+        return query_tool(self, points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """The top of the sphere over plan positions (n, 2) [m], and which lie over it."""
@@ -203,14 +202,7 @@ class Sphere:
         and n = A × B; the root on the far side of the plane (0, A, B) from the opposite node is
         the new node. A node below a trimmed sphere's floor is OFF_TOOL.
         """
-        from preform.drape import net_kernels
-
-        kind, params = self.compiled_queries()
-        ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
-        points, status = net_kernels.sphere_place_nodes(
-            kind, params, ends[0], ends[1], ends[2], float(spacing)
-        )
-        return np.asarray(points), np.asarray(status, dtype=np.int8)
+        return _compiled_place_nodes(self, a, b, opposite, spacing)
 
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """The sphere for the compiled net kernels: (SPHERE, (centre x, y, z, radius)) [m]."""
@@ -326,30 +318,23 @@ class Cylinder:
             f"centre_m={tuple(self.centre)})"
         )
 
-    def _radial(self, p: FloatArray) -> FloatArray:
-        """Unit direction from the axis, in the cross-section plane (+z for points on it)."""
-        rel = p - self.centre
-        rel[:, self._ax] = 0.0
-        length = np.sqrt(_dot(rel, rel))
-        on_axis = length == 0
-        if on_axis.any():
-            rel[on_axis] = (0.0, 0.0, 1.0)
-            length[on_axis] = 1.0
-        rel /= length[:, None]
-        return rel
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The cylinder for the compiled kernels: (CYLINDER, (centre x, y, z, radius, half
+        length [m], axis: 0 along x, 1 along y)). Points past an end have their closest point
+        on its end circle."""
+        half = 0.5 * self.length
+        return CYLINDER, np.array([*self.centre, self.radius, half, self._ax], dtype=float)
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the lateral surface [m] and distances (n,) [m]."""
-        p = np.asarray(points, dtype=float)
-        q = self.centre + self.radius * self._radial(p)
-        half = 0.5 * self.length
-        c = self.centre[self._ax]
-        q[:, self._ax] = np.clip(p[:, self._ax], c - half, c + half)
-        return q, np.sqrt(_dot(p - q, p - q))
+        """Closest points on the lateral surface [m] and distances (n,) [m] (compiled:
+        ``preform.drape.surface_kernels``); a point on the axis gets the top (+z)."""
+        foot, _, dist = query_tool(self, points)
+        return foot, dist
 
     def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward (radial) normals (n, 3) at surface points (n, 3) [m]."""
-        return self._radial(np.asarray(points, dtype=float))
+        """Unit outward (radial) normals (n, 3) at surface points (n, 3) [m] (for a point off
+        the surface, the normal at its closest surface point)."""
+        return query_tool(self, points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """The top of the cylinder over plan positions (n, 2) [m], and which lie over it."""

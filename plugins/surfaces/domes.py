@@ -6,8 +6,10 @@
 * ``ParaboloidDome``: z = h (1 − r²/R²) for r ≤ R.
 
 All lengths are in metres. Every class implements the ``preform.drape.surface.Surface``
-protocol with closed-form or vectorised-iterative closest points, so it answers for any query
-point, including points beyond the rim (the answer then lies on the rim or the flange edge).
+protocol with closed-form or iterative closest points, compiled (``compiled_queries``: the
+queries are in ``preform.drape.surface_kernels``, imported when first asked, and a drape of the
+tool runs the compiled fill in one loop), so it answers for any query point, including points
+beyond the rim (the answer then lies on the rim or the flange edge).
 ``point_at_plan`` answers the single point of the tool above a plan position (these tools are
 height fields); off the tool the mask is false and the returned point lies on the base plane
 z = 0, so no NaN ever leaves this module.
@@ -24,9 +26,16 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.drape.compiled_surface import (
+    CONE,
+    ELLIPSOID_DOME,
+    FLANGED_HEMISPHERE,
+    PARABOLOID_DOME,
+    query_tool,
+)
+
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-IntArray = NDArray[np.int64]
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 __all__ = ["Cone", "EllipsoidDome", "FlangedHemisphere", "ParaboloidDome"]
@@ -46,81 +55,7 @@ def _positive_length(name: str, value: float) -> float:
     return length
 
 
-# --- meridian half-plane helpers -------------------------------------------------------------
-
-
-def _to_meridian(points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Radial distance r, height z and the azimuth (cos, sin) of each point."""
-    r = np.hypot(points[:, 0], points[:, 1])
-    # Scale by the larger plan coordinate first so the azimuth stays a unit vector even for
-    # subnormal coordinates; on the axis every meridian is equally good and +x is taken.
-    largest = np.maximum(np.abs(points[:, 0]), np.abs(points[:, 1]))
-    on_axis = largest == 0.0
-    safe = np.where(on_axis, 1.0, largest)
-    x, y = points[:, 0] / safe, points[:, 1] / safe
-    unit = np.where(on_axis, 1.0, np.hypot(x, y))
-    cos_az = np.where(on_axis, 1.0, x / unit)
-    sin_az = np.where(on_axis, 0.0, y / unit)
-    return r, points[:, 2], cos_az, sin_az
-
-
-def _from_meridian(
-    r: FloatArray, z: FloatArray, cos_az: FloatArray, sin_az: FloatArray
-) -> FloatArray:
-    return np.column_stack((r * cos_az, r * sin_az, z))
-
-
-def _closest_on_segment(
-    r: FloatArray, z: FloatArray, start: tuple[float, float], end: tuple[float, float]
-) -> tuple[FloatArray, FloatArray]:
-    dr, dz = end[0] - start[0], end[1] - start[1]
-    length_sq = dr * dr + dz * dz
-    if length_sq == 0.0:
-        return np.full_like(r, start[0]), np.full_like(z, start[1])
-    t = np.clip(((r - start[0]) * dr + (z - start[1]) * dz) / length_sq, 0.0, 1.0)
-    return start[0] + t * dr, start[1] + t * dz
-
-
-def _closest_on_arc(
-    r: FloatArray,
-    z: FloatArray,
-    centre: tuple[float, float],
-    radius: float,
-    angle_start: float,
-    angle_end: float,
-) -> tuple[FloatArray, FloatArray]:
-    """Closest points on the circular arc running anticlockwise from ``angle_start`` to
-    ``angle_end`` [rad] (angles measured from +r towards +z)."""
-    angle = np.arctan2(z - centre[1], r - centre[0])
-    on_arc = np.mod(angle - angle_start, 2.0 * np.pi) <= angle_end - angle_start
-    proj_r = centre[0] + radius * np.cos(angle)
-    proj_z = centre[1] + radius * np.sin(angle)
-    start_r, start_z = (
-        centre[0] + radius * np.cos(angle_start),
-        centre[1] + radius * np.sin(angle_start),
-    )
-    end_r, end_z = centre[0] + radius * np.cos(angle_end), centre[1] + radius * np.sin(angle_end)
-    to_start = (r - start_r) ** 2 + (z - start_z) ** 2
-    to_end = (r - end_r) ** 2 + (z - end_z) ** 2
-    nearer_start = to_start <= to_end
-    out_r = np.where(on_arc, proj_r, np.where(nearer_start, start_r, end_r))
-    out_z = np.where(on_arc, proj_z, np.where(nearer_start, start_z, end_z))
-    return out_r, out_z
-
-
-def _pick_nearest(
-    points: FloatArray, candidates: FloatArray
-) -> tuple[FloatArray, FloatArray, IntArray]:
-    """From candidates (k, n, 3) pick the nearest to each point: (closest, distance, which)."""
-    distances = np.linalg.norm(candidates - points[None, :, :], axis=2)
-    which = np.argmin(distances, axis=0)
-    index = np.arange(points.shape[0])
-    return candidates[which, index], distances[which, index], which
-
-
 # --- flanged hemisphere ----------------------------------------------------------------------
-
-_CAP, _FILLET, _FLANGE = 0, 1, 2
 
 
 class FlangedHemisphere:
@@ -169,53 +104,33 @@ class FlangedHemisphere:
         self.bounds: Bounds = ((-width, -width, 0.0), (width, width, radius))
         self.size = radius
 
-    def _closest(self, points: FloatArray) -> tuple[FloatArray, FloatArray, IntArray]:
-        r, z, cos_az, sin_az = _to_meridian(points)
-        radius, fillet, foot = self.radius_m, self.fillet_radius_m, self.fillet_foot_radius_m
-        beta = self._seam_elevation
-        cap = _from_meridian(
-            *_closest_on_arc(r, z, (0.0, 0.0), radius, beta, 0.5 * np.pi), cos_az, sin_az
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The tool for the compiled kernels: (FLANGED_HEMISPHERE, (R, ρ, fillet foot radius,
+        flange half width [m], seam elevation [rad], 1 for a square flange or 0 for a disc))."""
+        return FLANGED_HEMISPHERE, np.array(
+            [
+                self.radius_m,
+                self.fillet_radius_m,
+                self.fillet_foot_radius_m,
+                self.flange_half_width_m,
+                self._seam_elevation,
+                1.0 if self.flange_shape == "square" else 0.0,
+            ]
         )
-        fillet_pts = _from_meridian(
-            *_closest_on_arc(r, z, (foot, fillet), fillet, np.pi + beta, 1.5 * np.pi),
-            cos_az,
-            sin_az,
-        )
-        # The flange is not axisymmetric when square, so it is handled in plan: clamp into the
-        # flange outline, then push out of the fillet foot disc (the part of the plane the
-        # fillet and dome cover), which is the nearest point of the annulus for inner points.
-        width = self.flange_half_width_m
-        if self.flange_shape == "square":
-            plan = np.clip(points[:, :2], -width, width)
-            plan_r = np.hypot(plan[:, 0], plan[:, 1])
-            inside_foot = plan_r < foot
-            plan[inside_foot] = foot * np.column_stack((cos_az, sin_az))[inside_foot]
-        else:
-            plan_r = np.clip(r, foot, width)
-            plan = np.column_stack((plan_r * cos_az, plan_r * sin_az))
-        flange = np.column_stack((plan, np.zeros(points.shape[0])))
-        return _pick_nearest(points, np.stack((cap, fillet_pts, flange)))
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
-        closest, distance, _ = self._closest(_as_points(points, 3))
+        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]:
+        the nearest of the cap, the fillet (both in the meridian plane) and the flange (in
+        plan: clamped into its outline, out of the fillet foot disc); points past the flange
+        edge answer a point of the edge."""
+        closest, _, distance = query_tool(self, _as_points(points, 3))
         return closest, distance
 
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3) at surface points (n, 3) [m]; a point off the surface gets
-        the normal at its closest surface point."""
-        closest, _, region = self._closest(_as_points(points, 3))
-        r, z, cos_az, sin_az = _to_meridian(closest)
-        # Cap: radial. Fillet: towards the fillet circle's centre (it is concave). Flange: +z.
-        normal_r = np.where(region == _CAP, r / self.radius_m, 0.0)
-        normal_z = np.where(region == _CAP, z / self.radius_m, 1.0)
-        is_fillet = region == _FILLET
-        normal_r = np.where(
-            is_fillet, (self.fillet_foot_radius_m - r) / self.fillet_radius_m, normal_r
-        )
-        normal_z = np.where(is_fillet, (self.fillet_radius_m - z) / self.fillet_radius_m, normal_z)
-        normals = _from_meridian(normal_r, normal_z, cos_az, sin_az)
-        return normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        the normal at its closest surface point (cap: radial; fillet: towards the fillet
+        circle's centre, it is concave; flange: +z)."""
+        return query_tool(self, _as_points(points, 3))[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
@@ -239,8 +154,6 @@ class FlangedHemisphere:
 
 
 # --- cone ------------------------------------------------------------------------------------
-
-_LATERAL, _TOP = 0, 1
 
 
 class Cone:
@@ -266,30 +179,24 @@ class Cone:
         slant = np.hypot(self.height_m, radius - self.top_radius_m)
         self._lateral_normal = (self.height_m / slant, (radius - self.top_radius_m) / slant)
 
-    def _closest(self, points: FloatArray) -> tuple[FloatArray, FloatArray, IntArray]:
-        r, z, cos_az, sin_az = _to_meridian(points)
-        rim = (self.base_radius_m, 0.0)
-        top_edge = (self.top_radius_m, self.height_m)
-        lateral = _from_meridian(*_closest_on_segment(r, z, rim, top_edge), cos_az, sin_az)
-        top = _from_meridian(
-            *_closest_on_segment(r, z, (0.0, self.height_m), top_edge), cos_az, sin_az
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The cone for the compiled kernels: (CONE, (base radius, height, top radius [m],
+        lateral outward normal: radial and vertical part))."""
+        return CONE, np.array(
+            [self.base_radius_m, self.height_m, self.top_radius_m, *self._lateral_normal]
         )
-        return _pick_nearest(points, np.stack((lateral, top)))
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
-        closest, distance, _ = self._closest(_as_points(points, 3))
+        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]:
+        the nearer of the lateral segment and the top disc in the meridian plane; points past
+        the base circle answer a point of it."""
+        closest, _, distance = query_tool(self, _as_points(points, 3))
         return closest, distance
 
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3) at surface points (n, 3) [m] (the normal of the closest
-        surface point for points off the surface)."""
-        closest, _, region = self._closest(_as_points(points, 3))
-        r, _, cos_az, sin_az = _to_meridian(closest)
-        use_top = (region == _TOP) | (r == 0.0)
-        normal_r = np.where(use_top, 0.0, self._lateral_normal[0])
-        normal_z = np.where(use_top, 1.0, self._lateral_normal[1])
-        return _from_meridian(normal_r, normal_z, cos_az, sin_az)
+        surface point for points off the surface; +z on the top disc and at the apex)."""
+        return query_tool(self, _as_points(points, 3))[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
@@ -390,27 +297,20 @@ class EllipsoidDome:
         self.bounds: Bounds = ((-a, -b, 0.0), (a, b, c))
         self.size = max(a, b, c)
 
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The dome for the compiled kernels: (ELLIPSOID_DOME, (a, b, c)) [m]."""
+        return ELLIPSOID_DOME, np.array(self.semi_axes_m, dtype=float)
+
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
-        p = _as_points(points, 3)
-        sign = np.where(p < 0.0, -1.0, 1.0)
-        foot = _ellipsoid_foot(np.abs(p), self.semi_axes_m)
-        closest = foot * sign
-        below = p[:, 2] < 0.0
-        if np.any(below):
-            q = p[below]
-            mirrored = foot[below] * np.column_stack((sign[below, :2], np.ones(q.shape[0])))
-            rim_plan = _ellipsoid_foot(np.abs(q[:, :2]), self.semi_axes_m[:2]) * sign[below, :2]
-            rim = np.column_stack((rim_plan, np.zeros(q.shape[0])))
-            closest[below] = _pick_nearest(q, np.stack((mirrored, rim)))[0]
-        return closest, np.linalg.norm(closest - p, axis=1)
+        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]
+        (compiled: ``preform.drape.surface_kernels._ellipsoid_foot`` has the root solve)."""
+        closest, _, distance = query_tool(self, _as_points(points, 3))
+        return closest, distance
 
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3) at surface points (n, 3) [m] (the gradient of the
         implicit function at the closest surface point)."""
-        closest, _ = self.closest_point(points)
-        gradient = closest / self.semi_axes_m**2
-        return gradient / np.linalg.norm(gradient, axis=1, keepdims=True)
+        return query_tool(self, _as_points(points, 3))[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
@@ -445,37 +345,20 @@ class ParaboloidDome:
         self.size = max(radius, self.height_m)
         self._curvature = self.height_m / radius**2
 
-    def _meridian_root(self, r_p: FloatArray, z_p: FloatArray) -> FloatArray:
-        k = self._curvature
-        cubic = 2.0 * k * k
-        linear = 1.0 - 2.0 * k * (self.height_m - z_p)
-        # Start right of the root: at r_a = √(max(−linear, 0)/cubic) the cubic part vanishes and
-        # adding ∛(r_p/cubic) makes f ≥ 0 (see the class docstring for the convexity argument).
-        r = np.sqrt(np.maximum(-linear, 0.0) / cubic) + np.cbrt(r_p / cubic)
-        for _ in range(100):
-            f = cubic * r**3 + linear * r - r_p
-            slope = 3.0 * cubic * r * r + linear
-            step = np.where(slope > 0.0, f / np.where(slope > 0.0, slope, 1.0), 0.0)
-            r = np.maximum(r - step, 0.0)
-            if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * np.maximum(r, self.radius_m)):
-                break
-        return np.clip(r, 0.0, self.radius_m)
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        """The dome for the compiled kernels: (PARABOLOID_DOME, (R [m], h [m], h/R² [1/m]))."""
+        return PARABOLOID_DOME, np.array([self.radius_m, self.height_m, self._curvature])
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
-        p = _as_points(points, 3)
-        r_p, z_p, cos_az, sin_az = _to_meridian(p)
-        r = self._meridian_root(r_p, z_p)
-        closest = _from_meridian(r, self.height_m - self._curvature * r * r, cos_az, sin_az)
-        return closest, np.linalg.norm(closest - p, axis=1)
+        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]
+        (compiled: ``preform.drape.surface_kernels``)."""
+        closest, _, distance = query_tool(self, _as_points(points, 3))
+        return closest, distance
 
     def normal(self, points: FloatArray) -> FloatArray:
         """Unit outward normals (n, 3) at surface points (n, 3) [m] (at the closest surface
         point for points off the surface)."""
-        closest, _ = self.closest_point(points)
-        r, _, cos_az, sin_az = _to_meridian(closest)
-        normals = _from_meridian(2.0 * self._curvature * r, np.ones_like(r), cos_az, sin_az)
-        return normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        return query_tool(self, _as_points(points, 3))[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
