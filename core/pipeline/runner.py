@@ -915,7 +915,9 @@ def _run_aggregates(
         folder = Path(first.case_dir).parent
         for step in steps:
             assert step.aggregate is not None
-            tasks.append((scene_name, step.name, session.submit(step.aggregate, folder, summaries)))
+            # steps are module-level functions (the registry checks): a worker imports it
+            future = session.submit(step.aggregate, folder, summaries)
+            tasks.append((scene_name, step.name, future))
     for scene_name, step_name, future in tasks:
         try:
             written.setdefault(scene_name, {})[step_name] = future.result()
