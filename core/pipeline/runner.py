@@ -246,9 +246,20 @@ def worker_preload() -> tuple[str, ...]:
 
 def start_workers_early() -> None:
     """Start the process pool's fork server before the run's library and scenes are read (the
-    command line calls it first): it imports the runner and ``WORKER_PRELOAD`` meanwhile, and
-    the workers of the pool the run opens later are forked from it."""
-    start_fork_server(tuple(dict.fromkeys(("preform.pipeline.runner", *worker_preload()))))
+    command line calls it first): meanwhile it imports the runner, preform's own plugins (the
+    steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
+    later are forked from it."""
+    from importlib import metadata
+
+    from preform.plugin_manager import ENTRY_POINT_GROUP
+
+    own_plugins = sorted(
+        ep.value.split(":")[0]
+        for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)
+        if ep.value.startswith("preform.")
+    )
+    modules = ("preform.pipeline.runner", *own_plugins, *worker_preload())
+    start_fork_server(tuple(dict.fromkeys(modules)))
 
 
 def warm_worker(hosts: tuple[tuple[bool, tuple[tuple[str, str], ...]], ...]) -> None:
