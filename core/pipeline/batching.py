@@ -25,11 +25,11 @@ T = TypeVar("T")
 #: Batches per worker the automatic batch size leaves at least, so that the last batches can
 #: still be shared out evenly: with fewer, the tail is a whole batch long.
 BATCHES_PER_WORKER = 4
-#: Largest automatic batch [cases]. Measured on 120 small cases, 2 workers: 79 ms a case
-#: alone, 27 in batches of 8, 23 of 16, 25 of 32 (``benchmarks/bench_batches.py``, README
-#: section k): past 16 nothing is gained, while a worker that dies mid-batch makes more cases
-#: run twice.
-MAX_AUTO_BATCH = 16
+#: Largest automatic batch [cases]. Measured on 120 small cases, 2 workers
+#: (``benchmarks/bench_batches.py``, README section k), wall time a case: 40 ms alone, 18 in
+#: batches of 4, 15 of 8, 15 of 16, 14 of 32 (load 2.2; under load 4: 79, 43, 27, 23, 25):
+#: past 8 little is gained, while a worker that dies mid-batch makes more cases run twice.
+MAX_AUTO_BATCH = 8
 #: A case estimated to take longer than this runs alone [s]: its own dispatch and
 #: bookkeeping (a few ms) are negligible beside it, and alone it can be balanced and recovered.
 SMALL_CASE_S = 0.5
@@ -71,8 +71,9 @@ def plan_batches(
     """The groups to send, in the order to send them.
 
     Ordered longest first (``longest_first``). With ``batch_size`` None the size is
-    ``auto_batch_size`` and a case estimated past ``SMALL_CASE_S`` goes alone; an explicit
-    ``batch_size`` groups every case so (1: one case a task, no batching).
+    ``auto_batch_size``; when it is above 1, the cases estimated past ``SMALL_CASE_S`` go
+    first, each alone, then the others in batches. An explicit ``batch_size`` groups every
+    case so, in ``longest_first`` order (1: one case a task, no batching).
     """
     ordered = longest_first(items, estimate)
     if batch_size is not None:
