@@ -3,9 +3,10 @@ speed ratios in ``bench_kernels.py``, measured in the same process.
 
 A frozen copy, reachable only from the benchmarks (never imported by preform or its tests): the
 wavefront fill with the sphere's vectorised closed form and the vectorised Newton placement,
-the cell fields, the node shear, the cut-cell share and the surrogate's Hermite evaluation,
-each as numpy code vectorised over a front or over the net. :func:`numpy_path` swaps them into
-the drape step for the duration of a ``with`` block.
+the cell fields and cell status, the node shear, the shear extremes and the summary, the
+cut-cell share, the surrogate's Hermite evaluation and the coverage with its dependency
+shadows, each as numpy code vectorised over a front or over the net. :func:`numpy_path` swaps
+them into the drape step for the duration of a ``with`` block.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from preform.drape import fields as fields_module
 from preform.drape import steps as steps_module
-from preform.drape.fields import cell_status
+from preform.drape import verdict as verdict_module
 from preform.drape.generators import (
     ClosedFormGeodesics,
     GeneratorNodes,
@@ -41,6 +42,12 @@ from preform.drape.part import Part
 from preform.drape.ply import PlyOutline
 from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.drape.surface import Surface
+from preform.drape.verdict import (
+    Coverage,
+    _fold_zones,
+    flat_plan_positions,
+    generator_stops_on_tool,
+)
 from preform.plugins.surfaces.basic import Hemisphere, Sphere
 from preform.shear import surrogate as surrogate_module
 from preform.shear.law import ShearLaw
@@ -449,6 +456,23 @@ def _stack_unit(a: Vec, valid: BoolArray) -> FloatArray:
     out = np.zeros((*length.shape, 3))
     for k in range(3):
         np.divide(a[k], length, out=out[..., k], where=valid)
+    return out
+
+
+def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
+    """CellStatus per cell from its corners' NodeStatus (numpy, as before the kernels)."""
+    corners = [status[:-1, :-1], status[1:, :-1], status[:-1, 1:], status[1:, 1:]]
+    out = np.full(corners[0].shape, CellStatus.VALID, dtype=np.int8)
+    missing = np.zeros(out.shape, dtype=bool)
+    folded = np.zeros(out.shape, dtype=bool)
+    outside = np.zeros(out.shape, dtype=bool)
+    for corner in corners:
+        missing |= corner != NodeStatus.PLACED
+        folded |= corner == NodeStatus.FOLDED
+        outside |= corner == NodeStatus.OUTSIDE_PLY
+    out[missing] = CellStatus.INCOMPLETE
+    out[folded] = CellStatus.FOLDED
+    out[outside] = CellStatus.OUTSIDE_PLY
     return out
 
 
@@ -945,6 +969,179 @@ def surrogate_energy(self: Any, gamma: ArrayLike) -> FloatArray:
     return np.where(g >= 0, _sense_energy(self._positive, u), _sense_energy(self._negative, u))
 
 
+def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
+    """``preform.drape.verdict.dependency_shadow`` as numpy accumulates (as before the kernels)."""
+    i0, j0 = start
+    out = np.zeros_like(mask, dtype=bool)
+    rows = (slice(i0, None), slice(i0, None, -1))
+    cols = (slice(j0, None), slice(j0, None, -1))
+    for r in rows:
+        for c in cols:
+            part = np.logical_or.accumulate(np.logical_or.accumulate(mask[r, c], axis=0), axis=1)
+            out[r, c] |= part
+    return out
+
+
+def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
+    """``preform.drape.fields.extremes`` in numpy, on this module's node shear (as before the
+    kernels)."""
+    counted = result.valid & result.in_part
+    cells = np.abs(result.shear[counted])
+    gamma = node_shear(result)
+    inside = np.isfinite(gamma)
+    if part is not None:
+        inside &= part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0))
+    nodes = np.abs(gamma[inside])
+    return {
+        "max_abs_shear_cells_deg": float(np.degrees(cells.max())) if cells.size else 0.0,
+        "max_abs_shear_nodes_deg": float(np.degrees(nodes.max())) if nodes.size else 0.0,
+    }
+
+
+def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float]) -> Coverage:
+    """``preform.drape.verdict.coverage`` as it was before the kernels: the plan positions of
+    every node, the dependency shadows as numpy accumulates."""
+    status = result.status
+    placed = status == NodeStatus.PLACED
+    in_ply = status != NodeStatus.OUTSIDE_PLY
+    start = result.start_index
+    stopped = generator_stops_on_tool(result, surface)
+    edge = (status == NodeStatus.OFF_TOOL) & ~stopped
+    past_edge = ~placed & in_ply & dependency_shadow(edge, start)
+    failed = (status == NodeStatus.NO_INTERSECTION) | (status == NodeStatus.FOLDED) | stopped
+    behind_failure = dependency_shadow(failed, start)
+    behind_outline = dependency_shadow(~in_ply, start)
+    lost = ~placed & in_ply & ~past_edge
+
+    plan = flat_plan_positions(result, start_xy_m)
+    over = np.zeros(status.shape, dtype=bool)
+    if lost.any():
+        _, mask = surface.point_at_plan(plan[lost])
+        over[lost] = np.asarray(mask, dtype=bool)
+    missing = lost & over
+    not_reached = missing & (status == NodeStatus.NOT_REACHED)
+    # The failed nodes themselves are counted wherever they lie (they say why the net stopped);
+    # the nodes behind them only where they lie over the tool (they are the coverage lost).
+    counts = {
+        "stopped_on_tool": int(np.count_nonzero(lost & stopped)),
+        "no_intersection": int(np.count_nonzero(lost & (status == NodeStatus.NO_INTERSECTION))),
+        "folded": int(np.count_nonzero(lost & (status == NodeStatus.FOLDED))),
+        "not_reached_behind_failure": int(np.count_nonzero(not_reached & behind_failure)),
+        "not_reached_behind_outline": int(
+            np.count_nonzero(not_reached & ~behind_failure & behind_outline)
+        ),
+    }
+    # A node that is missing for none of these reasons would be an engine bug; say so rather
+    # than let it pass as coverage.
+    other = int(np.count_nonzero(not_reached & ~behind_failure & ~behind_outline))
+    if other:
+        counts["not_reached_unexplained"] = other
+
+    # Cells: valid ones are covered; a non-valid cell inside the ply is asked for when one of
+    # its corners is missing and none is past the edge (so complete ⇔ nothing missing).
+    valid = result.cell_status == CellStatus.VALID
+    cell_in_ply = result.cell_status != CellStatus.OUTSIDE_PLY
+    edge_corner = past_edge[:-1, :-1] | past_edge[1:, :-1] | past_edge[:-1, 1:] | past_edge[1:, 1:]
+    missing_corner = missing[:-1, :-1] | missing[1:, :-1] | missing[:-1, 1:] | missing[1:, 1:]
+    asked = valid | (cell_in_ply & ~edge_corner & missing_corner)
+
+    # Uncovered fabric area by cause: each missing cell (asked, not valid) is d² of undeformed
+    # fabric, given to the first cause among its corners in this order.
+    lost_cells = asked & ~valid
+    causes = (
+        ("folded", lost & (status == NodeStatus.FOLDED)),
+        ("no_intersection", lost & (status == NodeStatus.NO_INTERSECTION)),
+        ("stopped_on_tool", lost & stopped),
+        ("behind_failure", missing & behind_failure),
+        ("behind_outline", missing & behind_outline),
+    )
+    uncovered: dict[str, float] = {}
+    left = lost_cells.copy()
+    for name, node_mask in causes:
+        corner = node_mask[:-1, :-1] | node_mask[1:, :-1] | node_mask[:-1, 1:] | node_mask[1:, 1:]
+        mine = left & corner
+        uncovered[name] = float(np.count_nonzero(mine)) * result.node_spacing**2
+        left &= ~mine
+    if left.any():
+        uncovered["other"] = float(np.count_nonzero(left)) * result.node_spacing**2
+
+    # The fold zone is all the fabric lost behind a fold, also where it would have hung past
+    # the tool's plan (a vertex's shadow on a tool with vertical walls lies wholly there).
+    fold_nodes = lost & dependency_shadow(status == NodeStatus.FOLDED, start)
+    fold_corner = (
+        fold_nodes[:-1, :-1] | fold_nodes[1:, :-1] | fold_nodes[:-1, 1:] | fold_nodes[1:, 1:]
+    )
+    zones = _fold_zones(
+        cell_in_ply & ~valid & ~edge_corner & fold_corner, plan, result.node_spacing
+    )
+
+    first: tuple[float, float] | None = None
+    if missing.any():
+        i0, j0 = start
+        ii, jj = np.nonzero(missing)
+        k = int(np.argmin(np.abs(ii - i0) + np.abs(jj - j0)))
+        first = (float(plan[ii[k], jj[k], 0]), float(plan[ii[k], jj[k], 1]))
+    return Coverage(
+        cells_asked=int(np.count_nonzero(asked)),
+        cells_covered=int(np.count_nonzero(valid)),
+        missing_nodes=counts,
+        nodes_overhang=int(np.count_nonzero(past_edge | (lost & ~over))),
+        nodes_missing=int(np.count_nonzero(missing)),
+        first_missing_xy_m=first,
+        node_spacing_m=result.node_spacing,
+        uncovered_area_m2=uncovered,
+        fold_zones=zones,
+    )
+
+
+def summary(
+    result: DrapeResult, energy: EnergyField | None = None, part: Part | None = None
+) -> dict[str, object]:
+    """``preform.drape.fields.summary`` as numpy masks and sums (as before the kernels), on
+    this module's extremes."""
+    valid = result.valid  # each a pass over the net: computed once here
+    counted = valid & result.in_part
+    shear = np.abs(result.shear[counted])
+    part_weight = result.part_weight
+    weight = part_weight[counted]
+    peaks = extremes(result, part)
+    out: dict[str, object] = {
+        "nodes_total": result.nodes_total,
+        "nodes_placed": result.nodes_placed,
+        "complete": result.complete,
+        "cells_valid": int(np.count_nonzero(valid)),
+        "cells_in_part": int(np.count_nonzero(counted)),
+        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (part_weight < 1.0))),
+        "part_fabric_area_m2": float(weight.sum() * result.node_spacing**2),
+        "part_draped_area_m2": float((result.area[counted] * weight).sum()),
+        "max_abs_shear_deg": peaks["max_abs_shear_cells_deg"],
+        **peaks,
+        "mean_abs_shear_deg": (
+            float(np.degrees(np.average(shear, weights=weight)))
+            if shear.size and weight.sum() > 0
+            else 0.0
+        ),
+        "generator_angle_deg": float(np.degrees(result.generator_angle)),
+        "orientation_deg": float(np.degrees(result.orientation)),
+        "node_spacing_m": result.node_spacing,
+    }
+    for code in NodeStatus:
+        out[f"nodes_{code.name.lower()}"] = int(np.count_nonzero(result.status == code))
+    for cell_code in CellStatus:
+        out[f"cells_{cell_code.name.lower()}"] = int(
+            np.count_nonzero(result.cell_status == cell_code)
+        )
+    if energy is not None:
+        out["total_energy_J"] = energy.total_energy
+        out["cells_past_locking"] = int(np.count_nonzero(energy.past_locking))
+        # Counted by the fabric area they put inside the part (undeformed, d² per whole cell).
+        out["part_area_past_locking_m2"] = float(
+            (part_weight * energy.past_locking).sum() * result.node_spacing**2
+        )
+        out["cells_past_failure"] = int(np.count_nonzero(energy.past_failure))
+    return out
+
+
 @contextlib.contextmanager
 def numpy_path() -> Iterator[None]:
     """Run the drape step (``preform.drape.steps.run_drape``) on this module's numpy code."""
@@ -952,12 +1149,20 @@ def numpy_path() -> Iterator[None]:
         steps_module.drape,
         steps_module.energy_field,
         fields_module.node_shear,
+        fields_module.extremes,
         surrogate_module.TabulatedSurrogate.energy,
+        verdict_module.dependency_shadow,
+        steps_module.coverage,
+        steps_module.summary,
     )
     steps_module.drape = drape  # type: ignore[assignment]
     steps_module.energy_field = energy_field
     fields_module.node_shear = node_shear
+    fields_module.extremes = extremes
     surrogate_module.TabulatedSurrogate.energy = surrogate_energy  # type: ignore[method-assign]
+    verdict_module.dependency_shadow = dependency_shadow
+    steps_module.coverage = coverage
+    steps_module.summary = summary
     try:
         yield
     finally:
@@ -965,5 +1170,9 @@ def numpy_path() -> Iterator[None]:
             steps_module.drape,
             steps_module.energy_field,
             fields_module.node_shear,
+            fields_module.extremes,
             surrogate_module.TabulatedSurrogate.energy,
+            verdict_module.dependency_shadow,
+            steps_module.coverage,
+            steps_module.summary,
         ) = saved  # type: ignore[assignment]

@@ -15,15 +15,31 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import NodeStatus
+from preform.drape.result import CellStatus, NodeStatus
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+Vec = tuple[float, float, float]
 
 _PLACED = np.int8(NodeStatus.PLACED)
+_NODE_FOLDED = np.int8(NodeStatus.FOLDED)
+_NODE_OUTSIDE = np.int8(NodeStatus.OUTSIDE_PLY)
+_VALID = np.int8(CellStatus.VALID)
+_INCOMPLETE = np.int8(CellStatus.INCOMPLETE)
+_CELL_FOLDED = np.int8(CellStatus.FOLDED)
+_CELL_OUTSIDE = np.int8(CellStatus.OUTSIDE_PLY)
 _HALF_PI = 0.5 * math.pi
 
 _jit = numba.njit(cache=True, error_model="numpy")
+# Steps that take an array are inlined into their loop (numba's own inlining): an array handed
+# to a function that is not inlined is reference counted, an atomic add and subtract, per call.
+_per_cell = numba.njit(cache=True, error_model="numpy", inline="always")
+
+
+@_per_cell
+def _corner(nodes: FloatArray, i: int, j: int) -> tuple[float, float, float]:
+    """Node (i, j) of an (ni, nj, 3) array as a tuple."""
+    return nodes[i, j, 0], nodes[i, j, 1], nodes[i, j, 2]
 
 
 @_jit
@@ -44,31 +60,39 @@ def _cross_norm(ax: float, ay: float, az: float, bx: float, by: float, bz: float
 
 
 @_jit
-def _pair_deviation(
-    ax: float,
-    ay: float,
-    az: float,
-    bx: float,
-    by: float,
-    bz: float,
-    cx: float,
-    cy: float,
-    cz: float,
-    dx: float,
-    dy: float,
-    dz: float,
-) -> float:
-    """(ω_ab − 90°) + (ω_cd − 90°) [rad] for the angles ω between a and b and between c and d.
+def _pair_number(a: Vec, b: Vec, c: Vec, d: Vec):
+    """(re, im) of the product of |a×b| − i(a·b) and |c×d| − i(c·d): its argument is
+    (ω_ab − 90°) + (ω_cd − 90°) for the angles ω between a and b and between c and d.
 
     ω − 90° is the argument of |a×b| − i(a·b), a number in [−90°, 90°] read accurately near
     0 as near ±90° (as atan2 reads ω itself); two such arguments add up to the argument of the
-    product of the two numbers, which lies in [−180°, 180°], so one atan2 gives the sum. Half
-    the atan2 calls of summing four corner angles one by one, the cell kernel's largest cost."""
-    re1 = _cross_norm(ax, ay, az, bx, by, bz)
-    im1 = -(ax * bx + ay * by + az * bz)
-    re2 = _cross_norm(cx, cy, cz, dx, dy, dz)
-    im2 = -(cx * dx + cy * dy + cz * dz)
-    return math.atan2(re1 * im2 + im1 * re2, re1 * re2 - im1 * im2)
+    product of the two numbers, which lies in [−180°, 180°]."""
+    re1 = _cross_norm(a[0], a[1], a[2], b[0], b[1], b[2])
+    im1 = -(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+    re2 = _cross_norm(c[0], c[1], c[2], d[0], d[1], d[2])
+    im2 = -(c[0] * d[0] + c[1] * d[1] + c[2] * d[2])
+    return re1 * re2 - im1 * im2, re1 * im2 + im1 * re2
+
+
+@_jit
+def _four_corner_deviation(u0: Vec, v0: Vec, u1: Vec, v1: Vec) -> float:
+    """Σ (ω − 90°) [rad] over the four corners (u0, v0), (u1, v1), (u0, v1), (u1, v0).
+
+    The corners are paired across the diagonals (``_pair_number``); when both pairs' sums lie
+    within ±90° (positive real parts: a shear below 45° on either diagonal, every cell of a
+    drape that has not locked) the whole sum lies within ±180° and is the argument of the
+    product of the two pair numbers, one atan2 for four corners, the cell kernels' largest
+    cost; else one atan2 per pair. The pairs multiply in either order to the same bits, so a
+    mirrored net still gets the mirrored sum."""
+    ra, ia = _pair_number(u0, v0, u1, v1)
+    rb, ib = _pair_number(u0, v1, u1, v0)
+    if ra > 0.0 and rb > 0.0:
+        re = ra * rb - ia * ib
+        im = ra * ib + ia * rb
+        # the product of four corner numbers, each |a||b|: keep clear of underflow
+        if abs(re) + abs(im) > 1e-280:
+            return math.atan2(im, re)
+    return math.atan2(ia, ra) + math.atan2(ib, rb)
 
 
 @_jit
@@ -95,17 +119,16 @@ def cell_geometry(
                     fibre_u[i, j, k] = 0.0
                     fibre_v[i, j, k] = 0.0
                 continue
-            x00, x10 = nodes[i, j], nodes[i + 1, j]
-            x01, x11 = nodes[i, j + 1], nodes[i + 1, j + 1]
+            # corners as tuples, not array views (a view is reference counted per cell)
+            x00, x10 = _corner(nodes, i, j), _corner(nodes, i + 1, j)
+            x01, x11 = _corner(nodes, i, j + 1), _corner(nodes, i + 1, j + 1)
             ulx, uly, ulz = x10[0] - x00[0], x10[1] - x00[1], x10[2] - x00[2]
             uhx, uhy, uhz = x11[0] - x01[0], x11[1] - x01[1], x11[2] - x01[2]
             vlx, vly, vlz = x01[0] - x00[0], x01[1] - x00[1], x01[2] - x00[2]
             vrx, vry, vrz = x11[0] - x10[0], x11[1] - x10[1], x11[2] - x10[2]
-            # γ = mean of the four corner angles ω − 90°, paired across the diagonals so two
-            # atan2 serve four corners (``_pair_deviation``)
-            shear[i, j] = 0.25 * (
-                _pair_deviation(ulx, uly, ulz, vlx, vly, vlz, uhx, uhy, uhz, vrx, vry, vrz)
-                + _pair_deviation(ulx, uly, ulz, vrx, vry, vrz, uhx, uhy, uhz, vlx, vly, vlz)
+            # γ = mean of the four corner angles ω − 90°
+            shear[i, j] = 0.25 * _four_corner_deviation(
+                (ulx, uly, ulz), (vlx, vly, vlz), (uhx, uhy, uhz), (vrx, vry, vrz)
             )
             for k in range(3):
                 centroid[i, j, k] = 0.25 * (x00[k] + x10[k] + x01[k] + x11[k])
@@ -120,18 +143,20 @@ def cell_geometry(
             )
             area[i, j] = 0.25 * (split_a + split_b)
             sx, sy, sz = ulx + uhx, uly + uhy, ulz + uhz
-            length = math.sqrt(sx * sx + sy * sy + sz * sz)
+            # one division and three products a fibre (divisions and roots share one unit of
+            # the core and bound this kernel; the unit vector changes by an ulp at most)
+            inverse = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
             fibre_u[i, j, 0], fibre_u[i, j, 1], fibre_u[i, j, 2] = (
-                sx / length,
-                sy / length,
-                sz / length,
+                sx * inverse,
+                sy * inverse,
+                sz * inverse,
             )
             sx, sy, sz = vlx + vrx, vly + vry, vlz + vrz
-            length = math.sqrt(sx * sx + sy * sy + sz * sz)
+            inverse = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
             fibre_v[i, j, 0], fibre_v[i, j, 1], fibre_v[i, j, 2] = (
-                sx / length,
-                sy / length,
-                sz / length,
+                sx * inverse,
+                sy * inverse,
+                sz * inverse,
             )
 
 
@@ -181,13 +206,40 @@ def _square_share(f00: float, f10: float, f01: float, f11: float) -> float:
 
 
 @_jit
-def grid_part_share(phi: FloatArray, out: FloatArray) -> None:
-    """:func:`_square_share` of every cell into ``out`` (ni−1, nj−1), φ at the nodes (ni, nj)
-    (outputs are allocated by the caller, where numpy's memory accounting sees them)."""
+def grid_part_share(phi: FloatArray, valid: BoolArray, out: FloatArray) -> None:
+    """:func:`_square_share` of every ``valid`` cell into ``out`` (ni−1, nj−1), φ at the nodes
+    (ni, nj); 0 for other cells and where φ is NaN (outputs are allocated by the caller, where
+    numpy's memory accounting sees them)."""
     ci, cj = phi.shape[0] - 1, phi.shape[1] - 1
     for i in range(ci):
         for j in range(cj):
-            out[i, j] = _square_share(phi[i, j], phi[i + 1, j], phi[i, j + 1], phi[i + 1, j + 1])
+            if not valid[i, j]:
+                out[i, j] = 0.0
+                continue
+            share = _square_share(phi[i, j], phi[i + 1, j], phi[i, j + 1], phi[i + 1, j + 1])
+            out[i, j] = 0.0 if math.isnan(share) else share
+
+
+@_jit
+def cell_status_codes(status: NDArray[np.int8], out: NDArray[np.int8]) -> None:
+    """CellStatus (ni−1, nj−1) into ``out`` from the NodeStatus of the corners (ni, nj), with
+    the precedence of ``preform.drape.fields.cell_status``: OUTSIDE_PLY, FOLDED, INCOMPLETE,
+    VALID."""
+    for i in range(status.shape[0] - 1):
+        for j in range(status.shape[1] - 1):
+            missing = folded = outside = False
+            for corner in (status[i, j], status[i + 1, j], status[i, j + 1], status[i + 1, j + 1]):
+                missing |= corner != _PLACED
+                folded |= corner == _NODE_FOLDED
+                outside |= corner == _NODE_OUTSIDE
+            if outside:
+                out[i, j] = _CELL_OUTSIDE
+            elif folded:
+                out[i, j] = _CELL_FOLDED
+            elif missing:
+                out[i, j] = _INCOMPLETE
+            else:
+                out[i, j] = _VALID
 
 
 @_jit
@@ -234,16 +286,10 @@ def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> 
                     interior = interior and math.isfinite(u[0, k]) and math.isfinite(u[1, k])
                     interior = interior and math.isfinite(v[0, k]) and math.isfinite(v[1, k])
                 if interior:
-                    # all four corners: two atan2 for the four angles, as for a cell
-                    out[i, j] = 0.25 * (
-                        _pair_deviation(
-                            u[0, 0], u[0, 1], u[0, 2], v[0, 0], v[0, 1], v[0, 2],
-                            u[1, 0], u[1, 1], u[1, 2], v[1, 0], v[1, 1], v[1, 2],
-                        )
-                        + _pair_deviation(
-                            u[0, 0], u[0, 1], u[0, 2], v[1, 0], v[1, 1], v[1, 2],
-                            u[1, 0], u[1, 1], u[1, 2], v[0, 0], v[0, 1], v[0, 2],
-                        )
+                    # all four corners, as for a cell
+                    out[i, j] = 0.25 * _four_corner_deviation(
+                        (u[0, 0], u[0, 1], u[0, 2]), (v[0, 0], v[0, 1], v[0, 2]),
+                        (u[1, 0], u[1, 1], u[1, 2]), (v[1, 0], v[1, 1], v[1, 2]),
                     )  # fmt: skip
                     continue
             total = 0.0
@@ -259,6 +305,30 @@ def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> 
                         total += omega
                         count += 1
             out[i, j] = total / count - _HALF_PI if count > 0 else np.nan
+
+
+@_jit
+def shear_extremes(shear: FloatArray, counted: BoolArray, gamma: FloatArray, in_part: BoolArray):
+    """(largest |γ| over the ``counted`` cells' shear, largest |γ| over the node shear
+    ``gamma`` at nodes ``in_part`` where it is finite) [rad], 0 where there is none and NaN
+    when a counted cell's shear is NaN (as numpy's max): ``preform.drape.fields.extremes``
+    without the boolean-indexed copies."""
+    cells = 0.0
+    for i in range(shear.shape[0]):
+        for j in range(shear.shape[1]):
+            if counted[i, j]:
+                value = abs(shear[i, j])
+                if math.isnan(value) or math.isnan(cells):
+                    cells = np.nan
+                elif value > cells:
+                    cells = value
+    largest = 0.0
+    for i in range(gamma.shape[0]):
+        for j in range(gamma.shape[1]):
+            value = abs(gamma[i, j])
+            if in_part[i, j] and value > largest:  # NaN: no shear formed there
+                largest = value
+    return cells, largest
 
 
 @_jit
@@ -318,3 +388,49 @@ def energy_cells(
             past_failure[i, j] = gamma > failure or gamma < -failure_negative
             total += w * share[i, j]
     return total
+
+
+@_jit
+def code_counts(codes: NDArray[np.int8], n_codes: int) -> NDArray[np.int64]:
+    """How many of ``codes`` (any shape, C order) equal 0, 1, …, n_codes − 1."""
+    out = np.zeros(n_codes, dtype=np.int64)
+    for code in codes.ravel():
+        if 0 <= code < n_codes:
+            out[code] += 1
+    return out
+
+
+@_jit
+def cell_sums(
+    cell_status: NDArray[np.int8],
+    in_part: BoolArray,
+    share: FloatArray,
+    has_share: bool,
+    shear: FloatArray,
+    area: FloatArray,
+    past_locking: BoolArray,
+    has_energy: bool,
+):
+    """The cell sums of ``preform.drape.fields.summary`` in one pass: (valid cells, counted
+    cells (valid and in the part), counted cells cut by the part's edge (weight < 1), Σ w,
+    Σ area·w [m²], Σ |γ|·w [rad], Σ w over cells past locking), w the part weight (``share``
+    on counted cells when ``has_share``, else 1 there; 0 elsewhere)."""
+    valid_cells = counted_cells = cut_cells = 0
+    weights = draped = shear_sum = locked = 0.0
+    for i in range(cell_status.shape[0]):
+        for j in range(cell_status.shape[1]):
+            if cell_status[i, j] != _VALID:
+                continue
+            valid_cells += 1
+            if not in_part[i, j]:
+                continue
+            counted_cells += 1
+            w = share[i, j] if has_share else 1.0
+            if w < 1.0:
+                cut_cells += 1
+            weights += w
+            draped += area[i, j] * w
+            shear_sum += abs(shear[i, j]) * w
+            if has_energy and past_locking[i, j]:
+                locked += w
+    return valid_cells, counted_cells, cut_cells, weights, draped, shear_sum, locked

@@ -38,18 +38,11 @@ def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
     turning the net over; each cell is completed by exactly one node, its corner farthest from
     the start, so this is the cell that folds), INCOMPLETE (another corner missing), VALID.
     """
-    corners = [status[:-1, :-1], status[1:, :-1], status[:-1, 1:], status[1:, 1:]]
-    out = np.full(corners[0].shape, CellStatus.VALID, dtype=np.int8)
-    missing = np.zeros(out.shape, dtype=bool)
-    folded = np.zeros(out.shape, dtype=bool)
-    outside = np.zeros(out.shape, dtype=bool)
-    for corner in corners:
-        missing |= corner != NodeStatus.PLACED
-        folded |= corner == NodeStatus.FOLDED
-        outside |= corner == NodeStatus.OUTSIDE_PLY
-    out[missing] = CellStatus.INCOMPLETE
-    out[folded] = CellStatus.FOLDED
-    out[outside] = CellStatus.OUTSIDE_PLY
+    from preform.drape import field_kernels
+
+    status = np.ascontiguousarray(status, dtype=np.int8)
+    out = np.empty((max(status.shape[0] - 1, 0), max(status.shape[1] - 1, 0)), dtype=np.int8)
+    field_kernels.cell_status_codes(status, out)
     return out
 
 
@@ -80,18 +73,18 @@ def cell_fields(
         np.ascontiguousarray(nodes, dtype=float), valid, shear, centroid, area, fibre_u, fibre_v
     )
     in_part = valid.copy()
-    share = valid.astype(float)
     if isinstance(trim, Part):
         # Cut cells count by their undeformed area inside the part (preform.drape.part).
         with np.errstate(invalid="ignore"):
             phi = np.asarray(trim.level(nodes), dtype=float)
-            cut = np.empty(shape)
-            field_kernels.grid_part_share(np.ascontiguousarray(phi), cut)
-        share = np.where(valid, np.nan_to_num(cut, nan=0.0), 0.0)
+        share = np.empty(shape)
+        field_kernels.grid_part_share(np.ascontiguousarray(phi), valid, share)
         in_part &= share > 0.0
     elif trim is not None and valid.any():
         in_part[valid] &= np.asarray(trim(centroid[valid]), dtype=bool)
         share = in_part.astype(float)
+    else:
+        share = valid.astype(float)
     return {
         "part_share": share,
         "cell_status": c_status,
@@ -201,16 +194,25 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     - ``max_abs_shear_nodes_deg``: over the placed nodes inside ``part`` (every placed node
       when None), the shear at the node (:func:`node_shear`), which reaches the part's edge.
     """
-    counted = result.valid & result.in_part
-    cells = np.abs(result.shear[counted])
-    gamma = node_shear(result)
-    inside = np.isfinite(gamma)
+    from preform.drape import field_kernels
+
+    counted = np.ascontiguousarray(result.valid & result.in_part)
+    shape = np.shape(result.status)
     if part is not None:
-        inside &= part.contains(np.where(np.isfinite(result.nodes), result.nodes, 0.0))
-    nodes = np.abs(gamma[inside])
+        # a missing node's NaN position is in no part (φ NaN; its node shear is NaN too)
+        inside = np.asarray(part.contains(result.nodes), dtype=bool)
+    else:
+        inside = np.ones(shape, dtype=bool)
+    # the largest values in one compiled pass, without boolean-indexed copies
+    cells, nodes = field_kernels.shear_extremes(
+        np.ascontiguousarray(result.shear, dtype=float),
+        counted,
+        node_shear(result),
+        np.ascontiguousarray(inside),
+    )
     return {
-        "max_abs_shear_cells_deg": float(np.degrees(cells.max())) if cells.size else 0.0,
-        "max_abs_shear_nodes_deg": float(np.degrees(nodes.max())) if nodes.size else 0.0,
+        "max_abs_shear_cells_deg": float(np.degrees(cells)),
+        "max_abs_shear_nodes_deg": float(np.degrees(nodes)),
     }
 
 
@@ -222,42 +224,57 @@ def summary(
     ``max_abs_shear_deg`` is the cell value ``max_abs_shear_cells_deg`` (kept under its old
     name); ``max_abs_shear_nodes_deg`` is read at the nodes inside ``part``
     (:func:`extremes`). ``mean_abs_shear_deg`` weighs each cell by its area in the part."""
-    counted = result.valid & result.in_part
-    shear = np.abs(result.shear[counted])
-    weight = result.part_weight[counted]
+    from preform.drape import field_kernels
+
+    node_counts = field_kernels.code_counts(
+        np.ascontiguousarray(result.status, dtype=np.int8), len(NodeStatus)
+    )
+    cell_status = np.ascontiguousarray(result.cell_status, dtype=np.int8)
+    cell_counts = field_kernels.code_counts(cell_status, len(CellStatus))
+    share = result.part_share
+    # the cell sums in one compiled pass (each numpy mask or sum would be a pass of its own)
+    valid, counted, cut, weights, draped, shear_sum, locked = field_kernels.cell_sums(
+        cell_status,
+        np.ascontiguousarray(result.in_part, dtype=bool),
+        np.ascontiguousarray(share if share is not None else np.zeros((0, 0)), dtype=float),
+        share is not None,
+        np.ascontiguousarray(result.shear, dtype=float),
+        np.ascontiguousarray(result.area, dtype=float),
+        np.ascontiguousarray(
+            energy.past_locking if energy is not None else np.zeros((0, 0), dtype=bool),
+            dtype=bool,
+        ),
+        energy is not None,
+    )
+    placed = int(node_counts[NodeStatus.PLACED])
     peaks = extremes(result, part)
     out: dict[str, object] = {
         "nodes_total": result.nodes_total,
-        "nodes_placed": result.nodes_placed,
-        "complete": result.complete,
-        "cells_valid": int(np.count_nonzero(result.valid)),
-        "cells_in_part": int(np.count_nonzero(counted)),
-        "cells_cut_by_part_edge": int(np.count_nonzero(counted & (result.part_weight < 1.0))),
-        "part_fabric_area_m2": float(weight.sum() * result.node_spacing**2),
-        "part_draped_area_m2": float((result.area[counted] * weight).sum()),
+        "nodes_placed": placed,
+        # every node inside the ply placed (DrapeResult.complete)
+        "complete": placed == result.nodes_total - int(node_counts[NodeStatus.OUTSIDE_PLY]),
+        "cells_valid": int(valid),
+        "cells_in_part": int(counted),
+        "cells_cut_by_part_edge": int(cut),
+        "part_fabric_area_m2": float(weights * result.node_spacing**2),
+        "part_draped_area_m2": float(draped),
         "max_abs_shear_deg": peaks["max_abs_shear_cells_deg"],
         **peaks,
         "mean_abs_shear_deg": (
-            float(np.degrees(np.average(shear, weights=weight)))
-            if shear.size and weight.sum() > 0
-            else 0.0
+            float(np.degrees(shear_sum / weights)) if counted and weights > 0 else 0.0
         ),
         "generator_angle_deg": float(np.degrees(result.generator_angle)),
         "orientation_deg": float(np.degrees(result.orientation)),
         "node_spacing_m": result.node_spacing,
     }
     for code in NodeStatus:
-        out[f"nodes_{code.name.lower()}"] = int(np.count_nonzero(result.status == code))
+        out[f"nodes_{code.name.lower()}"] = int(node_counts[code])
     for cell_code in CellStatus:
-        out[f"cells_{cell_code.name.lower()}"] = int(
-            np.count_nonzero(result.cell_status == cell_code)
-        )
+        out[f"cells_{cell_code.name.lower()}"] = int(cell_counts[cell_code])
     if energy is not None:
         out["total_energy_J"] = energy.total_energy
         out["cells_past_locking"] = int(np.count_nonzero(energy.past_locking))
         # Counted by the fabric area they put inside the part (undeformed, d² per whole cell).
-        out["part_area_past_locking_m2"] = float(
-            (result.part_weight * energy.past_locking).sum() * result.node_spacing**2
-        )
+        out["part_area_past_locking_m2"] = float(locked * result.node_spacing**2)
         out["cells_past_failure"] = int(np.count_nonzero(energy.past_failure))
     return out

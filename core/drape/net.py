@@ -538,7 +538,8 @@ def drape(
     )
     # a faceted tool that places nodes exactly by walking from the parents' facets (meshes)
     walking = use_closed_form and isinstance(surface, WalkingPlacement)
-    face = np.full(n_nodes, -1, dtype=np.int64)
+    # each node's facet, for a walking placement only (8 B a node the others do not need)
+    face = np.full(n_nodes if walking else 0, -1, dtype=np.int64)
     if walking:
         seeded = np.flatnonzero(status == _PLACED)
         face[seeded] = cast(WalkingPlacement, surface).locate_faces(pos[seeded])

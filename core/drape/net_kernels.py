@@ -8,19 +8,27 @@ The per-node steps are plain scalar functions:
 
 - :func:`_sphere_node`: the closed-form node on a sphere (PHYSICS §6); the plate's is
   ``preform.drape.surface_kernels.plane_node``, and every tool's closest point and normal
-  ``preform.drape.surface_kernels.query``;
+  ``preform.drape.surface_kernels`` (:func:`_query` picks them);
 - :func:`_circle_frame` and :func:`_newton_update`: the general placement on the circle where
   the two distance spheres meet (``preform.drape.net``'s module doc), one damped Newton step
   in the circle angle φ at a time, given the surface's closest point and normal;
 - :func:`_front_members`: which nodes front k holds and which are ready;
-- :func:`_finish_node`: the checks every new node goes through (past the tool's bounds, folded
-  cell, residual) and its write into the net.
+- :func:`_check_node` and :func:`_write_node`: the checks every new node goes through (past
+  the tool's bounds, folded cell, residual) and its write into the net.
 
 Two drivers use them. For a surface with compiled queries
 (:class:`~preform.drape.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
-net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a plugin's tool) the front loop
-stays in Python and calls the vectorised wrappers below once per front, with the surface's own
-vectorised ``closest_point``/``normal`` in between; the per-node arithmetic is the same code.
+net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a
+plugin's tool) the front loop stays in Python and calls the vectorised wrappers below once per
+front, with the surface's own vectorised ``closest_point``/``normal`` in between; the per-node
+arithmetic is the same code.
+
+The per-node steps are inlined into the loops (``_per_node``) and take points, frames and the
+tool's parameters as tuples, not arrays: numba reference-counts an array handed to a function
+(an atomic add and subtract), which at one call per node cost more than half of the fill. A
+new kind of compiled surface gets its code in ``compiled_surface`` and its query in
+``surface_kernels`` (closest point, unit normal, distance), reading its parameters by
+constant index: the fill hands it the ``MAX_PARAMS``-tuple of :func:`_param_tuple`.
 """
 
 from __future__ import annotations
@@ -31,14 +39,16 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.compiled_surface import TRIMMED_SPHERE
+from preform.drape import surface_kernels
+from preform.drape.compiled_surface import PLANE, SPHERE, TRIMMED_SPHERE
 from preform.drape.result import NodeStatus
-from preform.drape.surface_kernels import plane_node
-from preform.drape.surface_kernels import query as _query
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 StatusArray = NDArray[np.int8]
+#: A point or vector (x, y, z) [m] held in registers: the per-node steps take and return
+#: tuples, not array views (see ``_per_node``).
+Vec = tuple[float, float, float]
 
 _PLACED = np.int8(NodeStatus.PLACED)
 _OFF_TOOL = np.int8(NodeStatus.OFF_TOOL)
@@ -53,51 +63,84 @@ _EDGE_TOLERANCE = 1e-9
 # error_model="numpy": a division by zero gives inf/NaN (handled where it can occur) instead
 # of raising, as in the vectorised numpy code these kernels replace.
 _jit = numba.njit(cache=True, error_model="numpy", fastmath=False)
+# The per-node steps are inlined into the loops that call them (numba's own inlining, before
+# its reference counting): an array handed to a function that is not inlined is reference
+# counted at every call, an atomic add and subtract per array per node that cost more than
+# half of the fill.
+_per_node = numba.njit(cache=True, error_model="numpy", fastmath=False, inline="always")
+
+
+@_per_node
+def _row(array: FloatArray, i: int) -> Vec:
+    """Row i of an (m, 3) array as a tuple."""
+    return array[i, 0], array[i, 1], array[i, 2]
+
+
+#: Most parameters a kind of compiled surface may take (``compiled_surface``).
+MAX_PARAMS = 16
+
+
+@_jit
+def _param_tuple(params: FloatArray):
+    """A surface's parameters (as ``compiled_surface.kernel_parameters`` gives them) as a
+    tuple of ``MAX_PARAMS`` numbers (NaN past its own): what the fill hands its per-node steps,
+    held in registers (an array would be reference counted at every node). The queries index
+    it as they would the array."""
+    values = params.ravel()  # a sphere's vector or another tool's row (kernel_parameters)
+    if values.shape[0] > MAX_PARAMS:
+        raise ValueError("a compiled surface takes at most MAX_PARAMS parameters")
+    p = np.full(MAX_PARAMS, np.nan)
+    p[: values.shape[0]] = values
+    return (
+        p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7],
+        p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15],
+    )  # fmt: skip
+
+
+# --------------------------------------------------------------------------------------------
+# Compiled surface queries
+
+
+@_per_node
+def _query(kind: int, params, x: float, y: float, z: float):
+    """The closest point of the tool of ``kind`` to (x, y, z) [m], the unit outward normal
+    there and the distance [m], from its parameters as a tuple (:func:`_param_tuple`): the
+    sphere's query inlined here, any other tool's called (``surface_kernels``)."""
+    if kind == SPHERE or kind == TRIMMED_SPHERE:
+        return surface_kernels._sphere(kind, params, x, y, z)
+    return surface_kernels._other_kinds(kind, params, x, y, z)
 
 
 # --------------------------------------------------------------------------------------------
 # The closed-form node on a sphere
 
 
-# Inlined into ``_closed_form_node`` (numba IR), which the fill calls: one call level, as
-# before the plate had its closed form (one level more made the sphere fill ~25 % slower).
-@numba.njit(cache=True, error_model="numpy", fastmath=False, inline="always")
-def _sphere_node(
-    kind: int,
-    params: FloatArray,
-    ax: float,
-    ay: float,
-    az: float,
-    bx: float,
-    by: float,
-    bz: float,
-    cx: float,
-    cy: float,
-    cz: float,
-    spacing: float,
-):
+@_per_node
+def _sphere_node(kind: int, params: FloatArray, a: Vec, b: Vec, c: Vec, spacing: float):
     """Node at chord ``spacing`` from A and B on the sphere, away from C; and its status.
 
     Relative to the centre, P·A = P·B = R² − d²/2 and |P| = R: P lies in the plane spanned by
-    A + B and n = A × B, and of the two roots the one on the far side of the plane (0, A, B)
-    from C is the node."""
+    s = A + B and n = A × B, P = h·s + k·n with h = (2R² − d²)/|s|² (then P·A = P·B as
+    required) and k² |n|² = R² − h²|s|² (then |P| = R); of the two roots the one on the far
+    side of the plane (0, A, B) from C is the node. Written with squared lengths: one square
+    root and two divisions a node, the fill's largest cost (they share one unit of the core)."""
     ox, oy, oz, r = params[0], params[1], params[2], params[3]
-    pax, pay, paz = ax - ox, ay - oy, az - oz
-    pbx, pby, pbz = bx - ox, by - oy, bz - oz
-    pcx, pcy, pcz = cx - ox, cy - oy, cz - oz
+    pax, pay, paz = a[0] - ox, a[1] - oy, a[2] - oz
+    pbx, pby, pbz = b[0] - ox, b[1] - oy, b[2] - oz
+    pcx, pcy, pcz = c[0] - ox, c[1] - oy, c[2] - oz
     sx, sy, sz = pax + pbx, pay + pby, paz + pbz
-    along = math.sqrt(sx * sx + sy * sy + sz * sz)
     nx = pay * pbz - paz * pby
     ny = paz * pbx - pax * pbz
     nz = pax * pby - pay * pbx
-    n_len = math.sqrt(nx * nx + ny * ny + nz * nz)
-    height = (2.0 * r * r - spacing * spacing) / along
-    off2 = r * r - height * height
-    if not (off2 >= 0.0 and n_len > 1e-12 * r * spacing):
+    n2 = nx * nx + ny * ny + nz * nz
+    chord = 2.0 * r * r - spacing * spacing
+    h = chord / (sx * sx + sy * sy + sz * sz)
+    off2 = r * r - h * chord  # R² − (h|s|)²
+    limit = 1e-12 * r * spacing
+    if not (off2 >= 0.0 and n2 > limit * limit):
         return np.nan, np.nan, np.nan, _NO_INTERSECTION
     away = -1.0 if pcx * nx + pcy * ny + pcz * nz > 0.0 else 1.0
-    h = height / along
-    k = away * math.sqrt(off2) / n_len
+    k = away * math.sqrt(off2 / n2)
     px = h * sx + k * nx + ox
     py = h * sy + k * ny + oy
     pz = h * sz + k * nz + oz
@@ -109,28 +152,31 @@ def _sphere_node(
     return px, py, pz, _PLACED
 
 
-@_jit
-def _closed_form_node(
-    kind: int,
-    params: FloatArray,
-    ax: float,
-    ay: float,
-    az: float,
-    bx: float,
-    by: float,
-    bz: float,
-    cx: float,
-    cy: float,
-    cz: float,
-    spacing: float,
-):
-    """The closed-form node of a tool that has one (``CLOSED_FORM_KINDS``): the sphere's for
-    a sphere's parameters (1-D), else the plate's (``surface_kernels.plane_node``), picked when
-    compiled by the rank of ``params`` (as ``surface_kernels.query``)."""
-    if params.ndim == 1:
-        return _sphere_node(kind, params, ax, ay, az, bx, by, bz, cx, cy, cz, spacing)
-    else:
-        return plane_node(params[0], ax, ay, az, bx, by, bz, cx, cy, cz, spacing)
+@_per_node
+def _closed_form_normal(kind: int, params, x: float, y: float, z: float):
+    """The outward normal direction at a closed-form node (any positive multiple of the unit
+    normal: the fold check reads only its sign) and the distance to the tool [m].
+
+    On a sphere (above a trimmed sphere's floor, with a margin) that is the offset from the
+    centre and | |p − o| − R |, one square root where the full query (``_query``) takes two
+    and three divisions; elsewhere (below the floor, the plate) the full query."""
+    ox, oy, oz, r = params[0], params[1], params[2], params[3]
+    if kind != SPHERE and not (kind == TRIMMED_SPHERE and z > params[4] + 1e-9 * r):
+        _, _, _, nx, ny, nz, dist = _query(kind, params, x, y, z)
+        return nx, ny, nz, dist
+    rx, ry, rz = x - ox, y - oy, z - oz
+    return rx, ry, rz, abs(math.sqrt(rx * rx + ry * ry + rz * rz) - r)
+
+
+@_per_node
+def _closed_form_node(kind: int, params, a: Vec, b: Vec, c: Vec, spacing: float):
+    """The closed-form node of a tool that has one (``CLOSED_FORM_KINDS``): the sphere's, or
+    the plate's (``surface_kernels.plane_node``); parameters as :func:`_param_tuple` gives."""
+    if kind == PLANE:
+        return surface_kernels.plane_node(
+            params, a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], spacing
+        )
+    return _sphere_node(kind, params, a, b, c, spacing)
 
 
 @_jit
@@ -138,25 +184,13 @@ def closed_form_nodes(
     kind: int, params: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray, spacing: float
 ):
     """The tools' ``place_nodes`` (sphere, plate) over m nodes: points (m, 3) [m] (NaN unless
-    placed) and NodeStatus codes (m,)."""
+    placed) and NodeStatus codes (m,); ``params`` as ``kernel_parameters`` gives them."""
+    par = _param_tuple(params)
     m = a.shape[0]
     points = np.empty((m, 3))
     status = np.empty(m, dtype=np.int8)
     for i in range(m):
-        px, py, pz, st = _closed_form_node(
-            kind,
-            params,
-            a[i, 0],
-            a[i, 1],
-            a[i, 2],
-            b[i, 0],
-            b[i, 1],
-            b[i, 2],
-            c[i, 0],
-            c[i, 1],
-            c[i, 2],
-            spacing,
-        )
+        px, py, pz, st = _closed_form_node(kind, par, _row(a, i), _row(b, i), _row(c, i), spacing)
         points[i, 0], points[i, 1], points[i, 2] = px, py, pz
         status[i] = st
     return points, status
@@ -169,20 +203,13 @@ def closed_form_nodes(
 FRAME = 10
 
 
-@_jit
-def _circle_frame(
-    a: FloatArray,
-    b: FloatArray,
-    c: FloatArray,
-    guess: FloatArray,
-    n0: FloatArray,
-    spacing: float,
-    frame: FloatArray,
-) -> float:
-    """Fill ``frame`` for the node at chord ``spacing`` from a and b, away from c: the circle
+@_per_node
+def _circle_frame(a: Vec, b: Vec, c: Vec, guess: Vec, n0: Vec, spacing: float):
+    """The frame of the node at chord ``spacing`` from a and b, away from c: the circle
     P(φ) = M + r(cos φ·a1 + sin φ·a2), a1 the surface normal ``n0`` (at ``guess``, the closest
-    point to a + b − c) seen from the chord, a2 pointing away from c. Returns the starting
-    angle φ of ``guess``, or NaN when there is no circle (|AB| ≥ 2d or a degenerate frame)."""
+    point to a + b − c) seen from the chord, a2 pointing away from c, as the tuple (M, a1, a2,
+    r) (``FRAME`` numbers). Returns (the starting angle φ of ``guess``, or NaN when there is
+    no circle (|AB| ≥ 2d or a degenerate frame); the frame)."""
     mx, my, mz = 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])
     ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
     half2 = 0.25 * (ex * ex + ey * ey + ez * ez)
@@ -199,21 +226,27 @@ def _circle_frame(
     if (c[0] - mx) * a2x + (c[1] - my) * a2y + (c[2] - mz) * a2z > 0.0:
         a2x, a2y, a2z = -a2x, -a2y, -a2z
     radius = math.sqrt(max(radius2, 0.0))
-    frame[0], frame[1], frame[2] = mx, my, mz
-    frame[3], frame[4], frame[5] = a1x, a1y, a1z
-    frame[6], frame[7], frame[8] = a2x, a2y, a2z
-    frame[9] = radius
+    frame = (mx, my, mz, a1x, a1y, a1z, a2x, a2y, a2z, radius)
     rx, ry, rz = guess[0] - mx, guess[1] - my, guess[2] - mz
     phi = math.atan2(rx * a2x + ry * a2y + rz * a2z, rx * a1x + ry * a1y + rz * a1z)
     phi = min(max(phi, 0.0), math.pi)
     if not (radius2 > 0.0 and math.isfinite(a1x) and math.isfinite(phi)):
-        return np.nan
-    return phi
+        return np.nan, frame
+    return phi, frame
 
 
-@_jit
-def _on_circle(frame: FloatArray, phi: float):
-    cos_p, sin_p, r = math.cos(phi), math.sin(phi), frame[9]
+@_per_node
+def _frame_row(frames: FloatArray, i: int):
+    """Row i of an (m, FRAME) array of frames as a frame tuple."""
+    f = frames[i]
+    return f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], f[9]
+
+
+@_per_node
+def _on_circle(frame, cos_p: float, sin_p: float) -> Vec:
+    """P(φ) [m] of a frame, given cos φ and sin φ (computed once per step: the Newton update
+    at the same φ needs them too)."""
+    r = frame[9]
     return (
         frame[0] + r * (cos_p * frame[3] + sin_p * frame[6]),
         frame[1] + r * (cos_p * frame[4] + sin_p * frame[7]),
@@ -225,10 +258,12 @@ def _on_circle(frame: FloatArray, phi: float):
 _GOING, _DONE, _FAILED_OFF_TOOL, _FAILED = 0, 1, 2, 3
 
 
-@_jit
+@_per_node
 def _newton_update(
-    frame: FloatArray,
+    frame,
     phi: float,
+    cos_p: float,
+    sin_p: float,
     x: float,
     y: float,
     z: float,
@@ -243,13 +278,13 @@ def _newton_update(
     last_try: bool,
 ):
     """One damped Newton step in φ on the signed distance g(φ) = (P(φ) − foot)·n from the
-    surface, given the closest point ``foot`` of P(φ) = (x, y, z), its normal and distance.
-    Returns (new φ, outcome)."""
+    surface, given cos φ, sin φ, the closest point ``foot`` of P(φ) = (x, y, z), its normal and
+    distance. Returns (new φ, outcome)."""
     if dist <= tolerance_m:
         return phi, _DONE
     ox, oy, oz = x - fx, y - fy, z - fz
     g = ox * nx + oy * ny + oz * nz
-    cos_p, sin_p, r = math.cos(phi), math.sin(phi), frame[9]
+    r = frame[9]
     n_a1 = nx * frame[3] + ny * frame[4] + nz * frame[5]
     n_a2 = nx * frame[6] + ny * frame[7] + nz * frame[8]
     slope = r * (-sin_p * n_a1 + cos_p * n_a2)
@@ -278,7 +313,11 @@ def circle_frames(
     frames = np.empty((m, FRAME))
     phi = np.empty(m)
     for i in range(m):
-        phi[i] = _circle_frame(a[i], b[i], c[i], guess[i], n0[i], spacing, frames[i])
+        phi[i], f = _circle_frame(
+            _row(a, i), _row(b, i), _row(c, i), _row(guess, i), _row(n0, i), spacing
+        )
+        frames[i, 0], frames[i, 1], frames[i, 2], frames[i, 3], frames[i, 4] = f[:5]
+        frames[i, 5], frames[i, 6], frames[i, 7], frames[i, 8], frames[i, 9] = f[5:]
     return frames, phi
 
 
@@ -288,7 +327,9 @@ def circle_points(frames: FloatArray, phi: FloatArray, rows: IntArray) -> FloatA
     out = np.empty((rows.shape[0], 3))
     for k in range(rows.shape[0]):
         i = rows[k]
-        out[k, 0], out[k, 1], out[k, 2] = _on_circle(frames[i], phi[i])
+        out[k, 0], out[k, 1], out[k, 2] = _on_circle(
+            _frame_row(frames, i), math.cos(phi[i]), math.sin(phi[i])
+        )
     return out
 
 
@@ -313,8 +354,10 @@ def newton_updates(
     for k in range(rows.shape[0]):
         i = rows[k]
         new_phi, outcome = _newton_update(
-            frames[i],
+            _frame_row(frames, i),
             phi[i],
+            math.cos(phi[i]),
+            math.sin(phi[i]),
             x[k, 0],
             x[k, 1],
             x[k, 2],
@@ -340,47 +383,49 @@ def newton_updates(
     return going[:count]
 
 
-@_jit
+@_per_node
 def _newton_node(
     kind: int,
     params: FloatArray,
-    a: FloatArray,
-    b: FloatArray,
-    c: FloatArray,
+    a: Vec,
+    b: Vec,
+    c: Vec,
     spacing: float,
     tolerance_m: float,
     max_iterations: int,
-    frame: FloatArray,
-    work: FloatArray,
 ):
-    """The general node for a surface with compiled queries: (x, y, z, status, iterations)."""
+    """The general node for a surface with compiled queries: (x, y, z, status, iterations,
+    nx, ny, nz, distance), the last four the surface normal at the node and its distance to
+    the tool (from the query that accepted it)."""
     gx, gy, gz, n0x, n0y, n0z, _ = _query(
         kind, params, a[0] + b[0] - c[0], a[1] + b[1] - c[1], a[2] + b[2] - c[2]
     )
-    work[0], work[1], work[2], work[3], work[4], work[5] = gx, gy, gz, n0x, n0y, n0z
-    phi = _circle_frame(a, b, c, work[0:3], work[3:6], spacing, frame)
+    phi, frame = _circle_frame(a, b, c, (gx, gy, gz), (n0x, n0y, n0z), spacing)
+    nan = np.nan
     if math.isnan(phi):
-        return np.nan, np.nan, np.nan, _NO_INTERSECTION, 0
+        return nan, nan, nan, _NO_INTERSECTION, 0, nan, nan, nan, nan
     for used in range(1, max_iterations + 1):
-        x, y, z = _on_circle(frame, phi)
+        cos_p, sin_p = math.cos(phi), math.sin(phi)
+        x, y, z = _on_circle(frame, cos_p, sin_p)
         fx, fy, fz, nx, ny, nz, dist = _query(kind, params, x, y, z)
         phi, outcome = _newton_update(
-            frame, phi, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m, used == max_iterations
-        )
+            frame, phi, cos_p, sin_p, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m,
+            used == max_iterations,
+        )  # fmt: skip
         if outcome == _DONE:
-            return x, y, z, _PLACED, used
+            return x, y, z, _PLACED, used, nx, ny, nz, dist
         if outcome == _FAILED_OFF_TOOL:
-            return np.nan, np.nan, np.nan, _OFF_TOOL, used
+            return nan, nan, nan, _OFF_TOOL, used, nan, nan, nan, nan
         if outcome == _FAILED:
-            return np.nan, np.nan, np.nan, _NO_INTERSECTION, used
-    return np.nan, np.nan, np.nan, _NO_INTERSECTION, max_iterations
+            return nan, nan, nan, _NO_INTERSECTION, used, nan, nan, nan, nan
+    return nan, nan, nan, _NO_INTERSECTION, max_iterations, nan, nan, nan, nan
 
 
 # --------------------------------------------------------------------------------------------
 # The fronts
 
 
-@_jit
+@_per_node
 def _front_members(
     k: int,
     nj: int,
@@ -437,32 +482,32 @@ def front_members(
     return _front_members(k, nj, start_flat, q_sa, q_sb, q_na, q_nb, status, members)
 
 
-@_jit
-def _finish_node(
-    pos: FloatArray,
-    status: StatusArray,
-    residual: FloatArray,
-    member: IntArray,
-    px: float,
-    py: float,
-    pz: float,
+@_per_node
+def _check_node(
+    p: Vec,
     st: np.int8,
+    a: Vec,
+    b: Vec,
+    c: Vec,
+    orient: int,
     nx: float,
     ny: float,
     nz: float,
     dist: float,
     spacing: float,
-    lo: FloatArray,
-    hi: FloatArray,
-) -> None:
-    """Check a new node and write it: OFF_TOOL past the tool's bounds, FOLDED where the cell it
-    completes faces against the surface normal (nx, ny, nz) at it, else PLACED with its
-    residual max(|PA| − d, |PB| − d, distance ``dist`` to the tool)."""
-    node, ia, ib, ic, orient = member[0], member[1], member[2], member[3], member[4]
+    lo: Vec,
+    hi: Vec,
+):
+    """The checks every new node p goes through, from its parents a (along u), b (along v)
+    and the opposite corner c: (status, residual). OFF_TOOL past the tool's bounds, FOLDED
+    where the cell it completes (oriented ``orient``·(+u × +v)) faces against the surface
+    normal (nx, ny, nz) at it (any positive multiple of the unit normal), else PLACED with its residual max(|PA| − d, |PB| − d, distance
+    ``dist`` to the tool) [m] (0 when not placed)."""
+    px, py, pz = p
     if st == _PLACED:
         past = px < lo[0] or py < lo[1] or pz < lo[2] or px > hi[0] or py > hi[1] or pz > hi[2]
-        ux, uy, uz = px - pos[ic, 0], py - pos[ic, 1], pz - pos[ic, 2]
-        vx, vy, vz = pos[ia, 0] - pos[ib, 0], pos[ia, 1] - pos[ib, 1], pos[ia, 2] - pos[ib, 2]
+        ux, uy, uz = px - c[0], py - c[1], pz - c[2]
+        vx, vy, vz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
         cx = uy * vz - uz * vy
         cy = uz * vx - ux * vz
         cz = ux * vy - uy * vx
@@ -470,11 +515,27 @@ def _finish_node(
             st = _OFF_TOOL
         elif orient * (cx * nx + cy * ny + cz * nz) <= 0.0:
             st = _FOLDED
+    if st != _PLACED:
+        return st, 0.0
+    to_a = math.sqrt((px - a[0]) ** 2 + (py - a[1]) ** 2 + (pz - a[2]) ** 2)
+    to_b = math.sqrt((px - b[0]) ** 2 + (py - b[1]) ** 2 + (pz - b[2]) ** 2)
+    return st, max(abs(to_a - spacing), abs(to_b - spacing), dist)
+
+
+@_per_node
+def _write_node(
+    pos: FloatArray,
+    status: StatusArray,
+    residual: FloatArray,
+    node: int,
+    p: Vec,
+    st: np.int8,
+    res: float,
+) -> None:
+    """Write a checked node: its status, and where placed its position and residual."""
     if st == _PLACED:
-        to_a = math.sqrt((px - pos[ia, 0]) ** 2 + (py - pos[ia, 1]) ** 2 + (pz - pos[ia, 2]) ** 2)
-        to_b = math.sqrt((px - pos[ib, 0]) ** 2 + (py - pos[ib, 1]) ** 2 + (pz - pos[ib, 2]) ** 2)
-        pos[node, 0], pos[node, 1], pos[node, 2] = px, py, pz
-        residual[node] = max(abs(to_a - spacing), abs(to_b - spacing), dist)
+        pos[node, 0], pos[node, 1], pos[node, 2] = p
+        residual[node] = res
     status[node] = st
 
 
@@ -492,26 +553,17 @@ def finish_front(
     lo: FloatArray,
     hi: FloatArray,
 ) -> None:
-    """:func:`_finish_node` over one front placed by the Python loop (normals and distances of
+    """:func:`_check_node` over one front placed by the Python loop (normals and distances of
     the placed points given; anything where the status is not PLACED)."""
+    low, high = (lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2])
     for i in range(members.shape[0]):
-        _finish_node(
-            pos,
-            status,
-            residual,
-            members[i],
-            points[i, 0],
-            points[i, 1],
-            points[i, 2],
-            point_status[i],
-            normals[i, 0],
-            normals[i, 1],
-            normals[i, 2],
-            dist[i],
-            spacing,
-            lo,
-            hi,
-        )
+        node, ia, ib, ic = members[i, 0], members[i, 1], members[i, 2], members[i, 3]
+        p = _row(points, i)
+        st, res = _check_node(
+            p, point_status[i], _row(pos, ia), _row(pos, ib), _row(pos, ic), members[i, 4],
+            normals[i, 0], normals[i, 1], normals[i, 2], dist[i], spacing, low, high,
+        )  # fmt: skip
+        _write_node(pos, status, residual, node, p, st, res)
 
 
 @_jit
@@ -544,13 +596,12 @@ def fill_fronts(
     swept row by row, along memory, instead of front by front: every node sees the same
     parents, so the net is the same, and the sweep does not jump a row of the net per node."""
     ready_on_front = np.zeros(last_front + 2, dtype=np.bool_)
-    member = np.empty(5, dtype=np.int64)
-    frame = np.empty(FRAME)
-    work = np.empty(6)
+    low, high = (lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2])
+    par = _param_tuple(params)
     most_used = 0
     for q in range(q_sa.shape[0]):
         da, db = q_sa[q] * nj, q_sb[q]
-        member[4] = q_sa[q] * q_sb[q]  # the cell is oriented +u × +v whatever the quadrant
+        orient = q_sa[q] * q_sb[q]  # the cell is oriented +u × +v whatever the quadrant
         na, nb = q_na[q], q_nb[q]
         for a_off in range(1, na + 1):
             row = start_flat + a_off * da
@@ -566,56 +617,25 @@ def fill_fronts(
                 ):
                     continue
                 ready_on_front[a_off + b_off] = True
-                member[0], member[1], member[2], member[3] = node, ia, ib, ic
+                a, b, c = _row(pos, ia), _row(pos, ib), _row(pos, ic)
                 if closed_form:
-                    px, py, pz, st = _closed_form_node(
-                        kind,
-                        params,
-                        pos[ia, 0],
-                        pos[ia, 1],
-                        pos[ia, 2],
-                        pos[ib, 0],
-                        pos[ib, 1],
-                        pos[ib, 2],
-                        pos[ic, 0],
-                        pos[ic, 1],
-                        pos[ic, 2],
-                        spacing,
-                    )
+                    px, py, pz, st = _closed_form_node(kind, par, a, b, c, spacing)
+                    nx = ny = nz = dist = np.nan
+                    if st == _PLACED:
+                        nx, ny, nz, dist = _closed_form_normal(kind, par, px, py, pz)
                 else:
-                    px, py, pz, st, used = _newton_node(
-                        kind,
-                        params,
-                        pos[ia],
-                        pos[ib],
-                        pos[ic],
-                        spacing,
-                        tolerance_m,
-                        max_iterations,
-                        frame,
-                        work,
+                    px, py, pz, st, used, nx, ny, nz, dist = _newton_node(
+                        kind, par, a, b, c, spacing, tolerance_m, max_iterations
                     )
                     most_used = max(most_used, used)
-                nx = ny = nz = dist = np.nan
+                p = (px, py, pz)
+                st, res = _check_node(p, st, a, b, c, orient, nx, ny, nz, dist, spacing, low, high)
+                # written here, not by _write_node: the arrays handed even to an inlined
+                # step were reference counted per node
                 if st == _PLACED:
-                    _, _, _, nx, ny, nz, dist = _query(kind, params, px, py, pz)
-                _finish_node(
-                    pos,
-                    status,
-                    residual,
-                    member,
-                    px,
-                    py,
-                    pz,
-                    st,
-                    nx,
-                    ny,
-                    nz,
-                    dist,
-                    spacing,
-                    lo,
-                    hi,
-                )
+                    pos[node, 0], pos[node, 1], pos[node, 2] = px, py, pz
+                    residual[node] = res
+                status[node] = st
     # Fronts as the front-by-front loop counts them: it stops at the first front past the
     # second with no ready node (no later front can have one).
     fronts = 0

@@ -59,7 +59,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.result import DrapeResult, EnergyField, NodeStatus
 from preform.shear.law import ShearLaw
 
 BoolArray = NDArray[np.bool_]
@@ -72,14 +72,12 @@ def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
     Per quadrant around the start node, a running OR along both indices away from the start:
     node (a, b) of a quadrant depends on exactly the nodes (a', b') with a' ≤ a, b' ≤ b.
     """
-    i0, j0 = start
-    out = np.zeros_like(mask, dtype=bool)
-    rows = (slice(i0, None), slice(i0, None, -1))
-    cols = (slice(j0, None), slice(j0, None, -1))
-    for r in rows:
-        for c in cols:
-            part = np.logical_or.accumulate(np.logical_or.accumulate(mask[r, c], axis=0), axis=1)
-            out[r, c] |= part
+    from preform.drape import verdict_kernels
+
+    out = np.empty(np.shape(mask), dtype=bool)
+    verdict_kernels.dependency_shadow(
+        np.ascontiguousarray(mask, dtype=bool), int(start[0]), int(start[1]), out
+    )
     return out
 
 
@@ -169,6 +167,20 @@ def flat_plan_positions(result: DrapeResult, start_xy_m: tuple[float, float]) ->
         + xi[:, None, None] * e_u[None, None, :]
         + eta[None, :, None] * e_v[None, None, :]
     )
+
+
+def plan_positions_at(
+    result: DrapeResult, start_xy_m: tuple[float, float], ii: NDArray[np.intp], jj: NDArray[np.intp]
+) -> FloatArray:
+    """:func:`flat_plan_positions` (m, 2) [m] of the nodes (ii, jj) only (the same numbers)."""
+    i0, j0 = result.start_index
+    d = result.node_spacing
+    theta, alpha = result.orientation, result.generator_angle
+    e_u = np.array([math.cos(theta), math.sin(theta)])
+    e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
+    xi = (np.asarray(ii) - i0) * d
+    eta = (np.asarray(jj) - j0) * d
+    return np.asarray(start_xy_m, dtype=float) + xi[:, None] * e_u + eta[:, None] * e_v
 
 
 @dataclass(frozen=True)
@@ -319,80 +331,80 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     behind_outline = dependency_shadow(~in_ply, start)
     lost = ~placed & in_ply & ~past_edge
 
-    plan = flat_plan_positions(result, start_xy_m)
+    # undeformed plan positions only where they are asked (the lost nodes): the whole net's
+    # would be a net-sized array for the few nodes a drape loses
     over = np.zeros(status.shape, dtype=bool)
     if lost.any():
-        _, mask = surface.point_at_plan(plan[lost])
-        over[lost] = np.asarray(mask, dtype=bool)
-    missing = lost & over
-    not_reached = missing & (status == NodeStatus.NOT_REACHED)
-    # The failed nodes themselves are counted wherever they lie (they say why the net stopped);
-    # the nodes behind them only where they lie over the tool (they are the coverage lost).
+        ii, jj = np.nonzero(lost)
+        _, mask = surface.point_at_plan(plan_positions_at(result, start_xy_m, ii, jj))
+        over[ii, jj] = np.asarray(mask, dtype=bool)
+    from preform.drape import verdict_kernels
+
+    # The rest in two compiled passes (``preform.drape.verdict_kernels``): each node's part
+    # in the counts, then each cell's from its corners. The failed nodes themselves are
+    # counted wherever they lie (they say why the net stopped); the nodes behind them only
+    # where they lie over the tool (they are the coverage lost).
+    bits = np.empty(status.shape, dtype=np.uint8)
+    node_counts, first_flat = verdict_kernels.coverage_nodes(
+        np.ascontiguousarray(status, dtype=np.int8),
+        np.ascontiguousarray(stopped),
+        np.ascontiguousarray(lost),
+        np.ascontiguousarray(past_edge),
+        behind_failure,
+        behind_outline,
+        dependency_shadow(status == NodeStatus.FOLDED, start),
+        over,
+        int(start[0]),
+        int(start[1]),
+        bits,
+    )
     counts = {
-        "stopped_on_tool": int(np.count_nonzero(lost & stopped)),
-        "no_intersection": int(np.count_nonzero(lost & (status == NodeStatus.NO_INTERSECTION))),
-        "folded": int(np.count_nonzero(lost & (status == NodeStatus.FOLDED))),
-        "not_reached_behind_failure": int(np.count_nonzero(not_reached & behind_failure)),
-        "not_reached_behind_outline": int(
-            np.count_nonzero(not_reached & ~behind_failure & behind_outline)
-        ),
+        name: int(node_counts[k])
+        for k, name in enumerate(
+            (
+                "stopped_on_tool",
+                "no_intersection",
+                "folded",
+                "not_reached_behind_failure",
+                "not_reached_behind_outline",
+            )
+        )
     }
     # A node that is missing for none of these reasons would be an engine bug; say so rather
     # than let it pass as coverage.
-    other = int(np.count_nonzero(not_reached & ~behind_failure & ~behind_outline))
-    if other:
-        counts["not_reached_unexplained"] = other
+    if node_counts[5]:
+        counts["not_reached_unexplained"] = int(node_counts[5])
 
     # Cells: valid ones are covered; a non-valid cell inside the ply is asked for when one of
-    # its corners is missing and none is past the edge (so complete ⇔ nothing missing).
-    valid = result.cell_status == CellStatus.VALID
-    cell_in_ply = result.cell_status != CellStatus.OUTSIDE_PLY
-    edge_corner = past_edge[:-1, :-1] | past_edge[1:, :-1] | past_edge[:-1, 1:] | past_edge[1:, 1:]
-    missing_corner = missing[:-1, :-1] | missing[1:, :-1] | missing[:-1, 1:] | missing[1:, 1:]
-    asked = valid | (cell_in_ply & ~edge_corner & missing_corner)
-
-    # Uncovered fabric area by cause: each missing cell (asked, not valid) is d² of undeformed
-    # fabric, given to the first cause among its corners in this order.
-    lost_cells = asked & ~valid
-    causes = (
-        ("folded", lost & (status == NodeStatus.FOLDED)),
-        ("no_intersection", lost & (status == NodeStatus.NO_INTERSECTION)),
-        ("stopped_on_tool", lost & stopped),
-        ("behind_failure", missing & behind_failure),
-        ("behind_outline", missing & behind_outline),
-    )
-    uncovered: dict[str, float] = {}
-    left = lost_cells.copy()
-    for name, node_mask in causes:
-        corner = node_mask[:-1, :-1] | node_mask[1:, :-1] | node_mask[:-1, 1:] | node_mask[1:, 1:]
-        mine = left & corner
-        uncovered[name] = float(np.count_nonzero(mine)) * result.node_spacing**2
-        left &= ~mine
-    if left.any():
-        uncovered["other"] = float(np.count_nonzero(left)) * result.node_spacing**2
-
-    # The fold zone is all the fabric lost behind a fold, also where it would have hung past
-    # the tool's plan (a vertex's shadow on a tool with vertical walls lies wholly there).
-    fold_nodes = lost & dependency_shadow(status == NodeStatus.FOLDED, start)
-    fold_corner = (
-        fold_nodes[:-1, :-1] | fold_nodes[1:, :-1] | fold_nodes[:-1, 1:] | fold_nodes[1:, 1:]
-    )
-    zones = _fold_zones(
-        cell_in_ply & ~valid & ~edge_corner & fold_corner, plan, result.node_spacing
+    # its corners is missing and none is past the edge (so complete ⇔ nothing missing). Each
+    # missing cell (asked, not valid) is d² of undeformed fabric, given to the first cause
+    # among its corners in the order of verdict_kernels.CAUSES. The fold zone is all the
+    # fabric lost behind a fold, also where it would have hung past the tool's plan (a
+    # vertex's shadow on a tool with vertical walls lies wholly there).
+    cell_status = np.ascontiguousarray(result.cell_status, dtype=np.int8)
+    fold_cells = np.empty(cell_status.shape, dtype=bool)
+    asked, covered, lost_cells = verdict_kernels.coverage_cells(cell_status, bits, fold_cells)
+    d2 = result.node_spacing**2
+    uncovered = {name: float(lost_cells[k]) * d2 for k, name in enumerate(verdict_kernels.CAUSES)}
+    if lost_cells[5]:
+        uncovered["other"] = float(lost_cells[5]) * d2
+    zones = (
+        _fold_zones(fold_cells, flat_plan_positions(result, start_xy_m), result.node_spacing)
+        if fold_cells.any()
+        else ()
     )
 
     first: tuple[float, float] | None = None
-    if missing.any():
-        i0, j0 = start
-        ii, jj = np.nonzero(missing)
-        k = int(np.argmin(np.abs(ii - i0) + np.abs(jj - j0)))
-        first = (float(plan[ii[k], jj[k], 0]), float(plan[ii[k], jj[k], 1]))
+    if first_flat >= 0:
+        fi, fj = divmod(int(first_flat), status.shape[1])
+        x, y = plan_positions_at(result, start_xy_m, np.array([fi]), np.array([fj]))[0]
+        first = (float(x), float(y))
     return Coverage(
-        cells_asked=int(np.count_nonzero(asked)),
-        cells_covered=int(np.count_nonzero(valid)),
+        cells_asked=int(asked),
+        cells_covered=int(covered),
         missing_nodes=counts,
-        nodes_overhang=int(np.count_nonzero(past_edge | (lost & ~over))),
-        nodes_missing=int(np.count_nonzero(missing)),
+        nodes_overhang=int(node_counts[6]),
+        nodes_missing=int(node_counts[7]),
         first_missing_xy_m=first,
         node_spacing_m=result.node_spacing,
         uncovered_area_m2=uncovered,

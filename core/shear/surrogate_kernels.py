@@ -17,9 +17,12 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 _jit = numba.njit(cache=True, error_model="numpy")
+# inlined into the loop (numba's own inlining): arrays handed to a function that is not inlined
+# are reference counted at every call, which cost more than the interpolation
+_per_angle = numba.njit(cache=True, error_model="numpy", inline="always")
 
 
-@_jit
+@_per_angle
 def _hermite(
     nodes: FloatArray, energy: FloatArray, left: FloatArray, right: FloatArray, u: float
 ) -> float:
@@ -62,9 +65,11 @@ def signed_energy(
 ) -> None:
     """W(γ) [J/m²] at signed angles γ [rad] (flat): the positive sense's table (energies, left
     and right slopes) for γ ≥ 0, the negative sense's for γ < 0; written to ``out``."""
+    pos_energy, pos_left, pos_right = positive
+    neg_energy, neg_left, neg_right = negative
     for i in range(gamma.shape[0]):
         g = gamma[i]
         if g >= 0.0:
-            out[i] = _hermite(nodes, positive[0], positive[1], positive[2], g)
+            out[i] = _hermite(nodes, pos_energy, pos_left, pos_right, g)
         else:
-            out[i] = _hermite(nodes, negative[0], negative[1], negative[2], -g)
+            out[i] = _hermite(nodes, neg_energy, neg_left, neg_right, -g)

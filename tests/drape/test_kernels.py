@@ -11,7 +11,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.fields import cell_fields, cell_status, node_shear
+from preform.drape.fields import (
+    cell_fields,
+    cell_status,
+    energy_field,
+    extremes,
+    node_shear,
+    summary,
+)
 from preform.drape.net import drape
 from preform.drape.part import HeightCut, cell_part_share
 from preform.drape.ply import PlyOutline
@@ -210,6 +217,129 @@ def test_field_kernels_match_per_cell_loops(
     object.__setattr__(fake, "nodes", nodes)
     object.__setattr__(fake, "status", status)
     np.testing.assert_allclose(node_shear(fake), truth["node_shear"], rtol=0, atol=1e-13)
+
+
+def sheared_net(
+    seed: int, shape: tuple[int, int], alpha: float, missing: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """A net whose fibres meet at ``alpha`` [rad] (shear π/2 − α), wrinkled out of its plane,
+    some nodes missing: (nodes, status)."""
+    rng = np.random.default_rng(seed)
+    ni, nj = shape
+    e_u, e_v = np.array([0.1, 0.0, 0.0]), 0.1 * np.array([math.cos(alpha), math.sin(alpha), 0.0])
+    i, j = np.meshgrid(np.arange(ni), np.arange(nj), indexing="ij")
+    nodes = i[..., None] * e_u + j[..., None] * e_v
+    nodes += rng.normal(scale=0.01, size=nodes.shape)
+    status = np.where(rng.random((ni, nj)) < missing, NodeStatus.OFF_TOOL, NodeStatus.PLACED)
+    status = status.astype(np.int8)
+    nodes[status != NodeStatus.PLACED] = np.nan
+    return nodes, status
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    shape=st.tuples(st.integers(2, 6), st.integers(2, 6)),
+    alpha=st.floats(0.15, math.pi - 0.15),
+    missing=st.floats(0.0, 0.3),
+)
+def test_cell_and_node_shear_match_corner_by_corner_loops_at_any_shear(
+    seed: int, shape: tuple[int, int], alpha: float, missing: float
+) -> None:
+    """Beyond ±45° of shear the four corners no longer go through one atan2 (the pairs' sums
+    leave ±90°): both ways agree with one atan2 per corner."""
+    nodes, status = sheared_net(seed, shape, alpha, missing)
+    result = cell_fields(nodes, status)
+    truth = fields_by_loops(nodes, status)
+    np.testing.assert_allclose(result["shear"], truth["shear"], rtol=0, atol=1e-13)
+    fake = DrapeResult.__new__(DrapeResult)
+    object.__setattr__(fake, "nodes", nodes)
+    object.__setattr__(fake, "status", status)
+    np.testing.assert_allclose(node_shear(fake), truth["node_shear"], rtol=0, atol=1e-13)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    shape=st.tuples(st.integers(2, 6), st.integers(2, 6)),
+    alpha=st.floats(0.3, math.pi - 0.3),
+    missing=st.floats(0.0, 0.3),
+    z_cut=st.floats(-0.02, 0.02),
+)
+def test_shear_extremes_are_the_largest_of_the_loops_values(
+    seed: int, shape: tuple[int, int], alpha: float, missing: float, z_cut: float
+) -> None:
+    nodes, status = sheared_net(seed, shape, alpha, missing)
+    fields = cell_fields(nodes, status)
+    fake = DrapeResult.__new__(DrapeResult)
+    for name, value in {"nodes": nodes, "status": status, **fields}.items():
+        object.__setattr__(fake, name, value)
+    truth = fields_by_loops(nodes, status)
+    part = HeightCut(z_cut)
+    got = extremes(fake, part)
+    counted = fields["in_part"] & (fields["cell_status"] == CellStatus.VALID)
+    cells = np.abs(truth["shear"][counted])
+    with np.errstate(invalid="ignore"):
+        inside = np.isfinite(truth["node_shear"]) & (nodes[..., 2] >= z_cut)
+    at_nodes = np.abs(truth["node_shear"][inside])
+    expected_cells = math.degrees(cells.max()) if cells.size else 0.0
+    expected_nodes = math.degrees(at_nodes.max()) if at_nodes.size else 0.0
+    assert got["max_abs_shear_cells_deg"] == pytest.approx(expected_cells, abs=1e-11)
+    assert got["max_abs_shear_nodes_deg"] == pytest.approx(expected_nodes, abs=1e-11)
+
+
+@pytest.mark.parametrize("with_part", [True, False])
+def test_summary_sums_are_numpys_masks_and_sums(with_part: bool) -> None:
+    """The summary's compiled cell sums against the same quantities as numpy masks here."""
+    tool = Hemisphere(1.0, run_off_m=0.3)  # the net runs past the part's rim: cut cells
+    part = tool.part() if with_part else None
+    result = drape(
+        tool,
+        start_xy_m=(0.05, 0.0),
+        node_spacing_m=0.05,
+        ply=PlyOutline.rectangle((2.4, 2.2)),
+        orientation_rad=0.2,
+        generator_angle_rad=1.3,
+        trim=part,
+    )
+    energy = energy_field(result, _QuadraticLaw())  # type: ignore[arg-type]
+    got = summary(result, energy, part)
+    counted = result.valid & result.in_part
+    weight = result.part_weight
+    d2 = result.node_spacing**2
+    assert got["nodes_placed"] == np.count_nonzero(result.status == NodeStatus.PLACED)
+    assert got["complete"] == result.complete
+    assert got["cells_valid"] == np.count_nonzero(result.valid)
+    assert got["cells_in_part"] == np.count_nonzero(counted)
+    assert got["cells_cut_by_part_edge"] == np.count_nonzero(counted & (weight < 1.0))
+    assert got["cells_cut_by_part_edge"] > 0 if with_part else True
+    assert got["part_fabric_area_m2"] == pytest.approx(weight[counted].sum() * d2, rel=1e-12)
+    draped = (result.area[counted] * weight[counted]).sum()
+    assert got["part_draped_area_m2"] == pytest.approx(draped, rel=1e-12)
+    mean = np.degrees(np.average(np.abs(result.shear[counted]), weights=weight[counted]))
+    assert got["mean_abs_shear_deg"] == pytest.approx(mean, rel=1e-12)
+    for code in NodeStatus:
+        assert got[f"nodes_{code.name.lower()}"] == np.count_nonzero(result.status == code)
+    for cell_code in CellStatus:
+        expected = np.count_nonzero(result.cell_status == cell_code)
+        assert got[f"cells_{cell_code.name.lower()}"] == expected
+    locked = (weight * energy.past_locking).sum() * d2
+    assert np.count_nonzero(energy.past_locking) > 0
+    assert got["part_area_past_locking_m2"] == pytest.approx(locked, rel=1e-12)
+
+
+class _QuadraticLaw:
+    """W = γ² [J/m²] locking at 20°, so a hemisphere's net has cells past it."""
+
+    name = "quadratic"
+    locking_angle = math.radians(20.0)
+    failure_angle = None
+
+    def torque(self, gamma):  # type: ignore[no-untyped-def]
+        return 2.0 * np.asarray(gamma, dtype=float)
+
+    def energy(self, gamma):  # type: ignore[no-untyped-def]
+        return np.asarray(gamma, dtype=float) ** 2
 
 
 def test_part_share_of_a_cell_cut_by_a_plan_line_is_its_area_fraction() -> None:

@@ -8,6 +8,7 @@ group checks that a complete drape stays quiet (no partial reason: the checks do
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from pathlib import Path
@@ -17,16 +18,23 @@ import numpy as np
 import pytest
 from pydantic import BaseModel, ConfigDict
 
+from preform.drape.fields import cell_fields
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
 from preform.drape.result import CellStatus, NodeStatus
-from preform.drape.verdict import coverage, dependency_shadow
+from preform.drape.verdict import (
+    coverage,
+    dependency_shadow,
+    flat_plan_positions,
+    generator_stops_on_tool,
+    plan_positions_at,
+)
 from preform.pipeline.planner import plan
 from preform.pipeline.scene import load_scene
 from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext
 from preform.plugin_manager import hookimpl
-from preform.plugins.surfaces.basic import Plane
+from preform.plugins.surfaces.basic import Hemisphere, Plane
 from preform.plugins.surfaces.mesh import tessellate_hemisphere, write_stl
 from preform.testing import PluginSandbox
 
@@ -397,6 +405,132 @@ def test_the_dependency_shadow_is_the_rectangle_to_the_start(seed: int) -> None:
             rows = range(min(i, i0), max(i, i0) + 1)
             cols = range(min(j, j0), max(j, j0) + 1)
             assert got[i, j] == any(mask[r, c] for r in rows for c in cols)
+
+
+def numpy_coverage(result: Any, surface: Any, start_xy: tuple[float, float]) -> dict[str, Any]:
+    """The coverage's counts as whole-net numpy masks (the verdict's definitions, module
+    docstring of ``preform.drape.verdict``), a second implementation of the compiled passes."""
+    status, start = result.status, result.start_index
+
+    def shadow(mask: np.ndarray) -> np.ndarray:
+        i0, j0 = start
+        ii, jj = np.indices(mask.shape)
+        out = np.zeros_like(mask)
+        for i, j in zip(*np.nonzero(mask), strict=True):
+            # every node whose rectangle to the start holds (i, j)
+            out |= (
+                (np.sign(ii - i0) * np.sign(i - i0) >= 0)
+                & (abs(ii - i0) >= abs(i - i0))
+                & (np.sign(jj - j0) * np.sign(j - j0) >= 0)
+                & (abs(jj - j0) >= abs(j - j0))
+            )
+        return out
+
+    placed, in_ply = status == NodeStatus.PLACED, status != NodeStatus.OUTSIDE_PLY
+    stopped = generator_stops_on_tool(result, surface)
+    past_edge = ~placed & in_ply & shadow((status == NodeStatus.OFF_TOOL) & ~stopped)
+    failed = (status == NodeStatus.NO_INTERSECTION) | (status == NodeStatus.FOLDED) | stopped
+    behind_failure, behind_outline = shadow(failed), shadow(~in_ply)
+    lost = ~placed & in_ply & ~past_edge
+    over = np.zeros(status.shape, dtype=bool)
+    plan = flat_plan_positions(result, start_xy)
+    if lost.any():
+        over[lost] = surface.point_at_plan(plan[lost])[1]
+    missing = lost & over
+    not_reached = missing & (status == NodeStatus.NOT_REACHED)
+    valid = result.cell_status == CellStatus.VALID
+    in_ply_cells = result.cell_status != CellStatus.OUTSIDE_PLY
+
+    def corner(m: np.ndarray) -> np.ndarray:
+        return m[:-1, :-1] | m[1:, :-1] | m[:-1, 1:] | m[1:, 1:]
+
+    asked = valid | (in_ply_cells & ~corner(past_edge) & corner(missing))
+    left = asked & ~valid
+    by_cause = []
+    for node_mask in (
+        lost & (status == NodeStatus.FOLDED),
+        lost & (status == NodeStatus.NO_INTERSECTION),
+        lost & stopped,
+        missing & behind_failure,
+        missing & behind_outline,
+    ):
+        mine = left & corner(node_mask)
+        by_cause.append(int(np.count_nonzero(mine)))
+        left &= ~mine
+    fold = in_ply_cells & ~valid & ~corner(past_edge) & corner(lost & shadow(status == 3))
+    return {
+        "asked": int(np.count_nonzero(asked)),
+        "covered": int(np.count_nonzero(valid)),
+        "nodes": [
+            int(np.count_nonzero(lost & stopped)),
+            int(np.count_nonzero(lost & (status == NodeStatus.NO_INTERSECTION))),
+            int(np.count_nonzero(lost & (status == NodeStatus.FOLDED))),
+            int(np.count_nonzero(not_reached & behind_failure)),
+            int(np.count_nonzero(not_reached & ~behind_failure & behind_outline)),
+            int(np.count_nonzero(not_reached & ~behind_failure & ~behind_outline)),
+        ],
+        "overhang": int(np.count_nonzero(past_edge | (lost & ~over))),
+        "missing": int(np.count_nonzero(missing)),
+        "by_cause": by_cause,
+        "other": int(np.count_nonzero(left)),
+        "fold_cells": int(np.count_nonzero(fold)),
+    }
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_coverage_counts_match_whole_net_masks(seed: int) -> None:
+    """Random node statuses on a flat net (every failure kind, the outline, the overhang):
+    the compiled coverage passes count what the verdict's masks count."""
+    rng = np.random.default_rng(seed)
+    surface = Plane((0.16, 0.12))
+    start_xy = (0.01, -0.005)
+    net = drape(surface, node_spacing_m=0.01, ply=PlyOutline.rectangle((0.2, 0.16)),
+                start_xy_m=start_xy)  # fmt: skip
+    codes = np.array([0, 1, 2, 3, 4, 5], dtype=np.int8)
+    status = rng.choice(codes, size=net.status.shape, p=[0.8, 0.04, 0.04, 0.04, 0.04, 0.04])
+    status = status.astype(np.int8)
+    status[net.start_index] = NodeStatus.PLACED
+    nodes = np.where((status == NodeStatus.PLACED)[..., None], net.nodes, np.nan)
+    fields = cell_fields(nodes, status)
+    result = dataclasses.replace(net, nodes=nodes, status=status, **fields)
+    cover = coverage(result, surface, start_xy)
+    truth = numpy_coverage(result, surface, start_xy)
+    d2 = 0.01**2
+    assert cover.cells_asked == truth["asked"]
+    assert cover.cells_covered == truth["covered"]
+    names = ["stopped_on_tool", "no_intersection", "folded"]
+    names += ["not_reached_behind_failure", "not_reached_behind_outline"]
+    assert [cover.missing_nodes[n] for n in names] == truth["nodes"][:5]
+    assert cover.missing_nodes.get("not_reached_unexplained", 0) == truth["nodes"][5]
+    assert cover.nodes_overhang == truth["overhang"]
+    assert cover.nodes_missing == truth["missing"]
+    causes = ["folded", "no_intersection", "stopped_on_tool", "behind_failure", "behind_outline"]
+    assert [cover.uncovered_area_m2[c] / d2 for c in causes] == pytest.approx(truth["by_cause"])
+    assert cover.uncovered_area_m2.get("other", 0.0) / d2 == pytest.approx(truth["other"])
+    fold_area = sum(area for _, area in cover.fold_zones)
+    assert fold_area / d2 == pytest.approx(truth["fold_cells"])
+    assert truth["asked"] > truth["covered"] and sum(truth["by_cause"]) > 0
+
+
+def test_plan_positions_at_some_nodes_are_those_of_the_whole_flat_ply() -> None:
+    result = drape(
+        Hemisphere(0.1),
+        node_spacing_m=0.01,
+        ply=PlyOutline.rectangle((0.3, 0.2)),
+        start_xy_m=(0.01, -0.02),
+        orientation_rad=0.3,
+        generator_angle_rad=1.3,
+    )
+    whole = flat_plan_positions(result, (0.01, -0.02))
+    rng = np.random.default_rng(5)
+    ii = rng.integers(0, result.shape[0], 40)
+    jj = rng.integers(0, result.shape[1], 40)
+    got = plan_positions_at(result, (0.01, -0.02), ii, jj)
+    np.testing.assert_array_equal(got, whole[ii, jj])
+    # and the plan geometry itself: a d step along +u is d along the orientation
+    step = plan_positions_at(result, (0.0, 0.0), np.array([1]), np.array([0]))
+    step -= plan_positions_at(result, (0.0, 0.0), np.array([0]), np.array([0]))
+    np.testing.assert_allclose(step[0], 0.01 * np.array([np.cos(0.3), np.sin(0.3)]), atol=1e-15)
 
 
 # --------------------------------------------------------------------------------------------
