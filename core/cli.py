@@ -520,6 +520,13 @@ def pipeline() -> None:
     help="Wall-time limit of one case [s] (default 3600; a scene's limits.case_timeout_s "
     "wins). A case past it is stopped and recorded timed_out.",
 )
+@click.option(
+    "--batch-size",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Cases sent to a worker together (default: automatic, only when there are many; "
+    "1: never). See docs/engines.md.",
+)
 @click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
 @json_option
@@ -535,6 +542,7 @@ def pipeline_run(
     scheduler: str | None = None,
     workers: int | None = None,
     case_timeout_s: float | None = None,
+    batch_size: int | None = None,
     force: bool = False,
     explain: bool = False,
     as_json: bool = False,
@@ -563,6 +571,10 @@ def pipeline_run(
     from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
     from preform.pipeline.summary import run_summary
 
+    if engine == "process" and not explain:
+        from preform.pipeline.runner import start_workers_early
+
+        start_workers_early()  # their imports overlap this process reading library and scenes
     host = _host()
     lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
     for warning in lib.warnings:
@@ -636,6 +648,7 @@ def pipeline_run(
                 force=force,
                 inputs=inputs,
                 on_done=lambda r: progress.advance(task),
+                batch_size=batch_size,
             )
     except RunDirectoryError as exc:
         _fail([f"error: {exc}; nothing was run."])

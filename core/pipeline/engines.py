@@ -22,11 +22,12 @@ and each pays its imports itself.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, Future
 from typing import Any, TypeVar
 
@@ -49,6 +50,8 @@ class Engine:
     #: Cases the runner keeps submitted at a time (more only queue, and a queued case would
     #: have to be cancelled on an interrupt).
     capacity: int = 1
+    #: Cases the engine computes at the same time (its worker processes or threads).
+    workers: int = 1
     #: Whether ``submit(..., timeout_s=)`` is enforced by the engine itself.
     enforces_timeout: bool = False
 
@@ -82,29 +85,42 @@ def _raise_timeout(_signum: int, _frame: Any) -> None:
     raise CaseTimeout()
 
 
+def can_alarm() -> bool:
+    """Whether this thread can stop its own call at a time limit (SIGALRM: the main thread of
+    a process, where the platform has it)."""
+    return hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
+
+
+@contextlib.contextmanager
+def time_limit(timeout_s: float | None) -> Iterator[None]:
+    """Raise ``CaseTimeout`` in this thread after ``timeout_s`` [s] (SIGALRM; no limit with
+    None or where ``can_alarm`` is false). It interrupts Python code; a single long call into
+    compiled code ends before it fires."""
+    if timeout_s is None or not can_alarm():
+        yield
+        return
+    previous = signal.signal(signal.SIGALRM, _raise_timeout)
+    signal.setitimer(signal.ITIMER_REAL, timeout_s)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 class SerialEngine(Engine):
-    """In this process, one case at a time. A time limit uses SIGALRM (main thread only), so
-    it interrupts Python code; a single long call into compiled code ends before it fires.
+    """In this process, one case at a time, with ``time_limit``.
     A crash of this process ends the run; what finished is already recorded."""
 
     capacity = 1
 
     def __init__(self) -> None:
         self._executor = SerialExecutor()
-        self.enforces_timeout = (
-            hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
-        )
+        self.enforces_timeout = can_alarm()
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
-        if timeout_s is None or not self.enforces_timeout:
+        with time_limit(timeout_s):
             return self._executor.submit(fn, *args)
-        previous = signal.signal(signal.SIGALRM, _raise_timeout)
-        signal.setitimer(signal.ITIMER_REAL, timeout_s)
-        try:
-            return self._executor.submit(fn, *args)
-        finally:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, previous)
 
 
 def _alive(pid: int) -> bool:
@@ -183,6 +199,20 @@ def pool_context(preload: tuple[str, ...] = ()) -> Any:
     return context
 
 
+def start_fork_server(preload: tuple[str, ...]) -> None:
+    """Start the process pool's fork server now, importing ``preload``, so that its imports
+    overlap what this process does before it opens the pool (a no-op where there is none, or
+    when it already runs: the first start fixes what it imported)."""
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return
+    from multiprocessing import forkserver
+
+    pool_context(preload)
+    forkserver.ensure_running()
+
+
 class ProcessEngine(Engine):
     """A pebble process pool of ``workers`` processes, forked from a fork server that imported
     ``preload`` (see the module docstring); ``warm_up`` runs once in each worker."""
@@ -201,6 +231,7 @@ class ProcessEngine(Engine):
         from pebble import ProcessPool
 
         n = workers or max(1, os.cpu_count() or 1)
+        self.workers = n
         self.capacity = 2 * n  # one running and one queued per worker keeps them busy
         self._pool = ProcessPool(
             max_workers=n,
@@ -259,7 +290,7 @@ class DaskEngine(Engine):
                 )
             self._client = Client(self._cluster)
         threads = sum(self._client.nthreads().values()) or 1
-        self.capacity = max(1, threads)
+        self.capacity = self.workers = max(1, threads)
         self._running: dict[Future[Any], Any] = {}
         # each worker imports and loads what the cases need, all at once, in a task pinned to
         # it; waited for (a failure only costs the first case its imports): cases submitted

@@ -52,6 +52,7 @@ RECORD_KEYS = (
     "wall_time_s",
     "step_times_s",
     "files",
+    "run_id",
 )
 
 

@@ -22,13 +22,21 @@ import time
 import traceback
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, wait
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from preform import __version__
 from preform.library import Library, fabric_from_data
-from preform.pipeline.engines import CaseTimeout, Engine, open_engine
+from preform.pipeline.batching import plan_batches, recorded_wall_time_s
+from preform.pipeline.engines import (
+    CaseTimeout,
+    Engine,
+    SerialEngine,
+    open_engine,
+    start_fork_server,
+    time_limit,
+)
 from preform.pipeline.planner import plan
 from preform.pipeline.rundir import (
     RunDirectory,
@@ -49,6 +57,8 @@ DEFAULT_CASE_TIMEOUT_S = 3600.0
 #: Extra time the runner allows an engine that cannot stop a case itself (Dask) [s].
 TIMEOUT_GRACE_S = 5.0
 
+T = TypeVar("T")
+
 
 @dataclass(frozen=True)
 class Case:
@@ -67,6 +77,9 @@ class Case:
     discover: bool = True
     #: Wall-time limit [s]; None for none.
     timeout_s: float | None = None
+    #: The run computing it (set by ``run_cases``; written into its summary.json, so a lost
+    #: batch's finished cases can be told from an earlier run's).
+    run_id: str = ""
 
 
 @dataclass
@@ -231,6 +244,24 @@ def worker_preload() -> tuple[str, ...]:
     return (*sorted(own), *WORKER_PRELOAD)
 
 
+def start_workers_early() -> None:
+    """Start the process pool's fork server before the run's library and scenes are read (the
+    command line calls it first): meanwhile it imports the runner, preform's own plugins (the
+    steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
+    later are forked from it."""
+    from importlib import metadata
+
+    from preform.plugin_manager import ENTRY_POINT_GROUP
+
+    own_plugins = sorted(
+        ep.value.split(":")[0]
+        for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)
+        if ep.value.startswith("preform.")
+    )
+    modules = ("preform.pipeline.runner", *own_plugins, *worker_preload())
+    start_fork_server(tuple(dict.fromkeys(modules)))
+
+
 def warm_worker(hosts: tuple[tuple[bool, tuple[tuple[str, str], ...]], ...]) -> None:
     """A worker's warm-up (run once when it starts): build the plugin host of each
     (discover, plugins) its cases will ask for, so the first case pays nothing more."""
@@ -276,6 +307,7 @@ def case_record(case: Case, result: CaseResult) -> dict[str, Any]:
         "wall_time_s": round(result.wall_time_s, 6),
         "step_times_s": result.step_times_s,
         "files": result.files,
+        **({"run_id": case.run_id} if case.run_id else {}),
     }
 
 
@@ -521,6 +553,7 @@ def run_cases(
     force: bool = False,
     inputs: dict[str, Any] | None = None,
     on_done: Callable[[CaseResult], None] | None = None,
+    batch_size: int | None = None,
 ) -> RunReport:
     """Run the cases on an engine, keeping finished ones; keep manifest and tables current.
 
@@ -528,13 +561,51 @@ def run_cases(
     others go on. On Ctrl-C or SIGTERM the engine is stopped at once, what finished is kept,
     the rest is recorded ``interrupted``, and the report says so. Raises ``RunDirectoryError``
     when ``out_dir`` cannot be used (a file, or another run holds it).
-    """
-    # the table writers' imports, now rather than at the first finished case: a Ctrl-C that
-    # lands inside a half-done `import pandas` would leave it broken for the rest of the run
-    import pandas  # noqa: F401
 
-    with contextlib.suppress(ImportError):
-        import pyarrow  # noqa: F401
+    Cases start longest first where an earlier run recorded their time, and small ones travel
+    in batches of ``batch_size`` cases (None: ``preform.pipeline.batching.plan_batches``
+    chooses; 1: none). A batch whose worker dies or overruns keeps the cases it finished; the
+    others are run again, each on its own. The run-level outputs run on the engine too.
+    """
+    # workers start now (a fork server imports what they need) while this process reads the
+    # directory and imports its table writers; a pre-lock look, so a run with nothing to do
+    # starts none (the list that counts is taken under the lock below)
+    maybe_todo = [c for c in cases if force or previous_result(c) is None]
+    with _EngineSession(maybe_todo, host, engine, workers, scheduler) as session:
+        # the table writers' imports, now rather than at the first finished case: a Ctrl-C
+        # that lands inside a half-done `import pandas` would leave it broken for the run
+        import pandas  # noqa: F401
+
+        with contextlib.suppress(ImportError):
+            import pyarrow  # noqa: F401
+        return _run_in_directory(
+            cases,
+            out_dir,
+            host,
+            session,
+            engine,
+            workers,
+            scheduler,
+            force,
+            inputs,
+            on_done,
+            batch_size,
+        )
+
+
+def _run_in_directory(
+    cases: Sequence[Case],
+    out_dir: Path,
+    host: PluginHost,
+    session: _EngineSession,
+    engine: str,
+    workers: int | None,
+    scheduler: str | None,
+    force: bool,
+    inputs: dict[str, Any] | None,
+    on_done: Callable[[CaseResult], None] | None,
+    batch_size: int | None,
+) -> RunReport:
     with RunDirectory(out_dir) as rundir:
         run: dict[str, Any] = {
             "id": f"{now_utc()}-{os.getpid()}-{os.urandom(3).hex()}",
@@ -546,6 +617,7 @@ def run_cases(
                 "scheduler": scheduler,
                 "force": force,
                 "case_timeout_s": sorted({c.timeout_s for c in cases}, key=str),
+                "batch_size": batch_size,
             },
             "inputs": inputs or {},
             "plugins": [r.as_json() for r in host.records.values()],
@@ -556,16 +628,21 @@ def run_cases(
         rundir.write_manifest(run)
         results: dict[str, CaseResult] = {}
 
-        def record(case: Case, result: CaseResult, *, write: bool = False) -> None:
-            results[case.case_id] = result
+        def record(
+            case: Case, result: CaseResult, *, write: bool = False, flush: bool = True
+        ) -> None:
             if write:  # the worker could not write it (it died, or was stopped)
                 write_json(Path(case.case_dir) / "summary.json", case_record(case, result))
             rec = read_json(Path(case.case_dir) / "summary.json")
             if not isinstance(rec, dict) or rec.get("case_id") != case.case_id:
                 rec = case_record(case, result)
             rundir.record(rec, Path(case.case_dir))
-            rundir.write_manifest(run)
-            rundir.write_tables(force=False)
+            # only once the directory knows it: an interrupt before leaves it to be recorded
+            # again (from its summary.json), not pending
+            results[case.case_id] = result
+            if flush:  # a batch's results are written together, after its last one
+                rundir.write_manifest(run)
+                rundir.write_tables(force=False)
             if on_done is not None:
                 on_done(result)
 
@@ -575,10 +652,10 @@ def run_cases(
             if done is not None:
                 record(case, done)
             else:
-                todo.append(case)
+                todo.append(replace(case, run_id=run["id"]))
         interrupted = False
         if todo:
-            interrupted = _run_on_engine(todo, host, engine, workers, scheduler, record)
+            interrupted = session.run(todo, record, batch_size)
         for case in cases:
             if case.case_id not in results:
                 res = CaseResult(
@@ -593,8 +670,9 @@ def run_cases(
         report = RunReport(out_dir, ordered, interrupted)
         if not interrupted:
             try:
-                run["aggregates"] = _run_aggregates(cases, rundir, host)
+                run["aggregates"] = _run_aggregates(cases, rundir, host, session)
             except KeyboardInterrupt:  # every case is recorded; only run-level figures are lost
+                session.stop()
                 interrupted = True
                 report.interrupted = True
         run["finished"] = now_utc()
@@ -605,77 +683,233 @@ def run_cases(
         return report
 
 
-def _run_on_engine(
-    todo: Sequence[Case],
-    host: PluginHost,
-    engine_name: str,
-    workers: int | None,
-    scheduler: str | None,
-    record: Callable[..., None],
-) -> bool:
-    """Run ``todo`` on the engine, recording each case as it ends; True if interrupted."""
-    in_main = threading.current_thread() is threading.main_thread()
-    previous_term = signal.signal(signal.SIGTERM, _raise_interrupt) if in_main else None
-    engine: Engine | None = None
-    pending: dict[Future[CaseResult], tuple[Case, float]] = {}
-    queue = list(todo)
-    try:
+def execute_batch(cases: Sequence[Case]) -> list[CaseResult]:
+    """Run small cases one after another in one task (a worker). Each is ``execute_case``,
+    each within its own time limit where the worker can stop itself (``time_limit``: a
+    process pool's worker; a Dask worker's thread cannot, and relies on the runner)."""
+    results = []
+    for case in cases:
+        with time_limit(case.timeout_s):
+            results.append(execute_case(case))
+    return results
+
+
+def finished_in_run(case: Case) -> CaseResult | None:
+    """The result this run's worker wrote for ``case`` before its batch was lost (the worker
+    died or overran): its summary.json, if it carries this run's id."""
+    summary = read_json(Path(case.case_dir) / "summary.json")
+    if not isinstance(summary, dict) or not case.run_id:
+        return None
+    if summary.get("run_id") != case.run_id or summary.get("case_id") != case.case_id:
+        return None
+    from preform.pipeline.rundir import RECORD_KEYS
+
+    return CaseResult(
+        case.case_id,
+        case.material,
+        case.scene,
+        str(summary.get("status")),
+        summary.get("error"),
+        float(summary.get("wall_time_s") or 0.0),
+        dict(summary.get("step_times_s") or {}),
+        {k: v for k, v in summary.items() if k not in RECORD_KEYS},
+        list(summary.get("files") or []),
+        list(summary.get("reasons") or []),
+        list(summary.get("warnings") or []),
+    )
+
+
+class _EngineSession:
+    """The engine of one run, opened when the run starts (so its workers start while this
+    process prepares) and closed, or stopped at once on an interrupt, when the run ends;
+    SIGTERM is an interrupt meanwhile. No engine is opened for a run with nothing to do."""
+
+    def __init__(
+        self,
+        todo: Sequence[Case],
+        host: PluginHost,
+        engine_name: str,
+        workers: int | None,
+        scheduler: str | None,
+    ) -> None:
+        self.host = host
+        self.engine_name = engine_name
+        self.workers = workers
+        self.scheduler = scheduler
+        self._todo = list(todo)
+        self.engine: Engine | None = None
+        self._previous_term: Any = None
+
+    def __enter__(self) -> _EngineSession:
+        if threading.current_thread() is threading.main_thread():
+            self._previous_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+        try:
+            if self._todo:
+                self._open(self._todo)
+        except BaseException:
+            self._restore()
+            raise
+        return self
+
+    def _open(self, todo: Sequence[Case]) -> Engine:
         hosts = tuple(dict.fromkeys((c.discover, c.plugins) for c in todo))
-        engine = open_engine(
-            engine_name,
-            workers=workers,
-            scheduler=scheduler,
+        self.engine = open_engine(
+            self.engine_name,
+            workers=self.workers,
+            scheduler=self.scheduler,
             preload=worker_preload(),
             warm_up=("preform.pipeline.runner:warm_worker", (hosts,)),
         )
+        return self.engine
+
+    def __exit__(self, exc_type: Any, *_: object) -> None:
+        try:
+            if self.engine is not None:
+                if exc_type is None:
+                    self.engine.close()
+                else:
+                    self.engine.stop()
+                self.engine = None
+        finally:
+            self._restore()
+
+    def _restore(self) -> None:
+        if self._previous_term is not None:
+            signal.signal(signal.SIGTERM, self._previous_term)
+            self._previous_term = None
+
+    def stop(self) -> None:
+        """Stop every running and queued task now (interrupt)."""
+        if self.engine is not None:
+            self.engine.stop()
+            self.engine = None
+
+    def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
+        """A run-level task on the run's engine; in this process when it has none."""
+        if self.engine is None:
+            return SerialEngine().submit(fn, *args, timeout_s=timeout_s)
+        return self.engine.submit(fn, *args, timeout_s=timeout_s)
+
+    def run(
+        self,
+        todo: Sequence[Case],
+        record: Callable[..., None],
+        batch_size: int | None = None,
+    ) -> bool:
+        """Run ``todo``, recording each case as it ends; True if interrupted."""
+        recorded: set[str] = set()
+
+        def record_once(case: Case, result: CaseResult, **how: Any) -> None:
+            record(case, result, **how)
+            recorded.add(case.case_id)  # after: an interrupt inside leaves it to the harvest
+
+        try:
+            engine = self.engine or self._open(todo)
+            self._run(engine, todo, record_once, batch_size)
+        except KeyboardInterrupt:
+            self.stop()
+            # a worker may have finished cases whose results had not come back: they are kept
+            for case in todo:
+                done = None if case.case_id in recorded else finished_in_run(case)
+                if done is not None:
+                    record_once(case, done)
+            return True
+        return False
+
+    def _run(
+        self,
+        engine: Engine,
+        todo: Sequence[Case],
+        record: Callable[..., None],
+        batch_size: int | None,
+    ) -> None:
+        serial = self.engine_name == "serial"
+        estimates = {c.case_id: recorded_wall_time_s(c.case_dir) for c in todo}
+        queue = plan_batches(
+            todo,
+            lambda c: estimates[c.case_id],
+            workers=engine.workers,
+            batch_size=1 if serial else batch_size,  # in-process: nothing to save
+        )
+        pending: dict[Future[Any], tuple[list[Case], float]] = {}
         while queue or pending:
             while queue and len(pending) < engine.capacity:
-                case = queue.pop(0)
-                if engine_name == "serial":
+                batch = queue.pop(0)
+                limit = _batch_timeout(batch)
+                if serial:
                     # in-process: use this host, so plugins registered by code are seen
-                    fut = engine.submit(execute_case, case, host, timeout_s=case.timeout_s)
+                    fut: Future[Any] = engine.submit(
+                        execute_case, batch[0], self.host, timeout_s=limit
+                    )
+                elif len(batch) == 1:
+                    fut = engine.submit(execute_case, batch[0], timeout_s=limit)
                 else:
-                    fut = engine.submit(execute_case, case, timeout_s=case.timeout_s)
-                pending[fut] = (case, time.monotonic())
+                    fut = engine.submit(execute_batch, batch, timeout_s=limit)
+                pending[fut] = (batch, time.monotonic())
             done, _ = wait(list(pending), timeout=0.5, return_when=FIRST_COMPLETED)
             for fut in done:
-                case, _started = pending.pop(fut)
+                batch, _started = pending.pop(fut)
                 try:
-                    record(case, fut.result())
+                    returned = fut.result()
                 except (Exception, CaseTimeout) as exc:  # the worker did not return a result
-                    record(case, _engine_failure(case, exc, case.timeout_s), write=True)
+                    queue[:0] = self._lost(batch, exc, record)
+                    continue
+                for i, result in enumerate(returned if isinstance(returned, list) else [returned]):
+                    record(batch[i], result, flush=i == len(batch) - 1)
             if not engine.enforces_timeout:
                 now = time.monotonic()
-                for fut, (case, started) in list(pending.items()):
-                    if case.timeout_s is not None and now - started > case.timeout_s + (
-                        TIMEOUT_GRACE_S
-                    ):
+                for fut, (batch, started) in list(pending.items()):
+                    limit = _batch_timeout(batch)
+                    if limit is not None and now - started > limit + TIMEOUT_GRACE_S:
                         engine.abandon(fut)
                         del pending[fut]
-                        timed_out = _engine_failure(case, CaseTimeout(), case.timeout_s)
-                        record(case, timed_out, write=True)
-    except KeyboardInterrupt:
-        if engine is not None:
-            engine.stop()
-            engine = None
-        return True
-    finally:
-        if engine is not None:
-            engine.close()
-        if previous_term is not None:
-            signal.signal(signal.SIGTERM, previous_term)
-    return False
+                        queue[:0] = self._lost(batch, CaseTimeout(), record)
+
+    @staticmethod
+    def _lost(
+        batch: list[Case], exc: BaseException, record: Callable[..., None]
+    ) -> list[list[Case]]:
+        """A task that returned no result: one case is failed or timed out in words; a batch
+        keeps the cases it finished, and gives back the others to run again, each alone."""
+        if len(batch) == 1:
+            case = batch[0]
+            record(case, _engine_failure(case, exc, case.timeout_s), write=True)
+            return []
+        again = []
+        for case in batch:
+            done = finished_in_run(case)
+            if done is not None:
+                record(case, done)
+            else:
+                again.append([case])
+        return again
+
+
+def _batch_timeout(batch: Sequence[Case]) -> float | None:
+    """The engine's time limit of a task [s]: a case's own limit; for a batch, the largest of
+    its cases' limits plus ``TIMEOUT_GRACE_S`` (None if a case has none). Inside a batch each
+    case is stopped at its own limit where the worker can stop itself; this bound catches what
+    it cannot (a call into compiled code that never returns): past it the batch is stopped and
+    its unfinished cases run again, each alone. Batches hold small cases, so a sound one ends
+    far below it."""
+    limits = [c.timeout_s for c in batch]
+    if any(limit is None for limit in limits):
+        return None
+    longest = max(limit for limit in limits if limit is not None)
+    return longest if len(batch) == 1 else longest + TIMEOUT_GRACE_S
 
 
 def _run_aggregates(
-    cases: Sequence[Case], rundir: RunDirectory, host: PluginHost
+    cases: Sequence[Case], rundir: RunDirectory, host: PluginHost, session: _EngineSession
 ) -> dict[str, Any]:
     """Run-level outputs of steps that define ``aggregate``, once per scene of this run, over
-    every complete case of that scene in the directory (earlier runs' too)."""
+    every complete case of that scene in the directory (earlier runs' too). They run on the
+    run's engine (a warm worker has the figure libraries loaded; this process need not)."""
     written: dict[str, Any] = {}
     first_of_scene: dict[str, Case] = {}
     for case in cases:
         first_of_scene.setdefault(case.scene, case)
+    tasks: list[tuple[str, str, Future[list[str]]]] = []
     for scene_name, first in first_of_scene.items():
         try:
             scene = scene_from_data(first.scene_data, first.scene_base_dir, host.registry)
@@ -692,13 +926,16 @@ def _run_aggregates(
         folder = Path(first.case_dir).parent
         for step in steps:
             assert step.aggregate is not None
-            try:
-                files = step.aggregate(folder, summaries)
-                written.setdefault(scene_name, {})[step.name] = files
-            except Exception as exc:  # a run-level figure must not lose the run's results
-                written.setdefault(scene_name, {})[step.name] = {
-                    "error": f"{type(exc).__name__}: {exc}"
-                }
+            # steps are module-level functions (the registry checks): a worker imports it
+            future = session.submit(step.aggregate, folder, summaries)
+            tasks.append((scene_name, step.name, future))
+    for scene_name, step_name, future in tasks:
+        try:
+            written.setdefault(scene_name, {})[step_name] = future.result()
+        except Exception as exc:  # a run-level figure must not lose the run's results
+            written.setdefault(scene_name, {})[step_name] = {
+                "error": f"{type(exc).__name__}: {exc}"
+            }
     return written
 
 

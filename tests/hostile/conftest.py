@@ -43,6 +43,10 @@ def run_work(ctx):
     if pid_log:
         with open(pid_log, "a") as f:
             f.write(f"{os.getpid()}\\n")
+    order_log = os.environ.get("RUNTOY_ORDER")
+    if order_log:
+        with open(order_log, "a") as f:
+            f.write(f"{ctx.fabric.name}\\n")
     fate = ctx.fabric.fate
     time.sleep(ctx.fabric.work_s)
     if fate == "raise":

@@ -520,7 +520,7 @@ def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig, engine):
     assert "INTERRUPTED: finished cases are kept" in err
     kept = _finished(runenv.out)
     st = statuses(runenv.out)
-    assert set(st.values()) <= {"ok", "interrupted"} and "interrupted" in st.values()
+    assert set(st.values()) <= {"ok", "interrupted"} and "interrupted" in st.values(), (st, err)
     assert {k for k, v in st.items() if v == "ok"} == set(kept)
     assert_consistent(runenv.out)
     rerun = runenv.run(lib, scene, "--workers", "2", "--engine", engine)
@@ -711,3 +711,93 @@ def test_interrupt_while_the_library_loads_exits_130_without_traceback(runenv, m
     assert info.value.code == 130
     assert capsys.readouterr().err.strip() == "Aborted!"
     assert not runenv.out.exists()
+
+
+# -- 7. batches of small cases (issue 15): a lost batch costs only its unfinished cases -----
+
+
+def _work_runs(runenv) -> int:
+    """How many times a runtoy step ran (each run appends its worker's pid)."""
+    log = Path(runenv.env["RUNTOY_PIDS"])
+    return len(log.read_text().splitlines()) if log.exists() else 0
+
+
+@pytest.mark.parametrize("fate", ["kill", "exit"])
+def test_worker_killed_mid_batch_keeps_the_finished_and_reruns_the_rest(runenv, host, fate):
+    # one worker, batches of 4 in library order: [a0, a1, victim, a2] then [a3, a4]; the
+    # victim kills its worker after a0 and a1 finished in it
+    names = ["a0", "a1", "victim", "a2", "a3", "a4"]
+    lib = runenv.library(*(fabric(n, fate=fate if n == "victim" else "ok") for n in names))
+    report = run_in_process(
+        runenv, host, lib, runenv.scene(), engine="process", workers=1, batch_size=4
+    )
+    by = {r.material: r for r in report.results}
+    assert by["victim"].status == "failed"
+    assert "the worker process running this case died" in by["victim"].error
+    assert all(by[n].status == "ok" for n in names if n != "victim"), by
+    assert all(by[n].results["work_value"] == 1.0 for n in names if n != "victim")
+    # a0 and a1 kept from the lost batch, not run again; the victim and a2 ran again alone:
+    # 5 runs of the step in the batches (a2 never started in the first) plus 2
+    assert _work_runs(runenv) == 5 + 2
+    assert_consistent(runenv.out)
+    run_id = manifest(runenv.out)["runs"][-1]["id"]
+    for n in names:  # every record, the kept ones included, is this run's
+        rec = json.loads((runenv.out / "work-scene" / n / "summary.json").read_text())
+        assert rec["run_id"] == run_id
+
+
+def test_hanging_case_in_a_batch_times_out_alone(runenv, host):
+    lib = runenv.library(fabric("quick"), fabric("stuck", fate="hang"), fabric("quick2"))
+    t0 = time.monotonic()
+    report = run_in_process(
+        runenv, host, lib, runenv.scene(), engine="process", workers=1, batch_size=3, timeout_s=1.5
+    )
+    assert time.monotonic() - t0 < 30
+    by = {r.material: r for r in report.results}
+    assert by["stuck"].status == "timed_out"
+    assert by["stuck"].error == "stopped at the case time limit of 1.5 s"
+    assert by["quick"].status == by["quick2"].status == "ok"
+    assert _work_runs(runenv) == 3  # stopped inside its batch: nothing ran twice
+    assert_consistent(runenv.out)
+
+
+def test_batched_and_unbatched_runs_agree(runenv, host, tmp_path):
+    lib = runenv.library(
+        *(fabric(f"f{i}", work_s=0.01 * i) for i in range(7)), fabric("bad", fate="raise")
+    )
+    scene = runenv.scene()
+    serial = run_in_process(runenv, host, lib, scene)
+    batched = run_in_process(
+        runenv, host, lib, scene, engine="process", workers=2, batch_size=3, force=True
+    )
+    assert [(r.case_id, r.status, r.results, r.error) for r in serial.results] == [
+        (r.case_id, r.status, r.results, r.error) for r in batched.results
+    ]
+    assert_consistent(runenv.out)
+
+
+@pytest.mark.slow
+def test_dask_worker_killed_mid_batch_keeps_the_finished(runenv, host):
+    names = ["a0", "a1", "victim", "a2"]
+    lib = runenv.library(*(fabric(n, fate="exit" if n == "victim" else "ok") for n in names))
+    report = run_in_process(
+        runenv, host, lib, runenv.scene(), engine="dask", workers=1, batch_size=4
+    )
+    by = {r.material: r for r in report.results}
+    assert by["victim"].status == "failed" and "Dask: KilledWorker" in by["victim"].error
+    assert all(by[n].status == "ok" for n in names if n != "victim")
+    assert _work_runs(runenv) == 3 + 2
+    assert_consistent(runenv.out)
+
+
+def test_a_rerun_starts_the_cases_an_earlier_run_found_longest(runenv, host, monkeypatch):
+    order = runenv.root / "order.log"
+    monkeypatch.setenv("RUNTOY_ORDER", str(order))
+    works = {"w0": 0.0, "w3": 0.3, "w1": 0.1, "w2": 0.2}
+    lib = runenv.library(*(fabric(n, work_s=w) for n, w in works.items()))
+    scene = runenv.scene()
+    run_in_process(runenv, host, lib, scene)  # nothing known yet: library order
+    assert order.read_text().split() == list(works)
+    order.unlink()
+    run_in_process(runenv, host, lib, scene, force=True)
+    assert order.read_text().split() == ["w3", "w2", "w1", "w0"]
