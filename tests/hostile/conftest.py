@@ -4,11 +4,14 @@ processes find it exactly as they would a user's plugin."""
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
+import signal
 import subprocess
 import sys
 import textwrap
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -156,13 +159,32 @@ class RunEnv:
         )
 
     def start(self, library: Path, scene: Path, *args: str) -> subprocess.Popen[str]:
-        return subprocess.Popen(
-            self.command(library, scene, *args),
-            env=self.env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
+        with interruptible_children():
+            return subprocess.Popen(
+                self.command(library, scene, *args),
+                env=self.env,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+
+
+@contextlib.contextmanager
+def interruptible_children() -> Iterator[None]:
+    """Start children with SIGINT at its default, as from a terminal, however pytest was
+    started: a shell starts a background job (``pytest &``, a CI runner) with SIGINT ignored,
+    the ignore is inherited through exec, and Python then installs no KeyboardInterrupt
+    handler, so an interrupt test would see preform (rightly) ignore the signal. A handled
+    signal is reset to its default in the child on exec, so handling it here for the moment
+    of the fork is enough."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @pytest.fixture
