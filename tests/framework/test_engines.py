@@ -115,3 +115,15 @@ def test_a_warm_up_that_fails_fails_the_case_not_the_caller(probe):
     finally:
         engine.stop()
     assert sys.modules.get("preform_engine_probe") is module
+
+
+def test_every_preform_module_the_workers_preload_exists():
+    """The preload skips a name that does not import (an optional library not installed): a
+    preform module renamed or moved would silently drop out of it, and every worker would pay
+    its import in its first case again."""
+    import importlib
+
+    own = [m for m in runner.WORKER_PRELOAD if m.startswith("preform.")]
+    assert own, "the workers preload none of preform's modules"
+    for module in own:
+        importlib.import_module(module)
