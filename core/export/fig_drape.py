@@ -207,7 +207,8 @@ def shear_view_quads(
         in_block = blocks(np.where(drawn, shear, 0.0))[bi, bj]
         block_shear = in_block[np.arange(len(bi)), np.argmax(np.abs(in_block), axis=1)]
         if past_locking is not None:
-            block_locked = blocks(np.asarray(past_locking, dtype=bool))[bi, bj].any(axis=1)
+            locked_blocks = blocks(np.asarray(past_locking, dtype=bool))[bi, bj]
+            block_locked = np.asarray(locked_blocks.any(axis=1), dtype=bool)
         i0, j0 = k * bi, k * bj
         block_quads = [nodes_mm[i0, j0], nodes_mm[i0 + k, j0], nodes_mm[i0 + k, j0 + k]]
         block_quads.append(nodes_mm[i0, j0 + k])
