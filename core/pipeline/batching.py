@@ -48,9 +48,18 @@ def recorded_wall_time_s(case_dir: str | Path) -> float | None:
 def longest_first(items: Sequence[T], estimate: Callable[[T], float | None]) -> list[T]:
     """``items`` in the order to start them: those without an estimate first (as given), then
     the estimated ones from the longest down (ties as given)."""
-    unknown = [x for x in items if estimate(x) is None]
-    known = [x for x in items if estimate(x) is not None]
-    known.sort(key=lambda x: -(estimate(x) or 0.0))  # sort is stable: ties keep their order
+    return [item for item, _ in _longest_first_estimated(items, estimate)]
+
+
+def _longest_first_estimated(
+    items: Sequence[T], estimate: Callable[[T], float | None]
+) -> list[tuple[T, float | None]]:
+    """``longest_first`` with each item's estimate, asked once per item (an estimate reads
+    the case's earlier summary.json)."""
+    estimated = [(item, estimate(item)) for item in items]
+    unknown = [pair for pair in estimated if pair[1] is None]
+    known = [pair for pair in estimated if pair[1] is not None]
+    known.sort(key=lambda pair: -(pair[1] or 0.0))  # sort is stable: ties keep their order
     return unknown + known
 
 
@@ -75,7 +84,8 @@ def plan_batches(
     first, each alone, then the others in batches. An explicit ``batch_size`` groups every
     case so, in ``longest_first`` order (1: one case a task, no batching).
     """
-    ordered = longest_first(items, estimate)
+    estimated = _longest_first_estimated(items, estimate)
+    ordered = [item for item, _ in estimated]
     if batch_size is not None:
         if batch_size < 1:
             raise ValueError(f"batch size must be at least 1, not {batch_size}")
@@ -84,10 +94,10 @@ def plan_batches(
         grouped = ordered
     else:
         size = auto_batch_size(len(ordered), workers)
-        alone = [x for x in ordered if (estimate(x) or 0.0) > SMALL_CASE_S]
-        grouped = [x for x in ordered if (estimate(x) or 0.0) <= SMALL_CASE_S]
         if size == 1:
             return [[x] for x in ordered]
+        alone = [x for x, seconds in estimated if (seconds or 0.0) > SMALL_CASE_S]
+        grouped = [x for x, seconds in estimated if (seconds or 0.0) <= SMALL_CASE_S]
     batches = [[x] for x in alone]
     batches += [list(grouped[i : i + size]) for i in range(0, len(grouped), size)]
     return batches
