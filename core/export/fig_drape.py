@@ -284,7 +284,7 @@ def _nice_ticks(lo: float, hi: float, bins: int) -> np.ndarray:
     """At most ``bins`` + 1 round values [mm] within [lo, hi]."""
     from matplotlib.ticker import MaxNLocator
 
-    ticks = MaxNLocator(bins, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi)
+    ticks = np.asarray(MaxNLocator(bins, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi))
     return ticks[(ticks >= lo - 1e-9 * (hi - lo)) & (ticks <= hi + 1e-9 * (hi - lo))]
 
 
@@ -363,10 +363,12 @@ def _box_frame(ax: Axes, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np
         angle = math.degrees(math.atan2(direction[1], direction[0]))
         angle = (angle + 90.0) % 180.0 - 90.0  # upright text
         label = middle @ screen + 0.12 * size * outward
-        ax.text(*label, f"{name} [mm]", ha="center", va="center", rotation=angle)
+        ax.text(label[0], label[1], f"{name} [mm]", ha="center", va="center", rotation=angle)
         reach.append(np.array([label + 0.04 * size * outward]))
         reach.append(tick_out + 0.07 * size * outward)
-    ax.add_collection(LineCollection(np.concatenate(marks), colors="0.2", lw=0.8), autolim=False)
+    ax.add_collection(
+        LineCollection(list(np.concatenate(marks)), colors="0.2", lw=0.8), autolim=False
+    )
     return np.concatenate(reach)
 
 

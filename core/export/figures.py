@@ -33,7 +33,7 @@ PNG_COMPRESS_LEVEL = 1
 #: Settings every figure is drawn with. FreeType's hinting off: the glyphs keep their own
 #: outlines instead of being snapped to the pixel grid, which reads as well at 100 dpi and
 #: nearly halves the cost of drawing text, the largest part of a figure's drawing (section (m)).
-DRAW_RC = {"text.hinting": "no_hinting"}
+DRAW_RC: dict[str, Any] = {"text.hinting": "no_hinting"}
 
 _renderers = threading.local()
 
@@ -107,7 +107,7 @@ def save_figure(fig: Figure, path: str | os.PathLike[str]) -> None:
     """
     import matplotlib
 
-    with atomic_path(path) as tmp, matplotlib.rc_context(DRAW_RC):
+    with atomic_path(path) as tmp, matplotlib.rc_context(DRAW_RC):  # type: ignore[arg-type]
         fmt = tmp.suffix.lstrip(".").lower() or "png"
         if fmt != "png":
             fig.savefig(tmp, dpi=fig.dpi, format=fmt)
