@@ -146,8 +146,8 @@ def _top_view(ax: Axes, result: DrapeResult, tow_every: int, edge: np.ndarray | 
     ax.set_aspect("equal", adjustable="datalim")
     # Round ticks inside the view only: matplotlib makes a tick object (lines and texts) for
     # every value its locator returns, the ones past the limits too.
-    ax.xaxis.set_major_locator(_in_view_locator(6))
-    ax.yaxis.set_major_locator(_in_view_locator(6))
+    ax.xaxis.set_major_locator(_in_view_locator(8))
+    ax.yaxis.set_major_locator(_in_view_locator(8))
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     # y given: matplotlib then skips measuring every tick label to place the title above them
@@ -300,7 +300,11 @@ def _box_frame(ax: Axes, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np
     from matplotlib.collections import LineCollection, PolyCollection
 
     towards = view[2]
-    ticks = [_nice_ticks(lo[a], hi[a], 6 if a < 2 else 4) for a in range(3)]
+    span = hi - lo
+    # About a tick per eighth of the drawing along each axis's edge on the screen (2 to 6 gaps).
+    on_screen = span * np.hypot(view[0], view[1])
+    bins = np.clip(np.round(8 * on_screen / on_screen.max()), 2, 6).astype(int)
+    ticks = [_nice_ticks(lo[a], hi[a], int(bins[a])) for a in range(3)]
     # The pane of axis a lies on the side of the box away from the viewer.
     back = np.where(towards > 0, lo, hi)
     front = np.where(towards > 0, hi, lo)
@@ -482,13 +486,17 @@ def _shear_view(ax: Axes, result: DrapeResult, energy: EnergyField | None) -> No
             centre = folds.mean(axis=1) @ screen
             ax.plot(*centre.T, "X", color=FOLD_COLOUR, ms=9, mec="k", mew=0.6, ls="none")
     (x0, y0), (x1, y1) = reach.min(axis=0), reach.max(axis=0)
-    # The colour scale right of the drawing, 0.7 of its height (as a colour bar shrunk to 0.7).
+    # The colour scale right of the drawing: 0.7 of its height (as a colour bar shrunk to 0.7),
+    # but never shorter than 0.45 of its width (a flat part's panel grows to take it).
     width, height = x1 - x0, y1 - y0
+    bar = max(0.7 * height, 0.45 * width)
+    middle = 0.5 * (y0 + y1)
+    y0, y1 = min(y0, middle - 0.6 * bar), max(y1, middle + 0.6 * bar)
     _colour_scale(
         ax,
         norm,
         cmap,
-        (x1 + 0.04 * width, y0 + 0.15 * height, 0.035 * width, 0.7 * height),
+        (x1 + 0.04 * width, middle - 0.5 * bar, 0.035 * width, bar),
         "signed shear angle γ [deg]",
     )
     ax.set_xlim(x0, x1 + 0.3 * width)
