@@ -5,8 +5,9 @@ angle of ``--fabric`` (hemisphere R = 100 mm, 2.5 mm net, the part's edge), draw
 PNG by today's module and by the frozen copy in ``fig_drape_baseline.py`` (mplot3d's 3D view,
 matplotlib's PNG writer), taking turns ``--repeat`` times; processor time (``process_time``)
 of each call, best and median, and the ratio. Then the first figure in a fresh process: a child
-interpreter that has imported preform, numpy and matplotlib (as a pipeline worker has) draws
-one figure, for each code in turn, best of ``--fresh`` children.
+interpreter that has imported what a pipeline worker preloads (numpy, preform, matplotlib's
+figure, Agg and mplot3d modules) draws one figure, for each code in turn, best of ``--fresh``
+children.
 
 Fig. 10 (``energy_vs_angle_figure`` of ten fabrics, drawn once a run): the same function saved by
 today's ``save_figure`` and by the one before (the figure's code itself is unchanged); its
@@ -44,7 +45,8 @@ HERE = Path(__file__).resolve().parent
 FRESH = """
 import pickle, sys, time
 sys.path.insert(0, {here!r})
-import numpy, matplotlib, preform  # what a warm pipeline worker has imported
+# what a pipeline worker has imported (the runner's WORKER_PRELOAD) before its first case
+import numpy, matplotlib.figure, matplotlib.backends.backend_agg, mpl_toolkits.mplot3d, preform
 from preform.export import fig_drape
 import fig_drape_baseline
 result, energy, part, every = pickle.load(open({case!r}, "rb"))

@@ -112,7 +112,7 @@ def save_figure(fig: Figure, path: str | os.PathLike[str]) -> None:
         if fmt != "png":
             fig.savefig(tmp, dpi=fig.dpi, format=fmt)
             return
-        width, height = (round(v) for v in fig.bbox.size)
+        width, height = (int(v) for v in fig.bbox.size)  # as FigureCanvasAgg sizes its buffer
         renderer = _renderer(width, height, fig.dpi)
         renderer.clear()
         fig.draw(renderer)
