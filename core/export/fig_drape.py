@@ -293,7 +293,57 @@ def _tick_text(value: float) -> str:
     return "0" if text == "-0" else text.replace("-", "\N{MINUS SIGN}")
 
 
-def _box_frame(ax: Axes, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np.ndarray:
+class _Panel:
+    """Artists drawn on the figure in their own coordinates [mm on the screen], one scale both
+    ways, centred in ``rect`` (left, bottom, width, height) [figure fraction]: what a plain
+    axes with its axis off gives, without making an axes (its axis, tick prototypes, spines
+    and patch: a twentieth of the figure's time). ``fit`` sets the scale once the drawing's
+    extent is known; every artist added before follows it."""
+
+    def __init__(self, fig: Figure, rect: tuple[float, float, float, float]) -> None:
+        from matplotlib.transforms import Affine2D
+
+        self.fig = fig
+        self.rect = rect
+        self.affine = Affine2D()
+        self.transform = self.affine + fig.transFigure
+
+    def add(self, artist: Any) -> Any:
+        artist.set_transform(self.transform)
+        self.fig.add_artist(artist)
+        return artist
+
+    def text(self, x: float, y: float, text: str, **style: Any) -> Any:
+        from matplotlib.text import Text
+
+        return self.add(Text(x, y, text, **style))
+
+    def annotate(
+        self, text: str, xy: tuple[float, float], offset_pt: tuple[float, float], **style: Any
+    ) -> Any:
+        """``text`` ``offset_pt`` [points] away from ``xy`` (panel coordinates)."""
+        from matplotlib.text import Annotation
+
+        note = Annotation(
+            text, xy, xycoords=self.transform, xytext=offset_pt, textcoords="offset points", **style
+        )
+        self.fig.add_artist(note)
+        return note
+
+    def fit(self, x0: float, x1: float, y0: float, y1: float) -> float:
+        """Scale [x0, x1] × [y0, y1] to fill the panel's rectangle at one scale, centred;
+        returns the top of the drawing [figure fraction]."""
+        width_in, height_in = self.fig.get_size_inches()
+        left, bottom, width, height = self.rect
+        scale = min(width * width_in / (x1 - x0), height * height_in / (y1 - y0))  # in per unit
+        sx, sy = scale / width_in, scale / height_in
+        cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+        self.affine.clear().translate(-cx, -cy).scale(sx, sy)
+        self.affine.translate(left + 0.5 * width, bottom + 0.5 * height)
+        return bottom + 0.5 * height + sy * (y1 - cy)
+
+
+def _box_frame(ax: _Panel, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np.ndarray:
     """The 3D axes drawn in 2D: the three back panes of the box [lo, hi] [mm] with grid lines at
     the ticks, and each axis's ticks and label [mm] along a front edge of the box. Returns
     screen points (k, 2) that the frame and its labels reach, for the panel's limits."""
@@ -324,15 +374,12 @@ def _box_frame(ax: Axes, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np
                 line[:, other] = [lo[other], hi[other]]
                 grid.append(line)
     screen = view[:2].T
-    ax.add_collection(
+    ax.add(
         PolyCollection(
             [p @ screen for p in panes], facecolors=PANE_COLOUR, edgecolors="0.6", linewidths=0.6
-        ),
-        autolim=False,
+        )
     )
-    ax.add_collection(
-        LineCollection([g @ screen for g in grid], colors=GRID_COLOUR, lw=0.6), autolim=False
-    )
+    ax.add(LineCollection([g @ screen for g in grid], colors=GRID_COLOUR, lw=0.6))
     corners = np.array(
         [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
     )
@@ -370,69 +417,57 @@ def _box_frame(ax: Axes, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np
         ax.text(label[0], label[1], f"{name} [mm]", ha="center", va="center", rotation=angle)
         reach.append(np.array([label + 0.04 * size * outward]))
         reach.append(tick_out + 0.07 * size * outward)
-    ax.add_collection(
-        LineCollection(list(np.concatenate(marks)), colors="0.2", lw=0.8), autolim=False
-    )
+    ax.add(LineCollection(list(np.concatenate(marks)), colors="0.2", lw=0.8))
     return np.concatenate(reach)
 
 
 def _colour_scale(
-    ax: Axes, norm: Any, cmap: Any, box: tuple[float, float, float, float], label: str
+    ax: _Panel, norm: Any, cmap: Any, box: tuple[float, float, float, float], label: str
 ) -> None:
-    """A vertical colour bar of ``cmap`` over ``norm``'s range drawn inside ``ax`` at ``box``
-    (left, bottom, width, height) in its data coordinates, with round ticks and ``label``: what
+    """A vertical colour bar of ``cmap`` over ``norm``'s range drawn in the panel at ``box``
+    (left, bottom, width, height) in its coordinates, with round ticks and ``label``: what
     ``Figure.colorbar`` draws, without the extra Axes (half the shear panel's drawing time)."""
     from matplotlib.collections import LineCollection
-    from matplotlib.image import AxesImage
+    from matplotlib.image import BboxImage
     from matplotlib.patches import Rectangle
+    from matplotlib.transforms import Bbox, TransformedBbox
 
     left, bottom, width, height = box
-    image = AxesImage(
-        ax,
+    image = BboxImage(
+        TransformedBbox(Bbox.from_bounds(left, bottom, width, height), ax.transform),
         cmap=cmap,
         norm=norm,
-        extent=(left, left + width, bottom, bottom + height),
         origin="lower",
         interpolation="nearest",
         gid="colour scale",
     )
     image.set_data(np.linspace(norm.vmin, norm.vmax, 256)[:, None])
-    ax.add_image(image)
-    ax.add_patch(Rectangle((left, bottom), width, height, fill=False, lw=0.8, ec="k"))
+    ax.fig.add_artist(image)
+    ax.add(Rectangle((left, bottom), width, height, fill=False, lw=0.8, ec="k"))
     ticks = _nice_ticks(norm.vmin, norm.vmax, 6)
     y = bottom + height * (ticks - norm.vmin) / (norm.vmax - norm.vmin)
     right = left + width
-    ax.add_collection(
-        LineCollection([[(right, v), (right + 0.25 * width, v)] for v in y], colors="k", lw=0.8),
-        autolim=False,
-    )
+    ax.add(LineCollection([[(right, v), (right + 0.25 * width, v)] for v in y], colors="k", lw=0.8))
     for value, v in zip(ticks, y, strict=True):
-        ax.annotate(
-            _tick_text(float(value)),
-            (right, v),
-            xytext=(6, 0),
-            textcoords="offset points",
-            ha="left",
-            va="center",
-        )
+        ax.annotate(_tick_text(float(value)), (right, v), (6, 0), ha="left", va="center")
     ax.annotate(
-        label,
-        (right, bottom + 0.5 * height),
-        xytext=(40, 0),
-        textcoords="offset points",
-        ha="center",
-        va="center",
-        rotation=90,
+        label, (right, bottom + 0.5 * height), (40, 0), ha="center", va="center", rotation=90
     )
 
 
-def _shear_view(ax: Axes, result: DrapeResult, energy: EnergyField | None) -> None:
-    """The net in 3D, coloured by signed shear: an orthographic view projected here and drawn
-    as one 2D collection of polygons in depth order (see ``painter_order``), with the box's
-    panes, ticks in mm and a colour scale."""
+def _shear_view(
+    fig: Figure,
+    rect: tuple[float, float, float, float],
+    result: DrapeResult,
+    energy: EnergyField | None,
+) -> None:
+    """The net in 3D, coloured by signed shear, in ``rect`` [figure fraction]: an orthographic
+    view projected here and drawn as one 2D collection of polygons in depth order (see
+    ``painter_order``), with the box's panes, ticks in mm and a colour scale (``_Panel``)."""
     from matplotlib import colormaps
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import CenteredNorm, to_rgba
+    from matplotlib.text import Annotation
 
     valid = np.asarray(result.cell_status == CellStatus.VALID)
     if result.part_share is not None:
@@ -447,8 +482,7 @@ def _shear_view(ax: Axes, result: DrapeResult, energy: EnergyField | None) -> No
     cmap = colormaps["RdBu_r"]
     axes = view_axes(VIEW_ELEVATION_DEG, VIEW_AZIMUTH_DEG)
     screen = axes[:2].T
-    ax.set_axis_off()
-    ax.set_aspect("equal", adjustable="box")  # the box hugs the drawing: the title sits on it
+    ax = _Panel(fig, rect)
     folds = 1e3 * fold_triangles(result)
     if len(quads):
         pts = np.concatenate([quads.reshape(-1, 3), folds.reshape(-1, 3)])
@@ -481,10 +515,24 @@ def _shear_view(ax: Axes, result: DrapeResult, energy: EnergyField | None) -> No
             linewidths=widths[order],
             gid="shear cells",
         )
-        ax.add_collection(cells, autolim=False)
+        ax.add(cells)
         if len(folds):
+            from matplotlib.lines import Line2D
+
             centre = folds.mean(axis=1) @ screen
-            ax.plot(*centre.T, "X", color=FOLD_COLOUR, ms=9, mec="k", mew=0.6, ls="none")
+            ax.add(
+                Line2D(
+                    centre[:, 0],
+                    centre[:, 1],
+                    marker="X",
+                    color=FOLD_COLOUR,
+                    ms=9,
+                    mec="k",
+                    mew=0.6,
+                    ls="none",
+                    gid="fold marks",
+                )
+            )
     (x0, y0), (x1, y1) = reach.min(axis=0), reach.max(axis=0)
     # The colour scale right of the drawing: 0.7 of its height (as a colour bar shrunk to 0.7),
     # but never shorter than 0.45 of its width (a flat part's panel grows to take it).
@@ -499,12 +547,24 @@ def _shear_view(ax: Axes, result: DrapeResult, energy: EnergyField | None) -> No
         (x1 + 0.04 * width, middle - 0.5 * bar, 0.035 * width, bar),
         "signed shear angle γ [deg]",
     )
-    ax.set_xlim(x0, x1 + 0.3 * width)
-    ax.set_ylim(y0, y1)
+    top = ax.fit(x0, x1 + 0.3 * width, y0, y1)
     title = "Shear angle" + (" (black outline: past locking)" if energy is not None else "")
     if view.block > 1:
         title += f"\none quad per {view.block} × {view.block} cells (their largest |γ|)"
-    ax.set_title(title, y=1.0)  # y given: no search for decorations above (see _top_view)
+    # centred over the panel, 6 points above the drawing, at an axes title's size
+    fig.add_artist(
+        Annotation(
+            title,
+            (rect[0] + 0.5 * rect[2], top),
+            xycoords="figure fraction",
+            xytext=(0, 6),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize="large",
+            gid="shear title",
+        )
+    )
 
 
 def fibre_pattern_figure(
@@ -525,7 +585,7 @@ def fibre_pattern_figure(
     placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
     colour scale in degrees; with ``energy``, cells past locking are outlined and the total
     energy [J] goes into the title. It is an orthographic view from ``VIEW_ELEVATION_DEG``,
-    ``VIEW_AZIMUTH_DEG`` projected here and drawn on a plain 2D axes, the cells as one
+    ``VIEW_AZIMUTH_DEG`` projected here and drawn on the figure itself (no axes), the cells as one
     collection farthest first (``painter_order``), the box's back panes, ticks [mm] and the
     colour scale drawn with it: mplot3d's look at a fraction of its cost (benchmarks/README.md,
     section (m)). A net of more than ``SHEAR_VIEW_MAX_QUADS`` cells is drawn one quad per k × k
@@ -539,7 +599,8 @@ def fibre_pattern_figure(
     fig = new_figure(size_px)
     edge = part_edge_segments(result, part) if part is not None else None
     _top_view(fig.add_subplot(1, 2, 1), result, tow_every, edge)
-    _shear_view(fig.add_subplot(1, 2, 2), result, energy)
+    right = fig.add_gridspec(1, 2)[0, 1].get_position(fig)  # where add_subplot(1, 2, 2) goes
+    _shear_view(fig, tuple(right.bounds), result, energy)
     summary = (
         f"generator angle {np.degrees(result.generator_angle):.1f}°, "
         f"{result.nodes_placed}/{result.nodes_total} nodes placed"

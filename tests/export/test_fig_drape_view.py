@@ -105,8 +105,8 @@ def test_a_cell_hidden_behind_another_is_drawn_first(n, gap, elevation, azimuth,
     assert np.all(np.diff(depth) >= 0)
 
 
-def by_gid(ax, gid):
-    (artist,) = [a for a in ax.get_children() if a.get_gid() == gid]
+def by_gid(fig, gid):
+    (artist,) = [a for a in fig.get_children() if a.get_gid() == gid]
     return artist
 
 
@@ -116,7 +116,7 @@ def test_the_shear_cells_are_the_quads_projected_in_depth_order(make_net, make_e
     net = make_net(14, 16, dome=True, unplaced=[(0, 0)])
     energy = make_energy(net)
     fig = fibre_pattern_figure(net, energy, None, size_px=(800, 400))
-    cells = by_gid(fig.axes[1], "shear cells")
+    cells = by_gid(fig, "shear cells")
     view = shear_view_quads(net, np.asarray(net.valid), np.asarray(energy.past_locking))
     axes = view_axes(VIEW_ELEVATION_DEG, VIEW_AZIMUTH_DEG)
     depth = view.quads_mm.mean(axis=1) @ axes[2]
@@ -132,15 +132,17 @@ def test_the_panel_frames_the_net_with_round_ticks_in_mm(make_net, make_energy):
     """Each axis of the box has round ticks [mm] spanning the drawn net, and its label."""
     net = make_net(12, 12, dome=True)
     fig = fibre_pattern_figure(net, make_energy(net), None, size_px=(800, 400))
-    panel = fig.axes[1]
-    assert not panel.axison  # the frame and its ticks are drawn, not matplotlib's 2D axes
-    texts = [t.get_text() for t in panel.texts]
+    from matplotlib.text import Text
+
+    assert len(fig.axes) == 1  # the top view; the 3D view, its frame and ticks are drawn
+    panel = [a for a in fig.artists if isinstance(a, Text)]
+    texts = [t.get_text() for t in panel]
     nodes_mm = 1e3 * np.asarray(net.nodes).reshape(-1, 3)
     for a, name in enumerate("xyz"):
         assert f"{name} [mm]" in texts
         ticks = [
             float(t.get_text().replace("\N{MINUS SIGN}", "-"))
-            for t in panel.texts
+            for t in panel
             if t.get_gid() == f"{name} tick"
         ]
         lo, hi = nodes_mm[:, a].min(), nodes_mm[:, a].max()
@@ -165,11 +167,16 @@ def test_a_net_with_a_fold_draws_its_triangle_with_the_cells(make_net, make_ener
 
     net = dataclasses.replace(net, status=status)
     fig = fibre_pattern_figure(net, make_energy(net), None, size_px=(800, 400))
-    cells = by_gid(fig.axes[1], "shear cells")
+    cells = by_gid(fig, "shear cells")
     view = shear_view_quads(net, np.asarray(net.valid), None)
     assert len(cells.get_paths()) == len(view.quads_mm) + 1
     orange = [tuple(np.round(c, 3)) for c in cells.get_facecolors()]
     assert orange.count((0.878, 0.541, 0.0, 1.0)) == 1  # FOLD_COLOUR #e08a00
+    # its mark sits at the triangle's centre, seen from the view
+    from preform.export.fig_drape import fold_triangles
+
+    centre = 1e3 * fold_triangles(net).mean(axis=1) @ view_axes(30.0, -60.0)[:2].T
+    np.testing.assert_allclose(by_gid(fig, "fold marks").get_xydata(), centre)
 
 
 @settings(max_examples=30, deadline=None)
