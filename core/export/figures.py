@@ -35,6 +35,8 @@ PNG_COMPRESS_LEVEL = 1
 #: nearly halves the cost of drawing text, the largest part of a figure's drawing (section (m)).
 DRAW_RC: dict[str, Any] = {"text.hinting": "no_hinting"}
 
+#: Renderers kept per thread, one per figure size (a run draws Fig. 11 and Fig. 10 at two sizes).
+KEPT_RENDERERS = 3
 _renderers = threading.local()
 
 
@@ -69,7 +71,8 @@ def _renderer(width: int, height: int, dpi: float) -> Any:
     cache: dict[tuple[int, int, float], Any] = _renderers.__dict__.setdefault("by_size", {})
     key = (width, height, float(dpi))
     if key not in cache:
-        cache.clear()  # one size at a time: a buffer is width × height × 4 bytes
+        if len(cache) >= KEPT_RENDERERS:  # a buffer is width × height × 4 bytes
+            del cache[next(iter(cache))]
         cache[key] = RendererAgg(width, height, dpi)
     return cache[key]
 

@@ -234,3 +234,27 @@ def test_other_formats_still_go_through_matplotlib(tmp_path):
     fig.add_subplot().plot([0, 1], [1, 0])
     save_figure(fig, tmp_path / "f.svg")
     assert (tmp_path / "f.svg").read_text(encoding="utf-8").lstrip().startswith("<?xml")
+
+
+def test_the_kept_renderers_are_few_and_per_thread(tmp_path):
+    """One renderer a figure size, at most KEPT_RENDERERS of them; another thread keeps its own."""
+    import threading
+
+    sizes = [(100 + 10 * n, 80) for n in range(figures.KEPT_RENDERERS + 2)]
+    for n, size in enumerate(sizes):
+        fig = new_figure(size)
+        fig.add_subplot().plot([0, n])
+        save_figure(fig, tmp_path / f"{n}.png")
+    kept = figures._renderers.by_size
+    assert len(kept) == figures.KEPT_RENDERERS
+    assert {key[:2] for key in kept} == set(sizes[-figures.KEPT_RENDERERS :])
+    seen = []
+
+    def other() -> None:
+        save_figure(new_figure(sizes[-1]), tmp_path / "other.png")
+        seen.append(figures._renderers.by_size[(*sizes[-1], 100.0)])
+
+    thread = threading.Thread(target=other)
+    thread.start()
+    thread.join()
+    assert seen and seen[0] is not kept[(*sizes[-1], 100.0)]
