@@ -222,12 +222,13 @@ def _worker_host(case: Case) -> PluginHost:
 #: (2.0 s to import on a Dask worker). Since built-in steps, laws and architectures are
 #: registered by import path, the plugin host no longer imports their modules, so the default
 #: study's are named here too (the default study 7.3-8.8 s -> 6.4-8.6 s on 2 workers, quiet,
-#: alternated runs of ``preform pipeline run --force``).
+#: alternated runs of ``preform pipeline run --force``). Not pandas: the default study's
+#: tables are written without it (``preform.export.csv_columns``), and pandas 3 imports
+#: pyarrow's compute module (about 0.5 s) when pyarrow is installed.
 WORKER_PRELOAD = (
     "matplotlib.figure",
     "matplotlib.backends.backend_agg",
     "mpl_toolkits.mplot3d",
-    "pandas",
     "numba",
     "preform.drape.net_kernels",
     "preform.drape.generator_kernels",
@@ -239,6 +240,7 @@ WORKER_PRELOAD = (
     "preform.optimise.search_steps",
     "preform.export.fig_drape",
     "preform.export.tables",
+    "preform.export.csv_columns",
     "preform.plugins.surfaces.basic",
     "preform.plugins.woven.model",
     "preform.plugins.woven.shear",
@@ -587,11 +589,11 @@ def run_cases(
     maybe_todo = [c for c in cases if force or previous_result(c) is None]
     with _EngineSession(maybe_todo, host, engine, workers, scheduler) as session:
         # the table writers' imports, now rather than at the first finished case: a Ctrl-C
-        # that lands inside a half-done `import pandas` would leave it broken for the run
-        import pandas  # noqa: F401
+        # that lands inside a half-done import would leave the module broken for the run
+        import preform.export.csv_columns  # noqa: F401
 
         with contextlib.suppress(ImportError):
-            import pyarrow  # noqa: F401
+            import pyarrow.parquet  # noqa: F401
         return _run_in_directory(
             cases,
             out_dir,
