@@ -8,16 +8,17 @@ writes for the same values: floats as Python's shortest round-trip ``repr`` (``0
 entry) as an empty field, quoting by the csv module's minimal rule (the module pandas uses).
 Kept to that on purpose: readers, and earlier results, parse the same text.
 
-The one difference: a column of integers with a missing value keeps its integers (``32``);
-pandas turns such a column into floats (``32.0``). Both read back as the same numbers.
+Two differences: a column of integers with a missing value keeps its integers (``32``; pandas
+turns such a column into floats, ``32.0``; both read back as the same numbers), and a field
+holding a carriage return is quoted (the csv module leaves a lone "\\r" bare when lines end
+in "\\n", and readers then split the row there).
 """
 
 from __future__ import annotations
 
-import csv
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -55,32 +56,52 @@ def format_column(values: Column) -> list[str]:
         if kind == "f":
             # float64's repr is Python's shortest round-trip text, as pandas writes it;
             # tolist() gives Python floats, so the work is one C-level repr a value
-            fields = list(map(repr, flat.astype(np.float64, copy=False).tolist()))
-            for k in np.flatnonzero(np.isnan(flat)).tolist():
-                fields[k] = ""
-            return fields
+            present = ~np.isnan(flat)
+            text = np.full(flat.size, "", dtype=object)
+            text[present] = list(map(repr, flat[present].astype(np.float64, copy=False).tolist()))
+            return list(text.tolist())
         if kind in "iub":
             return list(map(str, flat.tolist()))
         return [format_value(v) for v in flat.tolist()]
     return [format_value(v) for v in values]
 
 
-def csv_text_rows(columns: Mapping[str, Column]) -> Iterable[Sequence[str]]:
-    """The header, then one row of fields per row of ``columns`` (all of one length)."""
-    fields = [format_column(values) for values in columns.values()]
+def quoted(field: str) -> str:
+    """``field`` as the csv module's minimal quoting writes it: in double quotes, its quotes
+    doubled, when it holds a comma, a quote or a line break ("\\r" too: module docstring)."""
+    if "," in field or '"' in field or "\n" in field or "\r" in field:
+        return '"' + field.replace('"', '""') + '"'
+    return field
+
+
+def csv_text(columns: Mapping[str, Column]) -> str:
+    """The CSV text of ``columns`` (all of one length): a header, then one line a row.
+
+    Joined here rather than by ``csv.writer`` (4x slower on a cells table): only text columns
+    can need quotes, so only they go through ``quoted``."""
+    fields = []
+    for values in columns.values():
+        column = format_column(values)
+        numeric = isinstance(values, np.ndarray) and values.dtype.kind in "fiub"
+        fields.append(column if numeric else [quoted(f) for f in column])
     lengths = {len(f) for f in fields}
     if len(lengths) > 1:
         sizes = ", ".join(f"{name}: {len(f)}" for name, f in zip(columns, fields, strict=True))
         raise ValueError(f"the columns of a table must have one length; got {sizes}")
-    yield list(columns)
-    yield from zip(*fields, strict=True)
+    header = ",".join(quoted(str(name)) for name in columns)
+    if len(fields) == 1:  # the csv module writes a lone empty field as "" (else a blank line)
+        fields = [['""' if f == "" else f for f in fields[0]]]
+        header = header or '""'
+    lines = [header, *map(",".join, zip(*fields, strict=True))]
+    return "\n".join(lines) + "\n"
 
 
 def write_csv_columns(columns: Mapping[str, Column], path: str | os.PathLike[str]) -> None:
     """Write ``columns`` (name -> values, in column order) to ``path`` as CSV with a header,
     atomically (a reader never sees half a file), "\\n" line ends."""
+    text = csv_text(columns)
     with atomic_open(path, "w", encoding="utf-8") as handle:
-        csv.writer(handle, lineterminator="\n").writerows(csv_text_rows(columns))
+        handle.write(text)
 
 
 def rows_to_columns(rows: Sequence[Mapping[str, Any]]) -> dict[str, list[Any]]:
