@@ -223,6 +223,22 @@ class ShearedCell:
         }
 
 
+def thickness_per_angle(
+    sheared_cell: Callable[[float], ShearedCell | None], shear: ArrayLike
+) -> FloatArray | None:
+    """Thickness [m] of ``sheared_cell(γ)`` at each shear angle γ [rad], one cell per angle;
+    None when the architecture has no sheared cell. (An architecture whose stack takes every
+    angle in one pass says so by its own ``FabricBase.sheared_thickness``.)"""
+    angles = np.asarray(shear, dtype=float)
+    thickness = np.empty(angles.shape)
+    for index, gamma in np.ndenumerate(angles):
+        cell = sheared_cell(float(gamma))
+        if cell is None:
+            return None
+        thickness[index] = cell.thickness
+    return thickness
+
+
 def sheared_paths(cell: UnitCell, stretch: FloatArray, z_shift: float = 0.0) -> UnitCell:
     """``cell`` with every point's (x, y) mapped by ``stretch`` (2, 2) and z moved by
     ``z_shift`` [m]; the period vectors are mapped too, so tiling still joins up."""

@@ -18,7 +18,7 @@ from pydantic import Field, field_validator
 
 from preform.geometry.fibres import FIBRES, fibre
 from preform.geometry.sheared_cell import ShearedCell
-from preform.geometry.unit_cell import UnitCell
+from preform.geometry.unit_cell import FloatArray, UnitCell
 from preform.material import (
     FILAMENT_DIAMETER,
     TOW_HEIGHT,
@@ -318,6 +318,18 @@ class WarpKnitFabric(FabricBase):
             loc, message = problems[0]
             raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
         return sheared_warp_knit_cell(self.geometry, shear_rad, self.reference_direction_deg())
+
+    def sheared_thickness(self, shear_rad: FloatArray) -> FloatArray:
+        """Thickness [m] of the sheared cell at each angle [rad] of an array, every angle's
+        stack in one pass (``sheared_stack``, the same stack ``sheared_cell`` builds); raises
+        ValueError on an entry with errors."""
+        from preform.plugins.warpknit.sheared_cell import sheared_stack
+
+        problems = self.errors()
+        if problems:
+            loc, message = problems[0]
+            raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
+        return sheared_stack(self.geometry, shear_rad, self.reference_direction_deg())[2]
 
     def derived(self) -> dict[str, Any]:
         """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow
