@@ -6,6 +6,11 @@ its sheared unit cell tabulated over |γ|), cold (first time in the process) and
 memory). The ratio thickness/drape says what an output that needs a thickness (cells.csv, the
 VTU, the FE exports) adds to a case. Best of ``--repeat`` runs (the machine may be shared).
 
+Then the table itself (``PreformResponse.from_fabric``) against the table as it was before
+issue 15h (``thickness_baseline.table``: one rebuilt cell per grid angle), alternated in the same
+process: their times, the speed-up, and the largest relative difference of the thickness and
+of the fibre fraction over the grid (0 when every value is bit-for-bit the old one).
+
     python benchmarks/bench_thickness.py [--repeat 3] [--fabrics NAME ...]
 """
 
@@ -14,8 +19,12 @@ from __future__ import annotations
 import argparse
 import time
 
+import numpy as np
+import thickness_baseline
+
 from preform import api
 from preform.drape import thickness
+from preform.drape.preform_fields import PreformResponse
 
 
 def best(call, repeat: int) -> float:  # type: ignore[no-untyped-def]
@@ -50,6 +59,33 @@ def main() -> None:
         print(
             f"{name:<22}{model[:19]:<20}{drape_s:>9.3f}{cold_s:>9.3f}{warm_s:>9.4f}"
             f"{cold_s / drape_s:>12.2f}"
+        )
+    table_against_baseline(library, names, args.repeat)
+
+
+def table_against_baseline(library, names: list[str], repeat: int) -> None:  # type: ignore[no-untyped-def]
+    print()
+    print(
+        f"{'fabric':<22}{'angles':>7}{'before s':>10}{'now s':>9}{'speed-up':>10}"
+        f"{'thickness Δ':>13}{'fraction Δ':>12}"
+    )
+    for name in names:
+        fabric = api.fabric(name, library)
+        before, now = [], []
+        for _ in range(repeat):  # alternated: the same load on both
+            start = time.perf_counter()
+            grid, t_old, v_old = thickness_baseline.table(fabric)
+            before.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            response = PreformResponse.from_fabric(fabric)
+            now.append(time.perf_counter() - start)
+        assert response is not None and np.array_equal(grid, response.shear)
+        d_t = float(np.max(np.abs(response.thickness / t_old - 1.0)))
+        d_v = float(np.max(np.abs(response.fibre_volume_fraction / v_old - 1.0)))
+        locked = int(np.count_nonzero(grid >= response.locking_angle))
+        print(
+            f"{name:<22}{locked:>7}{min(before):>10.4f}{min(now):>9.4f}"
+            f"{min(before) / min(now):>10.0f}{d_t:>13.1e}{d_v:>12.1e}"
         )
 
 
