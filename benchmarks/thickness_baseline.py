@@ -5,15 +5,20 @@ A frozen copy, reachable only from the benchmarks (never imported by preform or 
 ``PreformResponse.from_fabric``'s table built from one ``fabric.sheared_cell(γ)`` per grid angle
 from the locking angle on, each woven cell rebuilt with its tows' heights at γ and its thickness
 the envelope of its tow polylines (``tow_points`` per tow, the column stacks recomputed per
-cell), each warp-knit cell rebuilt likewise with its stack summed. Only the thickness and the
-fibre fraction of each angle are kept (what the table reads); the tow families, their states and
-the fabric's own checks per angle are today's code, called as the old path called them.
+cell), each warp-knit cell rebuilt likewise with its stack summed, and each tow's jamming
+fraction found by bisection (one bundle-law call per halving; kept per process as today's is).
+Only the thickness and the fibre fraction of each angle are kept (what the table reads); the
+tow families, their states and the fabric's own checks per angle are today's code, called as
+the old path called them, with the old jamming fraction swapped in while ``table`` runs.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+from collections.abc import Iterator
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -23,9 +28,52 @@ from preform.geometry.sheared_cell import MAX_SHEAR, check_shear
 from preform.plugins.warpknit import sheared_cell as warp_knit_module
 from preform.plugins.warpknit.geometry import WarpKnitGeometry
 from preform.plugins.woven import sheared_cell as woven_module
+from preform.plugins.woven.compaction import BundleCompaction
 from preform.plugins.woven.geometry import Family, TowKey, TowType, WovenUnitCell
+from preform.plugins.woven.tow_jamming import TowCompaction
 
 FloatArray = NDArray[np.float64]
+
+
+@lru_cache(maxsize=256)
+def jamming_fraction(
+    initial_fraction: float, fibre_modulus_Pa: float, settings: TowCompaction | None = None
+) -> float:
+    """The old V_j: bisection of σ_b(V) = p, one bundle-law call per halving."""
+    s = settings or TowCompaction()
+    cap = s.max_fraction * (1.0 - s.packing_margin)
+    if not 0.0 < initial_fraction < cap:
+        raise ValueError(f"as-built fibre fraction {initial_fraction:.3f} not below {cap:.3f}")
+    bundle = BundleCompaction(
+        fibre_modulus=fibre_modulus_Pa,
+        span_to_height=s.fibre_wave_ratio,
+        initial_fraction=initial_fraction,
+        onset_fraction=initial_fraction,
+        max_fraction=s.max_fraction,
+        packing_margin=s.packing_margin,
+    )
+    cap = bundle.cap_fraction
+    if float(bundle.stress(np.asarray(cap))) <= s.confining_pressure_Pa:
+        return float(cap)
+    lo, hi = initial_fraction, cap
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        if float(bundle.stress(np.asarray(mid))) < s.confining_pressure_Pa:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@contextlib.contextmanager
+def old_jamming() -> Iterator[None]:
+    """The old jamming fraction in both architectures' tow families for a ``with`` block."""
+    saved = woven_module.jamming_fraction, warp_knit_module.jamming_fraction
+    woven_module.jamming_fraction = warp_knit_module.jamming_fraction = jamming_fraction
+    try:
+        yield
+    finally:
+        woven_module.jamming_fraction, warp_knit_module.jamming_fraction = saved
 
 
 def _heights_z(cell: WovenUnitCell) -> dict[tuple[int, int, int], float]:
@@ -164,6 +212,11 @@ def cell_at(fabric: Any, gamma: float) -> tuple[float, float]:
 
 def table(fabric: Any, step_deg: float = 0.25) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The old ``PreformResponse.from_fabric``: |γ| grid [rad], thickness [m], fraction [-]."""
+    with old_jamming():
+        return _table(fabric, step_deg)
+
+
+def _table(fabric: Any, step_deg: float) -> tuple[FloatArray, FloatArray, FloatArray]:
     flat = fabric.sheared_cell(0.0)
     grid = np.radians(np.arange(0.0, math.degrees(MAX_SHEAR), step_deg))
     marks = [flat.locking_angle, flat.jamming_angle, MAX_SHEAR]

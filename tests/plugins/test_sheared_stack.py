@@ -1,6 +1,7 @@
 """The sheared cell's stack over a whole grid of angles in one pass (issue 15h) against the cell
 rebuilt one angle at a time, written here: the preform's table (``PreformResponse``) and
-``FabricBase.sheared_thickness`` must be what ``sheared_cell(γ)`` gives at every angle."""
+``FabricBase.sheared_thickness`` must be what ``sheared_cell(γ)`` gives at every angle. And the
+tows' jamming fraction, bracketed many fractions per bundle-law call, against a bisection."""
 
 from __future__ import annotations
 
@@ -19,7 +20,9 @@ from preform.api import load_library
 from preform.drape.preform_fields import PreformResponse
 from preform.geometry.sheared_cell import MAX_SHEAR
 from preform.plugins.warpknit.sheared_cell import sheared_stack as warp_knit_stack
+from preform.plugins.woven.compaction import SQUARE_PACKING, BundleCompaction
 from preform.plugins.woven.sheared_cell import sheared_stack as woven_stack
+from preform.plugins.woven.tow_jamming import TowCompaction, jamming_fraction
 
 #: Table against cell: the same arithmetic on arrays and on one angle (measured: equal bits).
 RTOL = 1e-12
@@ -199,3 +202,47 @@ def test_a_grid_with_an_angle_past_89_degrees_is_refused_in_words(bad: float) ->
         woven_stack(woven.woven_unit_cell, gammas)
     with pytest.raises(ValueError, match="outside ±89°"):
         warp_knit_stack(warp_knit.geometry, gammas, warp_knit.reference_direction_deg())
+
+
+def bisected_jamming_fraction(v0: float, modulus: float, settings: TowCompaction) -> float:
+    """Second implementation: σ_b(V) = p by plain bisection, one bundle-law call per halving
+    (the method before issue 15h)."""
+    bundle = BundleCompaction(
+        modulus,
+        settings.fibre_wave_ratio,
+        v0,
+        v0,
+        settings.max_fraction,
+        packing_margin=settings.packing_margin,
+    )
+    lo, hi = v0, bundle.cap_fraction
+    if float(bundle.stress(np.asarray(hi))) <= settings.confining_pressure_Pa:
+        return hi
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        if float(bundle.stress(np.asarray(mid))) < settings.confining_pressure_Pa:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    v0=st.floats(0.05, 0.75),
+    modulus_GPa=st.floats(3.0, 500.0),
+    pressure=st.floats(1e2, 1e8),
+)
+def test_jamming_fraction_is_resolved_to_neighbouring_floats_as_a_bisection_finds_it(
+    v0: float, modulus_GPa: float, pressure: float
+) -> None:
+    compaction = TowCompaction(confining_pressure_Pa=pressure)
+    vj = jamming_fraction(v0, modulus_GPa * 1e9, compaction)
+    bundle = BundleCompaction(modulus_GPa * 1e9, 30.0, v0, v0, SQUARE_PACKING, packing_margin=1e-2)
+    if vj < bundle.cap_fraction:
+        # the root is bracketed by vj and the next float above it
+        assert float(bundle.stress(np.asarray(vj))) < pressure
+        above = np.nextafter(vj, 1.0)
+        assert float(bundle.stress(np.asarray(above))) >= pressure
+    expected = bisected_jamming_fraction(v0, modulus_GPa * 1e9, compaction)
+    assert vj == pytest.approx(expected, rel=1e-15, abs=0.0)
