@@ -56,11 +56,15 @@ def pin_jointed_stretch(gamma: float, reference_direction: float) -> FloatArray:
     return np.asarray(along * np.outer(b, b) + across * np.outer(n, n), dtype=float)
 
 
-def check_shear(gamma: float) -> None:
-    """Refuse a shear angle the cell cannot take, in words."""
-    if not math.isfinite(gamma) or abs(gamma) > MAX_SHEAR:
+def check_shear(gamma: ArrayLike) -> None:
+    """Refuse a shear angle [rad] the cell cannot take, in words; for an array of angles, the
+    first such angle."""
+    angles = np.asarray(gamma, dtype=float)
+    refused = ~(np.abs(angles) <= MAX_SHEAR)  # NaN compares False: refused too
+    if refused.any():
+        first = float(angles[refused].flat[0])
         raise ValueError(
-            f"shear angle {math.degrees(gamma):g}° is outside ±{math.degrees(MAX_SHEAR):g}°: "
+            f"shear angle {math.degrees(first):g}° is outside ±{math.degrees(MAX_SHEAR):g}°: "
             "a pin-jointed cell has no area at 90°"
         )
 

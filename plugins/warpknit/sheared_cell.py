@@ -95,9 +95,7 @@ def sheared_stack(
     about ``reference_deg`` [deg] and the stack's thickness [m] (arrays shaped like γ): every
     angle in one pass (``WarpKnitGeometry.stack_thickness``)."""
     g = np.asarray(gamma, dtype=float)
-    if g.size:
-        for extreme in (np.min(g), np.max(g)):  # NaN propagates to both
-            check_shear(float(extreme))
+    check_shear(g)
     families = tow_families(geo, reference_deg, compaction)
     states = tuple(f.state(g) for f in families)
     thickness = geo.stack_thickness([s.height for s in states])
@@ -112,7 +110,6 @@ def sheared_warp_knit_cell(
 ) -> ShearedCell:
     """The warp-knit cell at shear angle ``gamma`` [rad] about ``reference_deg`` [deg]: the
     stack of ``sheared_stack`` at that one angle, and the cell it draws on demand."""
-    check_shear(gamma)
     families, states, thickness = sheared_stack(geo, gamma, reference_deg, compaction)
     # Fibre volume per period: each layer's tows fill the period's area at their spacing, so
     # fibre area × (area / spacing) is the layer's fibre area times its tow length per period.

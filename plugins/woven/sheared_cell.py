@@ -82,9 +82,7 @@ def sheared_stack(
     angle in one pass, the tows' heights arrays over γ (``WovenUnitCell.stack_thickness``).
     Only the heights move the stack: the widths narrow in the plane."""
     g = np.asarray(gamma, dtype=float)
-    if g.size:
-        for extreme in (np.min(g), np.max(g)):  # NaN propagates to both
-            check_shear(float(extreme))
+    check_shear(g)
     families = tow_families(cell, compaction)
     states = {name: fam.state(g) for name, fam in families.items()}
     thickness = cell.stack_thickness(
@@ -98,7 +96,6 @@ def sheared_woven_cell(
 ) -> ShearedCell:
     """The woven cell at shear angle ``gamma`` [rad] (both senses; |γ| ≤ 89°): the stack of
     ``sheared_stack`` at that one angle, and the cell it draws on demand."""
-    check_shear(gamma)
     stack = sheared_stack(cell, gamma, compaction)
     families, states = stack.families, stack.states
 
