@@ -355,6 +355,11 @@ def _box_frame(ax: _Panel, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> 
     on_screen = span * np.hypot(view[0], view[1])
     bins = np.clip(np.round(8 * on_screen / on_screen.max()), 2, 6).astype(int)
     ticks = [_nice_ticks(lo[a], hi[a], int(bins[a])) for a in range(3)]
+    for a in range(3):
+        if on_screen[a] < 0.1 * on_screen.max() and len(ticks[a]) > 1:
+            # an edge seen nearly end-on (a flat net's z): one tick, its labels would overlap
+            middle = 0.5 * (lo[a] + hi[a])
+            ticks[a] = ticks[a][[int(np.argmin(np.abs(ticks[a] - middle)))]]
     # The pane of axis a lies on the side of the box away from the viewer.
     back = np.where(towards > 0, lo, hi)
     front = np.where(towards > 0, hi, lo)

@@ -258,3 +258,12 @@ def test_the_kept_renderers_are_few_and_per_thread(tmp_path):
     thread.start()
     thread.join()
     assert seen and seen[0] is not kept[(*sizes[-1], 100.0)]
+
+
+def test_a_flat_nets_z_edge_gets_one_tick(make_net):
+    """Seen nearly end-on, the z edge of a flat net's box has one tick, at z = 0."""
+    from matplotlib.text import Text
+
+    fig = fibre_pattern_figure(make_net(6, 6, generator_angle_deg=70.0), None, None)
+    z_ticks = [a.get_text() for a in fig.artists if isinstance(a, Text) and a.get_gid() == "z tick"]
+    assert z_ticks == ["0"]
