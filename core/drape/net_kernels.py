@@ -76,6 +76,9 @@ def _row(array: FloatArray, i: int) -> Vec:
     return array[i, 0], array[i, 1], array[i, 2]
 
 
+#: Machine epsilon.
+_EPS = float(np.finfo(float).eps)
+
 #: Most parameters a kind of compiled surface may take (``compiled_surface``).
 MAX_PARAMS = 16
 
@@ -208,18 +211,30 @@ def _circle_frame(a: Vec, b: Vec, c: Vec, guess: Vec, n0: Vec, spacing: float):
     """The frame of the node at chord ``spacing`` from a and b, away from c: the circle
     P(φ) = M + r(cos φ·a1 + sin φ·a2), a1 the surface normal ``n0`` (at ``guess``, the closest
     point to a + b − c) seen from the chord, a2 pointing away from c, as the tuple (M, a1, a2,
-    r) (``FRAME`` numbers). Returns (the starting angle φ of ``guess``, or NaN when there is
-    no circle (|AB| ≥ 2d or a degenerate frame); the frame)."""
+    r) (``FRAME`` numbers). Returns (cos φ, sin φ of the starting angle, both NaN when there
+    is no circle (|AB| ≥ 2d or a degenerate frame); the frame).
+
+    The start is where the circle crosses the tangent plane at ``guess`` on the side away
+    from c. On a pin-jointed net (a Chebyshev net: ∂²r/∂u∂v is normal to the surface) the
+    node differs from the parallelogram point a + b − c by a mostly normal offset, so the
+    guess is within O(d³) of it along the surface and the crossing within O(d⁶) of the
+    surface: the first point on the circle is the node, with no Newton step, on smooth tools
+    at the usual spacings (the sphere at 145² and finer: every node). Where the circle misses
+    that plane (|cos φ| > 1, a tangency or an edge of the tool) the start is the guess's
+    direction from M in the circle's plane instead, φ kept in [0, π]."""
     mx, my, mz = 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])
     ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
     half2 = 0.25 * (ex * ex + ey * ey + ez * ez)
     radius2 = spacing * spacing - half2
-    e_len = math.sqrt(4.0 * half2)
-    ex, ey, ez = ex / e_len, ey / e_len, ez / e_len
+    # one division and three products per unit vector (the divisions and square roots bound
+    # the fill; a product by the reciprocal differs from the quotient by an ulp at most)
+    inv_e = 1.0 / math.sqrt(4.0 * half2)
+    ex, ey, ez = ex * inv_e, ey * inv_e, ez * inv_e
     along = n0[0] * ex + n0[1] * ey + n0[2] * ez
     a1x, a1y, a1z = n0[0] - along * ex, n0[1] - along * ey, n0[2] - along * ez
-    a1_len = math.sqrt(a1x * a1x + a1y * a1y + a1z * a1z)
-    a1x, a1y, a1z = a1x / a1_len, a1y / a1_len, a1z / a1_len
+    a1_len2 = a1x * a1x + a1y * a1y + a1z * a1z
+    inv_a1 = 1.0 / math.sqrt(a1_len2)
+    a1x, a1y, a1z = a1x * inv_a1, a1y * inv_a1, a1z * inv_a1
     a2x = ey * a1z - ez * a1y
     a2y = ez * a1x - ex * a1z
     a2z = ex * a1y - ey * a1x
@@ -228,11 +243,23 @@ def _circle_frame(a: Vec, b: Vec, c: Vec, guess: Vec, n0: Vec, spacing: float):
     radius = math.sqrt(max(radius2, 0.0))
     frame = (mx, my, mz, a1x, a1y, a1z, a2x, a2y, a2z, radius)
     rx, ry, rz = guess[0] - mx, guess[1] - my, guess[2] - mz
-    phi = math.atan2(rx * a2x + ry * a2y + rz * a2z, rx * a1x + ry * a1y + rz * a1z)
-    phi = min(max(phi, 0.0), math.pi)
-    if not (radius2 > 0.0 and math.isfinite(a1x) and math.isfinite(phi)):
-        return np.nan, frame
-    return phi, frame
+    # (P(φ) − guess)·n0 = 0 with a2·n0 = 0 and a1·n0 = |n0 − (n0·e)e| (unit n0 or not):
+    # cos φ = (guess − M)·n0 / (r |n0 − (n0·e)e|), sin φ ≥ 0 (the side away from c)
+    cos_p = (rx * n0[0] + ry * n0[1] + rz * n0[2]) / math.sqrt(radius2 * a1_len2)
+    if abs(cos_p) <= 1.0:
+        sin_p = math.sqrt(1.0 - cos_p * cos_p)
+    else:
+        along_a1 = rx * a1x + ry * a1y + rz * a1z
+        along_a2 = rx * a2x + ry * a2y + rz * a2z
+        length = math.sqrt(along_a1 * along_a1 + along_a2 * along_a2)
+        if along_a2 < 0.0 or length == 0.0:
+            cos_p, sin_p = 1.0, 0.0
+        else:
+            inv_length = 1.0 / length
+            cos_p, sin_p = along_a1 * inv_length, along_a2 * inv_length
+    if not (radius2 > 0.0 and math.isfinite(a1x) and math.isfinite(cos_p)):
+        return np.nan, np.nan, frame
+    return cos_p, sin_p, frame
 
 
 @_per_node
@@ -244,8 +271,8 @@ def _frame_row(frames: FloatArray, i: int):
 
 @_per_node
 def _on_circle(frame, cos_p: float, sin_p: float) -> Vec:
-    """P(φ) [m] of a frame, given cos φ and sin φ (computed once per step: the Newton update
-    at the same φ needs them too)."""
+    """P(φ) [m] of a frame, given cos φ and sin φ (the angle is carried as this unit vector,
+    see ``_newton_update``)."""
     r = frame[9]
     return (
         frame[0] + r * (cos_p * frame[3] + sin_p * frame[6]),
@@ -261,7 +288,6 @@ _GOING, _DONE, _FAILED_OFF_TOOL, _FAILED = 0, 1, 2, 3
 @_per_node
 def _newton_update(
     frame,
-    phi: float,
     cos_p: float,
     sin_p: float,
     x: float,
@@ -277,58 +303,77 @@ def _newton_update(
     tolerance_m: float,
     last_try: bool,
 ):
-    """One damped Newton step in φ on the signed distance g(φ) = (P(φ) − foot)·n from the
-    surface, given cos φ, sin φ, the closest point ``foot`` of P(φ) = (x, y, z), its normal and
-    distance. Returns (new φ, outcome)."""
+    """One damped Newton step on the signed distance g = (P − foot)·n from the surface along
+    the circle, given the angle as (cos φ, sin φ), the closest point ``foot`` of P(φ) =
+    (x, y, z), its normal and distance. Returns (new cos φ, new sin φ, outcome).
+
+    The step is Newton's in t = tan(Δφ/2), the half-angle tangent of the turn from φ: the turn
+    by cos Δφ = (1 − t²)/(1 + t²), sin Δφ = 2t/(1 + t²) keeps the point on the circle with one
+    division and no sine or cosine, and since dφ/dt = 2 at t = 0 the step t = −g/(2 g'(φ)) is
+    half the step in φ and converges as fast. Damped to |Δφ| ≤ 2·atan(0.25) ≈ 0.49 rad (|t| ≤
+    0.25, the step in φ clamped to ±0.5 rad); φ stays in [0, π] (sin φ ≥ 0, the side away
+    from the opposite node)."""
     if dist <= tolerance_m:
-        return phi, _DONE
+        return cos_p, sin_p, _DONE
     ox, oy, oz = x - fx, y - fy, z - fz
     g = ox * nx + oy * ny + oz * nz
     r = frame[9]
     n_a1 = nx * frame[3] + ny * frame[4] + nz * frame[5]
     n_a2 = nx * frame[6] + ny * frame[7] + nz * frame[8]
-    slope = r * (-sin_p * n_a1 + cos_p * n_a2)
+    slope = r * (-sin_p * n_a1 + cos_p * n_a2)  # g'(φ)
     step = -g / slope
     if math.isnan(step):
         step = 0.0
     step = min(max(step, -0.5), 0.5)
-    new_phi = min(max(phi + step, 0.0), math.pi)
-    stuck = abs(new_phi - phi) <= 1e-15 * math.pi
+    t = 0.5 * step
+    w = 1.0 / (1.0 + t * t)
+    cos_t, sin_t = (1.0 - t * t) * w, 2.0 * t * w
+    new_cos = cos_p * cos_t - sin_p * sin_t
+    new_sin = sin_p * cos_t + cos_p * sin_t
+    # Stuck: the turn is below 1e-15·π rad, or g is zero to its rounding (the offset from the
+    # foot is tangential: past an edge of the tool, where Newton then only turns by rounding
+    # noise); past φ = 0 or φ = π (|Δφ| < π/2) the point stops there, stuck if it was there.
+    noise = 8.0 * _EPS * (abs(x) + abs(y) + abs(z) + abs(fx) + abs(fy) + abs(fz))
+    stuck = abs(step) <= 1e-15 * math.pi or abs(g) <= noise
+    if new_sin < 0.0:
+        new_cos, new_sin = (1.0 if new_cos > 0.0 else -1.0), 0.0
+        stuck = sin_p <= 1e-15 * math.pi
     if not (stuck or last_try):
-        return new_phi, _GOING
+        return new_cos, new_sin, _GOING
     # A point whose closest point is an edge of the tool has an offset with a tangential
     # part; an interior closest point has a purely normal one.
     tx, ty, tz = ox - g * nx, oy - g * ny, oz - g * nz
     if math.sqrt(tx * tx + ty * ty + tz * tz) > 0.5 * dist:
-        return new_phi, _FAILED_OFF_TOOL
-    return new_phi, _FAILED
+        return new_cos, new_sin, _FAILED_OFF_TOOL
+    return new_cos, new_sin, _FAILED
 
 
 @_jit
 def circle_frames(
     a: FloatArray, b: FloatArray, c: FloatArray, guess: FloatArray, n0: FloatArray, spacing: float
 ):
-    """Frames (m, FRAME) and starting angles φ (m,) [rad] of m nodes (NaN: no circle)."""
+    """Frames (m, FRAME) and starting angles (m, 2) as (cos φ, sin φ) of m nodes (NaN: no
+    circle)."""
     m = a.shape[0]
     frames = np.empty((m, FRAME))
-    phi = np.empty(m)
+    angle = np.empty((m, 2))
     for i in range(m):
-        phi[i], f = _circle_frame(
+        angle[i, 0], angle[i, 1], f = _circle_frame(
             _row(a, i), _row(b, i), _row(c, i), _row(guess, i), _row(n0, i), spacing
         )
         frames[i, 0], frames[i, 1], frames[i, 2], frames[i, 3], frames[i, 4] = f[:5]
         frames[i, 5], frames[i, 6], frames[i, 7], frames[i, 8], frames[i, 9] = f[5:]
-    return frames, phi
+    return frames, angle
 
 
 @_jit
-def circle_points(frames: FloatArray, phi: FloatArray, rows: IntArray) -> FloatArray:
-    """P(φ) (len(rows), 3) [m] of the nodes ``rows``."""
+def circle_points(frames: FloatArray, angle: FloatArray, rows: IntArray) -> FloatArray:
+    """P(φ) (len(rows), 3) [m] of the nodes ``rows``, their angles as (cos φ, sin φ)."""
     out = np.empty((rows.shape[0], 3))
     for k in range(rows.shape[0]):
         i = rows[k]
         out[k, 0], out[k, 1], out[k, 2] = _on_circle(
-            _frame_row(frames, i), math.cos(phi[i]), math.sin(phi[i])
+            _frame_row(frames, i), angle[i, 0], angle[i, 1]
         )
     return out
 
@@ -341,23 +386,23 @@ def newton_updates(
     normal: FloatArray,
     dist: FloatArray,
     frames: FloatArray,
-    phi: FloatArray,
+    angle: FloatArray,
     points: FloatArray,
     status: StatusArray,
     tolerance_m: float,
     last_try: bool,
 ) -> IntArray:
     """One Newton update of the nodes ``rows`` (their P(φ) ``x``, closest points, normals and
-    distances given); writes placed ``points`` and ``status`` and returns the rows still going."""
+    distances given; their angles (cos φ, sin φ) updated in ``angle``); writes placed
+    ``points`` and ``status`` and returns the rows still going."""
     going = np.empty(rows.shape[0], dtype=np.int64)
     count = 0
     for k in range(rows.shape[0]):
         i = rows[k]
-        new_phi, outcome = _newton_update(
+        angle[i, 0], angle[i, 1], outcome = _newton_update(
             _frame_row(frames, i),
-            phi[i],
-            math.cos(phi[i]),
-            math.sin(phi[i]),
+            angle[i, 0],
+            angle[i, 1],
             x[k, 0],
             x[k, 1],
             x[k, 2],
@@ -371,7 +416,6 @@ def newton_updates(
             tolerance_m,
             last_try,
         )
-        phi[i] = new_phi
         if outcome == _DONE:
             points[i, 0], points[i, 1], points[i, 2] = x[k, 0], x[k, 1], x[k, 2]
             status[i] = _PLACED
@@ -400,16 +444,15 @@ def _newton_node(
     gx, gy, gz, n0x, n0y, n0z, _ = _query(
         kind, params, a[0] + b[0] - c[0], a[1] + b[1] - c[1], a[2] + b[2] - c[2]
     )
-    phi, frame = _circle_frame(a, b, c, (gx, gy, gz), (n0x, n0y, n0z), spacing)
+    cos_p, sin_p, frame = _circle_frame(a, b, c, (gx, gy, gz), (n0x, n0y, n0z), spacing)
     nan = np.nan
-    if math.isnan(phi):
+    if math.isnan(cos_p):
         return nan, nan, nan, _NO_INTERSECTION, 0, nan, nan, nan, nan
     for used in range(1, max_iterations + 1):
-        cos_p, sin_p = math.cos(phi), math.sin(phi)
         x, y, z = _on_circle(frame, cos_p, sin_p)
         fx, fy, fz, nx, ny, nz, dist = _query(kind, params, x, y, z)
-        phi, outcome = _newton_update(
-            frame, phi, cos_p, sin_p, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m,
+        cos_p, sin_p, outcome = _newton_update(
+            frame, cos_p, sin_p, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m,
             used == max_iterations,
         )  # fmt: skip
         if outcome == _DONE:
