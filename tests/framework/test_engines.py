@@ -9,6 +9,7 @@ first case.
 from __future__ import annotations
 
 import multiprocessing
+import subprocess
 import sys
 import textwrap
 from pathlib import Path
@@ -16,8 +17,9 @@ from typing import Any
 
 import pytest
 
-from preform.pipeline import engines, runner
+from preform.pipeline import engines
 from preform.pipeline.engines import ProcessEngine, open_engine
+from preform.pipeline.preload import WORKER_PRELOAD, worker_preload
 
 # Test modules are imported by path (--import-mode=importlib): what workers run lives in a
 # module written to a folder that only this test puts on sys.path.
@@ -90,11 +92,23 @@ def test_the_warm_up_runs_once_per_worker_before_its_first_case(probe):
 
 
 def test_the_runner_asks_for_its_own_modules_and_the_lazy_libraries():
-    preload = runner.worker_preload()
-    assert "preform.pipeline.runner" in preload
-    own = preload[: -len(runner.WORKER_PRELOAD)]
-    assert preload[len(own) :] == runner.WORKER_PRELOAD
+    preload = worker_preload()
+    assert "preform.pipeline.runner" in WORKER_PRELOAD
+    own = preload[: -len(WORKER_PRELOAD)]
+    assert preload[len(own) :] == WORKER_PRELOAD
     assert all(m == "preform" or m.startswith("preform.") for m in own)
+
+
+def test_the_fork_server_starts_before_the_command_imports_numpy_or_pydantic():
+    """`preform pipeline run` starts the server first, so its imports overlap the command's
+    own (scene and summary models, library): the module doing it imports neither."""
+    code = (
+        "import sys; import preform.cli, preform.pipeline.preload; "
+        "print(sorted({'numpy', 'pydantic'} & set(sys.modules)))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
 
 
 @pytest.mark.skipif(
@@ -123,7 +137,7 @@ def test_every_preform_module_the_workers_preload_exists():
     its import in its first case again."""
     import importlib
 
-    own = [m for m in runner.WORKER_PRELOAD if m.startswith("preform.")]
+    own = [m for m in WORKER_PRELOAD if m.startswith("preform.")]
     assert own, "the workers preload none of preform's modules"
     for module in own:
         importlib.import_module(module)
