@@ -571,3 +571,26 @@ def test_newton_placement_holds_its_equations_at_any_net(
     assert error.size > 0
     assert np.max(error) <= 1e-9 * d
     assert np.all(side_of_c < 0.0)
+
+
+def test_newton_start_is_the_node_on_a_fine_net() -> None:
+    """Where the constraint circle crosses the guess's tangent plane is the node to within
+    the tolerance on a fine net (the start's error is O(d⁶), see ``_circle_frame``): every
+    node of a 145² hemisphere net, rim nodes included (they fail as OFF_TOOL at their first
+    point), takes one pass; at 21² the same start still needs Newton steps."""
+
+    def newton_passes(n: int) -> object:
+        d = 2.0 / (n - 1) * (1 - 1e-12)
+        net = drape(
+            Hemisphere(1.0),
+            start_xy_m=(0.0, 0.0),
+            node_spacing_m=d,
+            ply=PlyOutline.rectangle(((n - 1) * d, (n - 1) * d)),
+            use_closed_form=False,
+        )
+        assert NodeStatus.OFF_TOOL in net.status
+        return net.info["newton_iterations_max"]
+
+    # the fill reports the most passes over a front plus the pass that finds none left
+    assert newton_passes(145) == 2
+    assert newton_passes(21) > 2
