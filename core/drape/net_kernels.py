@@ -340,7 +340,7 @@ def _newton_update(
     if new_p2 < 0.0:
         r = frame[9]
         new_p1, new_p2 = (r if new_p1 > 0.0 else -r), 0.0
-        stuck = p2 <= 1e-15 * math.pi * r
+        stuck = p2 <= 1e-15 * math.pi * r or abs(g) <= noise
     if not (stuck or last_try):
         return new_p1, new_p2, _GOING
     # A point whose closest point is an edge of the tool has an offset with a tangential
