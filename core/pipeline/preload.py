@@ -9,7 +9,7 @@ before it imports anything else.
 
 from __future__ import annotations
 
-from preform.pipeline.engines import start_fork_server
+from preform.pipeline.engines import start_fork_server, stop_fork_server
 
 #: Libraries the default study's steps import when they first run (its figures and cells.csv):
 #: a process pool's fork server imports them once, so no worker pays them in its first case.
@@ -61,7 +61,9 @@ def start_workers_early() -> None:
     """Start the process pool's fork server before the run's library and scenes are read (the
     command line calls it first): meanwhile it imports the runner, preform's own plugins (the
     steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
-    later are forked from it."""
+    later are forked from it. The server is stopped when this process exits
+    (``stop_fork_server``), however the command ends."""
+    import atexit
     from importlib import metadata
 
     from preform.plugin_manager import ENTRY_POINT_GROUP
@@ -73,3 +75,4 @@ def start_workers_early() -> None:
     )
     modules = (*own_plugins, *worker_preload())
     start_fork_server(tuple(dict.fromkeys(modules)))
+    atexit.register(stop_fork_server)

@@ -9,6 +9,7 @@ first case.
 from __future__ import annotations
 
 import multiprocessing
+import os
 import subprocess
 import sys
 import textwrap
@@ -117,6 +118,48 @@ def test_the_fork_server_starts_before_the_command_imports_numpy_or_pydantic():
 )
 def test_the_pool_forks_from_a_fork_server():
     assert engines.pool_context().get_start_method() == "forkserver"
+
+
+@pytest.mark.skipif(
+    "forkserver" not in multiprocessing.get_all_start_methods(),
+    reason="no fork server on this platform",
+)
+def test_the_fork_server_is_gone_when_the_command_exits():
+    """The command's exit stops its fork server at once (a server left to itself finalises
+    numpy & co. after the command has gone, and a pipe reading the command's output waits for
+    it); a pool opened after a stop forks from a new server."""
+    script = textwrap.dedent(
+        """
+        import multiprocessing, os, sys
+        from multiprocessing import forkserver
+        from preform.pipeline.engines import stop_fork_server
+        from preform.pipeline.preload import start_workers_early
+
+        start_workers_early()
+        context = multiprocessing.get_context("forkserver")
+        child = context.Process(target=os.getpid)
+        child.start(); child.join()
+        first = forkserver._forkserver._forkserver_pid
+        stop_fork_server()
+        try:
+            os.kill(first, 0)
+            sys.exit("the stopped server still runs")
+        except ProcessLookupError:
+            pass
+        child = context.Process(target=os.getpid)
+        child.start(); child.join()
+        assert child.exitcode == 0, child.exitcode
+        second = forkserver._forkserver._forkserver_pid
+        assert second not in (None, first), (first, second)
+        print(second, flush=True)  # left running: the exit must stop it
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    server = int(done.stdout.split()[-1])
+    # no wait: stopped (and reaped) before the command's own exit
+    with pytest.raises(ProcessLookupError):
+        os.kill(server, 0)
 
 
 def test_a_warm_up_that_fails_fails_the_case_not_the_caller(probe):
