@@ -123,6 +123,12 @@ def test_on_a_plane_a_geodesic_is_a_straight_line(
     assert np.all(status == NodeStatus.PLACED)
     expected = start + spacing * np.arange(1, count + 1)[:, None] * t
     np.testing.assert_allclose(points[0], expected, atol=1e-12)
+    # with every turn a feature (0°), the rounding-level turns between coplanar triangles
+    # (normals equal to ~1e-16) are no crease to unfold about
+    sharp = TriangleMesh(mesh.vertices, mesh.faces, feature_angle_deg=0.0)
+    points, status = sharp.geodesic_nodes(start[None], t[None], spacing, count)
+    assert np.all(status == NodeStatus.PLACED)
+    np.testing.assert_allclose(points[0], expected, atol=1e-12)
     # past the plane's edge the geodesic leaves the tool
     points, status = mesh.geodesic_nodes(start[None], t[None], spacing, int(0.3 / spacing))
     assert status[0, -1] == NodeStatus.OFF_TOOL
