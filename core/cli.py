@@ -571,10 +571,11 @@ def pipeline_run(
     from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
     from preform.pipeline.summary import run_summary
 
-    if engine == "process" and not explain:
+    if (engine == "process" or (engine == "dask" and not scheduler)) and not explain:
         from preform.pipeline.runner import start_workers_early
 
-        start_workers_early()  # their imports overlap this process reading library and scenes
+        # their imports overlap this process reading library and scenes
+        start_workers_early(engine, workers)
     host = _host()
     lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
     for warning in lib.warnings:

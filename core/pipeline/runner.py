@@ -35,6 +35,7 @@ from preform.pipeline.engines import (
     SerialEngine,
     open_engine,
     start_fork_server,
+    start_local_dask_engine,
     time_limit,
 )
 from preform.pipeline.planner import plan
@@ -258,11 +259,12 @@ def worker_preload() -> tuple[str, ...]:
     return (*sorted(own), *WORKER_PRELOAD)
 
 
-def start_workers_early() -> None:
+def start_workers_early(engine: str = "process", workers: int | None = None) -> None:
     """Start the process pool's fork server before the run's library and scenes are read (the
     command line calls it first): meanwhile it imports the runner, preform's own plugins (the
     steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
-    later are forked from it."""
+    later are forked from it. For ``engine`` dask, the LocalCluster of ``workers`` workers
+    forked from it opens too."""
     from importlib import metadata
 
     from preform.plugin_manager import ENTRY_POINT_GROUP
@@ -273,7 +275,10 @@ def start_workers_early() -> None:
         if ep.value.startswith("preform.")
     )
     modules = ("preform.pipeline.runner", *own_plugins, *worker_preload())
-    start_fork_server(tuple(dict.fromkeys(modules)))
+    if engine == "dask":
+        start_local_dask_engine(workers, tuple(dict.fromkeys(modules)))
+    else:
+        start_fork_server(tuple(dict.fromkeys(modules)))
 
 
 def warm_worker(hosts: tuple[tuple[bool, tuple[tuple[str, str], ...]], ...]) -> None:

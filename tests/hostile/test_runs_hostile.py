@@ -500,7 +500,12 @@ def _finished(out: Path) -> dict[str, bytes]:
 
 
 @pytest.mark.parametrize(
-    ("sig", "engine"), [(signal.SIGINT, "process"), (signal.SIGTERM, "serial")]
+    ("sig", "engine"),
+    [
+        (signal.SIGINT, "process"),
+        (signal.SIGTERM, "serial"),
+        pytest.param(signal.SIGINT, "dask", marks=pytest.mark.slow),
+    ],
 )
 def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig, engine):
     # Two quick cases and four that sleep 4 s: the signal lands while cases run however loaded
@@ -540,9 +545,12 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def test_kill_9_of_the_main_process_takes_its_workers_with_it(runenv, tmp_path):
+@pytest.mark.parametrize("engine", ["process", "dask"])
+def test_kill_9_of_the_main_process_takes_its_workers_with_it(runenv, tmp_path, engine):
+    if engine == "dask":
+        pytest.importorskip("distributed")
     lib = runenv.library(*(fabric(f"f{i}", fate="hang") for i in range(2)))
-    proc = runenv.start(lib, runenv.scene(), "--workers", "2")
+    proc = runenv.start(lib, runenv.scene(), "--workers", "2", "--engine", engine)
     pids_log = Path(runenv.env["RUNTOY_PIDS"])
     assert _wait_for(lambda: pids_log.exists() and len(pids_log.read_text().split()) >= 2)
     workers = [int(p) for p in pids_log.read_text().split()]
