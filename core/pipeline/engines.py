@@ -379,6 +379,11 @@ class DaskEngine(Engine):
 
     def close(self) -> None:
         try:
+            if self._cluster is None:  # a shared cluster: its later workers need not warm up
+                from preform.pipeline.dask_worker import PrepareWorker
+
+                with contextlib.suppress(Exception):
+                    self._client.unregister_worker_plugin(PrepareWorker.name)
             self._client.close()
             if self._cluster is not None:
                 self._cluster.close()
@@ -392,12 +397,14 @@ class DaskEngine(Engine):
 _EARLY_DASK: dict[int | None, Future[DaskEngine]] = {}
 
 
-def start_local_dask_engine(workers: int | None, preload: tuple[str, ...]) -> None:
+def start_local_dask_engine(
+    workers: int | None, preload: tuple[str, ...], warm_up: WarmUp | None = None
+) -> None:
     """Open the LocalCluster of a coming Dask run now, in a thread, so that its start (the fork
-    server's imports, the scheduler, the workers) overlaps what this process does before the
-    run opens its engine; ``open_engine`` then takes it. One at a time; one never taken (the
-    command ended before its run, or had nothing to compute) is closed when this process exits.
-    """
+    server's imports, the scheduler, the workers, ``warm_up``) overlaps what this process does
+    before the run opens its engine; ``open_engine`` then takes it and prepares its workers for
+    the run. One at a time; one never taken (the command ended before its run, or had nothing
+    to compute) is closed when this process exits."""
     if _EARLY_DASK:
         return
     import atexit
@@ -406,7 +413,7 @@ def start_local_dask_engine(workers: int | None, preload: tuple[str, ...]) -> No
 
     def open_cluster() -> None:
         try:
-            future.set_result(DaskEngine(workers, preload=preload))
+            future.set_result(DaskEngine(workers, preload=preload, warm_up=warm_up))
         except BaseException as exc:  # given to whoever takes it; it opens its own instead
             future.set_exception(exc)
 

@@ -264,7 +264,7 @@ def start_workers_early(engine: str = "process", workers: int | None = None) -> 
     command line calls it first): meanwhile it imports the runner, preform's own plugins (the
     steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
     later are forked from it. For ``engine`` dask, the LocalCluster of ``workers`` workers
-    forked from it opens too."""
+    forked from it opens too (``engines.start_local_dask_engine``)."""
     from importlib import metadata
 
     from preform.plugin_manager import ENTRY_POINT_GROUP
@@ -276,7 +276,9 @@ def start_workers_early(engine: str = "process", workers: int | None = None) -> 
     )
     modules = ("preform.pipeline.runner", *own_plugins, *worker_preload())
     if engine == "dask":
-        start_local_dask_engine(workers, tuple(dict.fromkeys(modules)))
+        # warmed for the command line's plugins (entry points), which its cases will ask for
+        warm_up = ("preform.pipeline.runner:warm_worker", (((True, ()),),))
+        start_local_dask_engine(workers, tuple(dict.fromkeys(modules)), warm_up)
     else:
         start_fork_server(tuple(dict.fromkeys(modules)))
 

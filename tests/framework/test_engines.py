@@ -246,3 +246,30 @@ def test_open_engine_takes_the_cluster_opened_ahead_once(probe):
         assert 1 not in engines._EARLY_DASK  # taken: the next run opens its own
     finally:
         engine.close()
+
+
+def test_a_remote_cluster_is_warmed_keeps_its_environment_and_is_left_running(probe, monkeypatch):
+    """``--scheduler``: the workers are someone else's (here threads of a cluster this test
+    runs): they warm up, keep their own environment, and stay up after the run; the warm-up
+    is no longer asked of workers that join later."""
+    pytest.importorskip("distributed")
+    from distributed import Client, LocalCluster
+
+    from preform.pipeline.dask_worker import PrepareWorker
+
+    module, _ = probe
+    monkeypatch.setenv("PREFORM_TEST_WARMED", "")  # the warm-up sets it in this process
+    with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
+        engine = open_engine(
+            "dask",
+            scheduler=cluster.scheduler_address,
+            warm_up=("preform_engine_probe:note_warm_up", ("remote",)),
+        )
+        try:
+            view = engine.submit(module.worker_view, 0).result(timeout=120)
+        finally:
+            engine.close()
+        assert view["tag"] == "remote" and view["pid"] in view["warmed"]
+        assert PrepareWorker.name not in cluster.scheduler.worker_plugins
+        with Client(cluster) as client:  # still serving
+            assert client.submit(sum, [1, 2]).result(timeout=60) == 3
