@@ -425,16 +425,21 @@ def start_local_dask_engine(
 def _take_early_dask(workers: int | None) -> DaskEngine | None:
     """The LocalCluster opened ahead for ``workers`` workers, once it is up; None if there is
     none or it failed to open."""
-    future = _EARLY_DASK.pop(workers, None)
+    future = _EARLY_DASK.get(workers)
     if future is None:
         return None
     try:
-        return future.result()
+        engine: DaskEngine | None = future.result()
     except Exception:
-        return None
+        engine = None
+    # only now: interrupted while it opens, it stays here and is closed at exit
+    del _EARLY_DASK[workers]
+    return engine
 
 
 def _close_early_dask() -> None:
+    # waits for it to be up (a run with nothing to compute pays its start): Dask's own exit
+    # handler would wait as long for a cluster still starting, then close it
     for workers in list(_EARLY_DASK):
         engine = _take_early_dask(workers)
         if engine is not None:
