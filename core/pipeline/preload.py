@@ -10,6 +10,7 @@ before it imports anything else.
 from __future__ import annotations
 
 from preform.pipeline.engines import (
+    DASK_WORKER_PRELOAD,
     start_fork_server,
     start_local_dask_engine,
     stop_fork_server,
@@ -67,8 +68,8 @@ def start_workers_early(engine: str = "process", workers: int | None = None) -> 
     steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
     later are forked from it. For ``engine`` dask, the LocalCluster of ``workers`` workers
     forked from it opens too, in a thread (``engines.start_local_dask_engine``). The server is
-    stopped when this process exits (``stop_fork_server``), however the command ends, after
-    a cluster opened here and never used is closed."""
+    stopped when this process exits (``stop_fork_server``), however the command ends (after a
+    cluster opened here and never used is closed)."""
     import atexit
     from importlib import metadata
 
@@ -80,10 +81,11 @@ def start_workers_early(engine: str = "process", workers: int | None = None) -> 
         if ep.value.startswith("preform.")
     )
     modules = tuple(dict.fromkeys((*own_plugins, *worker_preload())))
-    atexit.register(stop_fork_server)  # registered first: runs after the cluster's closing
-    if engine == "dask":
-        # warmed for the command line's plugins (entry points), which its cases will ask for
+    dask = engine == "dask"
+    start_fork_server((*DASK_WORKER_PRELOAD, *modules) if dask else modules)
+    atexit.register(stop_fork_server)
+    if dask:
+        # warmed for the command line's plugins (entry points), which its cases will ask for;
+        # a cluster never used is closed at exit before the server stops (registered after)
         warm_up = ("preform.pipeline.runner:warm_worker", (((True, ()),),))
         start_local_dask_engine(workers, modules, warm_up)
-    else:
-        start_fork_server(modules)
