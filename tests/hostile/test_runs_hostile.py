@@ -560,6 +560,20 @@ def test_kill_9_of_the_main_process_takes_its_workers_with_it(runenv, tmp_path, 
     assert _wait_for(lambda: not any(_alive(p) for p in workers), timeout=10), workers
 
 
+def test_a_dask_run_with_nothing_to_do_closes_its_early_cluster_quietly(runenv, host):
+    """The command opens its LocalCluster before it knows a rerun has nothing to compute: it
+    is closed at exit, and nothing but the run's own words is printed."""
+    pytest.importorskip("distributed")
+    lib = runenv.library(fabric("f0"), fabric("f1"))
+    scene = runenv.scene()
+    run_in_process(runenv, host, lib, scene)
+    proc = runenv.run(lib, scene, "--engine", "dask", "--workers", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert "2 skipped" in proc.stdout
+    assert "Exception" not in proc.stderr
+    no_traceback(proc)
+
+
 # -- 11. permissions follow the umask ----------------------------------------------------------
 
 
