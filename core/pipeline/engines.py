@@ -339,13 +339,17 @@ class DaskEngine(Engine):
                 # read by each nanny whenever it (re)starts its worker: kept for the engine's life
                 settings["distributed.worker.multiprocessing-method"] = "forkserver"
             self._config = dask.config.set(settings)
-            self._cluster = LocalCluster(
-                n_workers=workers or 2,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-            )
-            self._client = Client(self._cluster)
+            try:
+                self._cluster = LocalCluster(
+                    n_workers=workers or 2,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                )
+                self._client = Client(self._cluster)
+            except BaseException:
+                self._config.__exit__(None, None, None)
+                raise
         threads = sum(self._client.nthreads().values()) or 1
         self.capacity = self.workers = max(1, threads)
         self._running: dict[Future[Any], Any] = {}
