@@ -331,7 +331,12 @@ class DaskEngine(Engine):
         if scheduler:
             self._client = Client(scheduler)
         else:
-            settings: dict[str, Any] = {"distributed.scheduler.allowed-failures": 0}
+            settings: dict[str, Any] = {
+                "distributed.scheduler.allowed-failures": 0,
+                # the workers' statistical profile (their task thread's stack 100 times a
+                # second) is only read on a dashboard, and this cluster has none
+                "distributed.worker.profile.enabled": False,
+            }
             if pool_context().get_start_method() == "forkserver":
                 # started here, not by the first nanny: Dask would have it import only its own
                 # modules (a no-op if the command line started it already)
