@@ -558,12 +558,13 @@ def pipeline_run(
     case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
     summary (every case with its status, reasons, warnings and error) and nothing else.
     """
-    if engine == "process" and not explain:
+    if (engine == "process" or (engine == "dask" and not scheduler)) and not explain:
         from preform.pipeline.preload import start_workers_early
 
         # first: the workers' imports (the longest wait before the first case) overlap
-        # this process importing its own modules and reading the library and scenes
-        start_workers_early()
+        # this process importing its own modules and reading the library and scenes (dask:
+        # the LocalCluster opens meanwhile too)
+        start_workers_early(engine, workers)
     from preform.pipeline.overrides import load_scene_changed, with_fidelity
     from preform.pipeline.planner import explain as explain_plan
     from preform.pipeline.runner import (

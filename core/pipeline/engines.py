@@ -133,6 +133,10 @@ def _alive(pid: int) -> bool:
     return True
 
 
+#: The parents this process watches already (``watch_parent``).
+_WATCHED: set[int] = set()
+
+
 def watch_parent(parent_pid: int) -> None:
     """Worker initializer: exit at once when the main process is gone (kill -9, crash).
 
@@ -140,6 +144,9 @@ def watch_parent(parent_pid: int) -> None:
     fork server, died) or the main process no longer exists, its results would go nowhere and it
     might still write into the results directory, so it ends itself.
     """
+    if parent_pid in _WATCHED:  # a Dask worker prepared again (a later run's warm-up)
+        return
+    _WATCHED.add(parent_pid)
     own_parent = os.getppid()
 
     def watch() -> None:
@@ -174,15 +181,25 @@ def start_worker(
     sys_path: list[str],
     warm_up: WarmUp | None = None,
 ) -> None:
-    """Process-pool initializer: watch the parent, take its current environment and
-    ``sys.path`` (a fork server started earlier holds older ones), then warm up."""
+    """Process-pool initializer: take the parent's state (``take_parent_state``), then warm
+    up."""
+    take_parent_state(parent_pid, environ, sys_path)
+    run_warm_up(warm_up)
+
+
+def take_parent_state(parent_pid: int, environ: dict[str, str], sys_path: list[str]) -> None:
+    """In a worker on this machine: watch the parent (``watch_parent``) and take its current
+    environment and ``sys.path`` (a fork server started earlier holds older ones); the
+    directories on it may have gained modules since the fork server read them, so the import
+    system's caches are dropped."""
+    import importlib
     import sys
 
     watch_parent(parent_pid)
     os.environ.clear()
     os.environ.update(environ)
     sys.path[:] = sys_path
-    run_warm_up(warm_up)
+    importlib.invalidate_caches()
 
 
 def pool_context(preload: tuple[str, ...] = ()) -> Any:
@@ -273,6 +290,11 @@ class ProcessEngine(Engine):
         self._pool.join()
 
 
+#: What a Dask worker imports before anything of preform's: the fork server a LocalCluster's
+#: workers are forked from imports it too when it starts for a Dask run.
+DASK_WORKER_PRELOAD = ("distributed", "distributed.nanny", "distributed.worker")
+
+
 class DaskEngine(Engine):
     """A Dask cluster: a LocalCluster of worker processes, or the scheduler at ``address``.
 
@@ -280,6 +302,13 @@ class DaskEngine(Engine):
     stop a running task otherwise). On a LocalCluster a case whose worker dies is failed at
     once (``allowed-failures: 0``) rather than retried on the next worker, which it would kill
     too; a remote scheduler keeps its own setting.
+
+    A LocalCluster's workers are forked from the process pool's fork server where the platform
+    has one (``pool_context``: preform and the libraries the cases load are imported once, and a
+    worker that ends needs no interpreter shutdown, so the cluster closes at once), and each
+    one, restarted ones too, runs ``preform.pipeline.dask_worker.PrepareWorker`` first: it
+    takes this process's environment and ``sys.path``, exits when this process is gone, and
+    warms up (``prepare``).
     """
 
     def __init__(
@@ -297,32 +326,54 @@ class DaskEngine(Engine):
             raise RuntimeError(
                 'the dask engine needs the optional extra: pip install "preform[dask]"'
             ) from None
-        self._cluster = None
+        self._cluster: Any = None
+        self._config: Any = None
         if scheduler:
             self._client = Client(scheduler)
         else:
-            with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            settings: dict[str, Any] = {
+                "distributed.scheduler.allowed-failures": 0,
+                # the workers' statistical profile (their task thread's stack 100 times a
+                # second) is only read on a dashboard, and this cluster has none
+                "distributed.worker.profile.enabled": False,
+            }
+            if pool_context().get_start_method() == "forkserver":
+                # started here, not by the first nanny: Dask would have it import only its own
+                # modules (a no-op if the command line started it already)
+                start_fork_server((*DASK_WORKER_PRELOAD, *preload))
+                # read by each nanny whenever it (re)starts its worker: kept for the engine's life
+                settings["distributed.worker.multiprocessing-method"] = "forkserver"
+            self._config = dask.config.set(settings)
+            try:
                 self._cluster = LocalCluster(
                     n_workers=workers or 2,
                     threads_per_worker=1,
                     processes=True,
                     dashboard_address=None,
                 )
-            self._client = Client(self._cluster)
+                self._client = Client(self._cluster)
+            except BaseException:
+                self._config.__exit__(None, None, None)
+                raise
         threads = sum(self._client.nthreads().values()) or 1
         self.capacity = self.workers = max(1, threads)
         self._running: dict[Future[Any], Any] = {}
-        # each worker imports and loads what the cases need, all at once, in a task pinned to
-        # it; waited for (a failure only costs the first case its imports): cases submitted
-        # behind a busy worker's warm-up could queue two to a worker, and a case that kills
-        # its worker would take the other one with it (KilledWorker)
-        from distributed import wait as dask_wait
+        self.prepare(preload, warm_up)
 
-        warming = [
-            self._client.submit(warm_dask_worker, preload, warm_up, workers=[address], pure=False)
-            for address in self._client.nthreads()
-        ]
-        dask_wait(warming)
+    def prepare(self, preload: tuple[str, ...], warm_up: WarmUp | None) -> None:
+        """Have every worker, and every worker started later, import ``preload`` and run
+        ``warm_up`` before its next task; returns when the current workers are done. Waited
+        for (a failed warm-up only costs the first case its imports): cases submitted behind a
+        busy worker's warm-up could queue two to a worker, and a case that kills its worker
+        would take the other one with it (KilledWorker)."""
+        import sys
+
+        from preform.pipeline.dask_worker import PrepareWorker
+
+        parent = None
+        if self._cluster is not None:  # after the cluster started: the nannies' settings too
+            parent = (os.getpid(), dict(os.environ), list(sys.path))
+        self._client.register_plugin(PrepareWorker(preload, warm_up, parent))
 
     def submit(self, fn: Callable[..., T], *args: Any, timeout_s: float | None = None) -> Future[T]:
         remote = self._client.submit(fn, *args, pure=False)
@@ -356,22 +407,72 @@ class DaskEngine(Engine):
         self.close()
 
     def close(self) -> None:
-        self._client.close()
-        if self._cluster is not None:
-            self._cluster.close()
-
-
-def warm_dask_worker(preload: tuple[str, ...], warm_up: WarmUp | None) -> None:
-    """Run on each Dask worker when the engine opens: import ``preload`` (what is not installed
-    is skipped) and run the warm-up, so the worker's first case costs what its next ones do."""
-    import importlib
-
-    for module in preload:
         try:
-            importlib.import_module(module)
-        except ImportError:
-            continue
-    run_warm_up(warm_up)
+            if self._cluster is None:  # a shared cluster: its later workers need not warm up
+                from preform.pipeline.dask_worker import PrepareWorker
+
+                with contextlib.suppress(Exception):
+                    self._client.unregister_worker_plugin(PrepareWorker.name)
+            self._client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            if self._config is not None:
+                self._config.__exit__(None, None, None)
+                self._config = None
+
+
+#: LocalClusters opened ahead of their run (``start_local_dask_engine``), by worker count.
+_EARLY_DASK: dict[int | None, Future[DaskEngine]] = {}
+
+
+def start_local_dask_engine(
+    workers: int | None, preload: tuple[str, ...], warm_up: WarmUp | None = None
+) -> None:
+    """Open the LocalCluster of a coming Dask run now, in a thread, so that its start (the fork
+    server's imports, the scheduler, the workers, ``warm_up``) overlaps what this process does
+    before the run opens its engine; ``open_engine`` then takes it and prepares its workers for
+    the run. One at a time; one never taken (the command ended before its run, or had nothing
+    to compute) is closed when this process exits."""
+    if _EARLY_DASK:
+        return
+    import atexit
+
+    future: Future[DaskEngine] = Future()
+
+    def open_cluster() -> None:
+        try:
+            future.set_result(DaskEngine(workers, preload=preload, warm_up=warm_up))
+        except BaseException as exc:  # given to whoever takes it; it opens its own instead
+            future.set_exception(exc)
+
+    _EARLY_DASK[workers] = future
+    threading.Thread(target=open_cluster, name="preform-dask-open", daemon=True).start()
+    atexit.register(_close_early_dask)
+
+
+def _take_early_dask(workers: int | None) -> DaskEngine | None:
+    """The LocalCluster opened ahead for ``workers`` workers, once it is up; None if there is
+    none or it failed to open."""
+    future = _EARLY_DASK.get(workers)
+    if future is None:
+        return None
+    try:
+        engine: DaskEngine | None = future.result()
+    except Exception:
+        engine = None
+    # only now: interrupted while it opens, it stays here and is closed at exit
+    del _EARLY_DASK[workers]
+    return engine
+
+
+def _close_early_dask() -> None:
+    # waits for it to be up (a run with nothing to compute pays its start): Dask's own exit
+    # handler would wait as long for a cluster still starting, then close it
+    for workers in list(_EARLY_DASK):
+        engine = _take_early_dask(workers)
+        if engine is not None:
+            engine.close()
 
 
 def open_engine(
@@ -389,5 +490,9 @@ def open_engine(
     if engine == "process":
         return ProcessEngine(workers, preload=preload, warm_up=warm_up)
     if engine == "dask":
-        return DaskEngine(workers, scheduler, preload=preload, warm_up=warm_up)
+        early = None if scheduler else _take_early_dask(workers)
+        if early is None:
+            return DaskEngine(workers, scheduler, preload=preload, warm_up=warm_up)
+        early.prepare(preload, warm_up)
+        return early
     raise ValueError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}")

@@ -9,7 +9,12 @@ before it imports anything else.
 
 from __future__ import annotations
 
-from preform.pipeline.engines import start_fork_server, stop_fork_server
+from preform.pipeline.engines import (
+    DASK_WORKER_PRELOAD,
+    start_fork_server,
+    start_local_dask_engine,
+    stop_fork_server,
+)
 
 #: Libraries the default study's steps import when they first run (its figures and cells.csv):
 #: a process pool's fork server imports them once, so no worker pays them in its first case.
@@ -57,12 +62,14 @@ def worker_preload() -> tuple[str, ...]:
     return (*sorted(own), *WORKER_PRELOAD)
 
 
-def start_workers_early() -> None:
+def start_workers_early(engine: str = "process", workers: int | None = None) -> None:
     """Start the process pool's fork server before the run's library and scenes are read (the
     command line calls it first): meanwhile it imports the runner, preform's own plugins (the
     steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
-    later are forked from it. The server is stopped when this process exits
-    (``stop_fork_server``), however the command ends."""
+    later are forked from it. For ``engine`` dask, the LocalCluster of ``workers`` workers
+    forked from it opens too, in a thread (``engines.start_local_dask_engine``). The server is
+    stopped when this process exits (``stop_fork_server``), however the command ends (after a
+    cluster opened here and never used is closed)."""
     import atexit
     from importlib import metadata
 
@@ -73,6 +80,12 @@ def start_workers_early() -> None:
         for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)
         if ep.value.startswith("preform.")
     )
-    modules = (*own_plugins, *worker_preload())
-    start_fork_server(tuple(dict.fromkeys(modules)))
+    modules = tuple(dict.fromkeys((*own_plugins, *worker_preload())))
+    dask = engine == "dask"
+    start_fork_server((*DASK_WORKER_PRELOAD, *modules) if dask else modules)
     atexit.register(stop_fork_server)
+    if dask:
+        # warmed for the command line's plugins (entry points), which its cases will ask for;
+        # a cluster never used is closed at exit before the server stops (registered after)
+        warm_up = ("preform.pipeline.runner:warm_worker", (((True, ()),),))
+        start_local_dask_engine(workers, modules, warm_up)

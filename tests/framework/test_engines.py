@@ -40,6 +40,7 @@ def worker_view(_):
         "pid": os.getpid(),
         "value": os.environ.get("PREFORM_TEST_ENGINE"),
         "path": sys.path[:1],
+        "full_path": list(sys.path),
         "warmed": list(WARMED),
         "tag": os.environ.get("PREFORM_TEST_WARMED"),
         "runner_loaded": "preform.pipeline.runner" in sys.modules,
@@ -184,3 +185,147 @@ def test_every_preform_module_the_workers_preload_exists():
     assert own, "the workers preload none of preform's modules"
     for module in own:
         importlib.import_module(module)
+
+
+# -- Dask: a LocalCluster's workers are forked from the same fork server ------------------------
+
+DASK_PROBE = """
+import os
+
+
+def die():
+    os._exit(3)
+"""
+
+
+def dask_engine(workers: int = 1) -> Any:
+    pytest.importorskip("distributed")
+    return open_engine(
+        "dask",
+        workers=workers,
+        preload=("preform.pipeline.runner",),
+        warm_up=("preform_engine_probe:note_warm_up", ("dask",)),
+    )
+
+
+def test_dask_workers_take_the_parents_state_set_after_the_fork_server_started(probe, monkeypatch):
+    module, folder = probe
+    # the fork server holds the environment of its start (an earlier run, the command line's
+    # early start): the variable and the probe's folder come after it
+    engines.start_fork_server(("preform.pipeline.runner",))
+    monkeypatch.setenv("PREFORM_TEST_ENGINE", "set later")
+    engine = dask_engine(workers=2)
+    try:
+        views = [engine.submit(module.worker_view, i).result(timeout=120) for i in range(4)]
+    finally:
+        engine.close()
+    for view in views:
+        assert view["value"] == "set later"
+        # the parent's path, in its order (Dask puts its scratch folder first, for upload_file)
+        parent = [p for p in sys.path if p]
+        assert [p for p in view["full_path"] if p in parent] == parent
+        assert folder in view["full_path"]
+        # prepared once, in this very worker process, before its first task
+        assert view["warmed"] == [view["pid"]] and view["tag"] == "dask"
+        assert view["runner_loaded"]
+    assert os.getpid() not in {v["pid"] for v in views}
+
+
+def test_a_restarted_dask_worker_is_prepared_like_the_first(probe, monkeypatch, tmp_path):
+    module, folder = probe
+    (Path(folder) / "preform_engine_probe_die.py").write_text(textwrap.dedent(DASK_PROBE))
+    monkeypatch.setenv("PREFORM_TEST_ENGINE", "kept")
+    import importlib
+
+    die = importlib.import_module("preform_engine_probe_die").die
+    engine = dask_engine(workers=1)
+    try:
+        first = engine.submit(module.worker_view, 0).result(timeout=120)
+        with pytest.raises(Exception, match=r"died"):
+            engine.submit(die).result(timeout=120)
+        engine._client.wait_for_workers(1, timeout=120)
+        again = engine.submit(module.worker_view, 1).result(timeout=120)
+    finally:
+        engine.close()
+    assert again["pid"] != first["pid"]  # a new worker process, started by its nanny
+    assert again["warmed"] == [again["pid"]] and again["tag"] == "dask"
+    assert again["value"] == "kept" and folder in again["full_path"]
+
+
+ORPHAN_CHECK = """
+import os, sys, time
+from preform.pipeline import engines
+
+engines.start_local_dask_engine(2, ("preform.pipeline.runner",))
+engine = engines._EARLY_DASK[2].result(timeout=120)  # up, but never taken by a run
+print(" ".join(str(p) for p in engine._client.run(os.getpid).values()), flush=True)
+"""
+
+
+def _process_alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split()[2] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
+def test_a_cluster_opened_ahead_and_never_used_leaves_no_worker_behind(tmp_path):
+    pytest.importorskip("distributed")
+    import subprocess
+    import time
+
+    proc = subprocess.run(
+        [sys.executable, "-c", ORPHAN_CHECK], capture_output=True, text=True, timeout=180
+    )
+    assert proc.returncode == 0, proc.stderr
+    pids = [int(p) for p in proc.stdout.split()]
+    assert len(pids) == 2
+    deadline = time.monotonic() + 10
+    while any(_process_alive(p) for p in pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(_process_alive(p) for p in pids), pids
+
+
+def test_open_engine_takes_the_cluster_opened_ahead_once(probe):
+    pytest.importorskip("distributed")
+    module, _ = probe
+    engines.start_local_dask_engine(1, ("preform.pipeline.runner",))
+    ahead = engines._EARLY_DASK[1]
+    engine = dask_engine(workers=1)
+    try:
+        assert engine is ahead.result()
+        view = engine.submit(module.worker_view, 0).result(timeout=120)
+        # prepared again for this run: its warm-up ran in the worker before the task
+        assert view["warmed"] == [view["pid"]] and view["tag"] == "dask"
+        assert 1 not in engines._EARLY_DASK  # taken: the next run opens its own
+    finally:
+        engine.close()
+
+
+def test_a_remote_cluster_is_warmed_keeps_its_environment_and_is_left_running(probe, monkeypatch):
+    """``--scheduler``: the workers are someone else's (here threads of a cluster this test
+    runs): they warm up, keep their own environment, and stay up after the run; the warm-up
+    is no longer asked of workers that join later."""
+    pytest.importorskip("distributed")
+    from distributed import Client, LocalCluster
+
+    from preform.pipeline.dask_worker import PrepareWorker
+
+    module, _ = probe
+    monkeypatch.setenv("PREFORM_TEST_WARMED", "")  # the warm-up sets it in this process
+    with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
+        engine = open_engine(
+            "dask",
+            scheduler=cluster.scheduler_address,
+            warm_up=("preform_engine_probe:note_warm_up", ("remote",)),
+        )
+        try:
+            view = engine.submit(module.worker_view, 0).result(timeout=120)
+        finally:
+            engine.close()
+        assert view["tag"] == "remote" and view["pid"] in view["warmed"]
+        assert PrepareWorker.name not in cluster.scheduler.worker_plugins
+        with Client(cluster) as client:  # still serving
+            assert client.submit(sum, [1, 2]).result(timeout=60) == 3

@@ -500,7 +500,12 @@ def _finished(out: Path) -> dict[str, bytes]:
 
 
 @pytest.mark.parametrize(
-    ("sig", "engine"), [(signal.SIGINT, "process"), (signal.SIGTERM, "serial")]
+    ("sig", "engine"),
+    [
+        (signal.SIGINT, "process"),
+        (signal.SIGTERM, "serial"),
+        pytest.param(signal.SIGINT, "dask", marks=pytest.mark.slow),
+    ],
 )
 def test_interrupt_stops_promptly_and_keeps_what_finished(runenv, sig, engine):
     # Two quick cases and four that sleep 4 s: the signal lands while cases run however loaded
@@ -540,9 +545,12 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def test_kill_9_of_the_main_process_takes_its_workers_with_it(runenv, tmp_path):
+@pytest.mark.parametrize("engine", ["process", "dask"])
+def test_kill_9_of_the_main_process_takes_its_workers_with_it(runenv, tmp_path, engine):
+    if engine == "dask":
+        pytest.importorskip("distributed")
     lib = runenv.library(*(fabric(f"f{i}", fate="hang") for i in range(2)))
-    proc = runenv.start(lib, runenv.scene(), "--workers", "2")
+    proc = runenv.start(lib, runenv.scene(), "--workers", "2", "--engine", engine)
     pids_log = Path(runenv.env["RUNTOY_PIDS"])
     assert _wait_for(lambda: pids_log.exists() and len(pids_log.read_text().split()) >= 2)
     workers = [int(p) for p in pids_log.read_text().split()]
@@ -550,6 +558,20 @@ def test_kill_9_of_the_main_process_takes_its_workers_with_it(runenv, tmp_path):
     proc.kill()
     proc.wait(timeout=10)
     assert _wait_for(lambda: not any(_alive(p) for p in workers), timeout=10), workers
+
+
+def test_a_dask_run_with_nothing_to_do_closes_its_early_cluster_quietly(runenv, host):
+    """The command opens its LocalCluster before it knows a rerun has nothing to compute: it
+    is closed at exit, and nothing but the run's own words is printed."""
+    pytest.importorskip("distributed")
+    lib = runenv.library(fabric("f0"), fabric("f1"))
+    scene = runenv.scene()
+    run_in_process(runenv, host, lib, scene)
+    proc = runenv.run(lib, scene, "--engine", "dask", "--workers", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert "2 skipped" in proc.stdout
+    assert "Exception" not in proc.stderr
+    no_traceback(proc)
 
 
 # -- 11. permissions follow the umask ----------------------------------------------------------
