@@ -27,6 +27,7 @@ Three kinds of value check, from hard to soft:
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 import os
 import typing
@@ -58,6 +59,15 @@ def _has_numeric_leaf(annotation: Any) -> bool:
     if isinstance(annotation, type):
         return False
     return any(_has_numeric_leaf(arg) for arg in typing.get_args(annotation) if arg is not Ellipsis)
+
+
+@functools.cache
+def _numeric_fields(model: type[BaseModel]) -> frozenset[str]:
+    """The fields of a model class whose annotation holds an int or a float: worked out once
+    per class, not at every entry validated (the check runs on every nested model)."""
+    return frozenset(
+        name for name, info in model.model_fields.items() if _has_numeric_leaf(info.annotation)
+    )
 
 
 def _boolean_errors(value: Any, loc: tuple[str | int, ...] = ()) -> Iterator[InitErrorDetails]:
@@ -98,10 +108,10 @@ class ParamsModel(BaseModel):
         # validators on discriminator fields, and each error still gets its exact location.
         if not isinstance(data, dict):
             return data
+        numeric = _numeric_fields(cls)
         errors: list[InitErrorDetails] = []
         for name, value in data.items():
-            field = cls.model_fields.get(name) if isinstance(name, str) else None
-            if field is not None and _has_numeric_leaf(field.annotation):
+            if name in numeric:
                 errors += _boolean_errors(value, (name,))
         if errors:
             raise ValidationError.from_exception_data(cls.__name__, errors)
