@@ -33,11 +33,12 @@ COMMANDS: dict[str, list[str]] = {
     "preform --help": [sys.executable, "-c", MAIN, "--help"],
     "preform materials list": [sys.executable, "-c", MAIN, "materials", "list"],
     # not a goal: what `materials list` cannot do without (it validates fabrics, whose models
-    # are pydantic and whose geometry is numpy; the library is YAML; the CLI is click)
-    "(import numpy pydantic yaml click)": [
+    # are pydantic, one model built; the library is YAML; the CLI is click). Since issue 15j
+    # the checks a listing runs are plain Python: numpy is not among them.
+    "(import pydantic yaml click)": [
         sys.executable,
         "-c",
-        "import numpy, pydantic, yaml, click\nclass M(pydantic.BaseModel):\n    x: int\nM(x=1)",
+        "import pydantic, yaml, click\nclass M(pydantic.BaseModel):\n    x: int\nM(x=1)",
     ],
 }
 

@@ -37,7 +37,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.geometry.unit_cell import FloatArray, TowPath, UnitCell
+from preform.geometry.unit_cell import TowPath, UnitCell
+
+FloatArray = NDArray[np.float64]
 
 #: Largest |γ| [rad] a sheared cell is built for: the cell's area vanishes at 90°.
 MAX_SHEAR = math.radians(89.0)
