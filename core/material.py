@@ -362,10 +362,10 @@ def plausibility_checks(model: BaseModel, base: Location = ()) -> list[Plausibil
     Generic over any pydantic model: a plugin's architecture or law gets its ranges checked by
     marking its fields, nothing else."""
     out: list[PlausibilityCheck] = []
-    for name, info in type(model).model_fields.items():
+    for name, rules, may_nest in _checked_fields(type(model)):
         value = getattr(model, name, None)
         where = (*base, name)
-        for rule in _rules(info):
+        for rule in rules:
             if value is None:
                 continue
             if rule.measure is not None:
@@ -380,8 +380,41 @@ def plausibility_checks(model: BaseModel, base: Location = ()) -> list[Plausibil
                     for i, v in enumerate(value)
                     if _is_number(v)
                 ]
-        out += _nested_checks(value, where)
+        if may_nest:
+            out += _nested_checks(value, where)
     return out
+
+
+@functools.cache
+def _checked_fields(model: type[BaseModel]) -> list[tuple[str, list[Plausible], bool]]:
+    """Per field of a model class: its name, its ranges, and whether its value may hold a
+    model (whose fields are checked in turn); worked out once per class, so that validating a
+    library does not walk every number of a weaving matrix looking for models."""
+    return [
+        (name, _rules(info), _may_hold_model(info.annotation))
+        for name, info in model.model_fields.items()
+    ]
+
+
+def _may_hold_model(annotation: Any) -> bool:
+    """False only when the annotation rules a model out (numbers, text, Literal tags and
+    containers of them); anything it cannot read (Any, a bare container, a forward reference)
+    may hold one."""
+    origin = typing.get_origin(annotation)
+    if origin is typing.Literal:
+        return False
+    args = typing.get_args(annotation)
+    if origin is typing.Annotated:
+        return _may_hold_model(args[0])
+    if args:
+        return any(_may_hold_model(arg) for arg in args if arg is not Ellipsis)
+    if annotation in (int, float, str, bool, bytes, type(None)):
+        return False
+    if isinstance(annotation, type) and origin is None:
+        return issubclass(annotation, BaseModel) or not issubclass(
+            annotation, int | float | str | bytes
+        )
+    return True
 
 
 def _nested_checks(value: Any, where: Location) -> list[PlausibilityCheck]:

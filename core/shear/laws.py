@@ -16,6 +16,7 @@ clipped curve.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
@@ -98,7 +99,16 @@ def polynomial_extremes(
     listing of the library must not pay for importing numpy (issue 15). Two roots of the slope
     closer than one grid step (a wiggle of the size of the grid's own error) are bounded by
     the grid values."""
-    c = _float_list(coefficients_per_deg)
+    return _extremes(tuple(_float_list(coefficients_per_deg)), start_deg, end_deg)
+
+
+@functools.lru_cache(maxsize=256)
+def _extremes(
+    coefficients: tuple[float, ...], start_deg: float, end_deg: float
+) -> tuple[float, float, float]:
+    # Cached: a law's validator and its plausible-range check ask for the same polynomial
+    # over the same range.
+    c = list(coefficients)
     while c and c[-1] == 0.0:
         c.pop()
     if not c:

@@ -694,27 +694,28 @@ class WarpKnitGeometry:
             _LayerLattice(layer, length, width, self._row_length(i))
             for i, layer in enumerate(self.tow_layers)
         ]
-        # Scores are worked out lazily: most fabrics fit one of the first few cells.
-        scores: dict[tuple[int, int], float] = {}
+
+        def fits(m_x: int, m_y: int) -> bool:  # stops at the first layer that does not fit
+            return all(lattice.score(m_x, m_y) <= 1.0 for lattice in layers)
 
         def score(m_x: int, m_y: int) -> float:
-            if (m_x, m_y) not in scores:
-                scores[m_x, m_y] = max((lattice.score(m_x, m_y) for lattice in layers), default=0.0)
-            return scores[m_x, m_y]
+            return max((lattice.score(m_x, m_y) for lattice in layers), default=0.0)
 
-        chosen = next((cell for cell in _CELLS_BY_AREA if score(*cell) <= 1.0), None)
+        # Most fabrics fit one of the first cells: the scan stops there.
+        chosen = next((cell for cell in _CELLS_BY_AREA if fits(*cell)), None)
+        within = chosen is not None
         if chosen is None:  # none fits: the smallest finite score, the first in (m_x, m_y) order
-            chosen = (1, 1)
-            best = math.inf
+            chosen, best = (1, 1), math.inf
             for m_x in range(1, MAX_REPEATS + 1):
                 for m_y in range(1, MAX_REPEATS + 1):
-                    if score(m_x, m_y) < best:
-                        chosen, best = (m_x, m_y), score(m_x, m_y)
+                    value = score(m_x, m_y)
+                    if value < best:
+                        chosen, best = (m_x, m_y), value
         return CellFit(
             stitch_repeat=(length, width),
             repeats=chosen,
             layers=tuple(lattice.fitted(*chosen) for lattice in layers),
-            within_tolerance=score(*chosen) <= 1.0,
+            within_tolerance=within,
         )
 
     def tow_paths(self) -> list[TowPath]:
