@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import NDArray
 

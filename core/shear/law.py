@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import ArrayLike, NDArray
 

@@ -28,7 +28,7 @@ from preform.material import ParamsModel, Plausible, size_limit
 from preform.shear.energy import DOMAIN_END, Branch, PiecewiseBranch
 from preform.shear.law import ShearLaw
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import ArrayLike, NDArray
 

@@ -42,7 +42,7 @@ from preform.material import Location
 
 from .lapping import LappingSequence
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import NDArray
 

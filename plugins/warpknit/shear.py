@@ -59,7 +59,7 @@ from preform.shear.laws import (
     raise_located,
 )
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
 
 _COEFFICIENTS = "ascending powers of the shear-angle magnitude in degrees; a_k in N/mm/deg^k"

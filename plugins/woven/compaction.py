@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import ArrayLike, NDArray
 

@@ -60,7 +60,7 @@ from preform.shear.energy import QuadratureBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import SignedShearLaw
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import ArrayLike, NDArray
 
