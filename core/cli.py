@@ -560,6 +560,12 @@ def pipeline_run(
     case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
     summary (every case with its status, reasons, warnings and error) and nothing else.
     """
+    if engine == "process" and not explain:
+        from preform.pipeline.preload import start_workers_early
+
+        # first: the workers' imports (the longest wait before the first case) overlap
+        # this process importing its own modules and reading the library and scenes
+        start_workers_early()
     from preform.pipeline.overrides import load_scene_changed, with_fidelity
     from preform.pipeline.planner import explain as explain_plan
     from preform.pipeline.runner import (
@@ -573,10 +579,6 @@ def pipeline_run(
     from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
     from preform.pipeline.summary import run_summary
 
-    if engine == "process" and not explain:
-        from preform.pipeline.runner import start_workers_early
-
-        start_workers_early()  # their imports overlap this process reading library and scenes
     host = _host()
     lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
     for warning in lib.warnings:

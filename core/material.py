@@ -40,7 +40,7 @@ from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
 
 if TYPE_CHECKING:
     from preform.geometry.sheared_cell import ShearedCell
-    from preform.geometry.unit_cell import UnitCell
+    from preform.geometry.unit_cell import FloatArray, UnitCell
 
 #: Where in an entry a problem is: a path of field names and list indices,
 #: e.g. ("weave", "matrix", 2).
@@ -547,6 +547,14 @@ class FabricBase(ParamsModel):
         fractions (``preform.geometry.sheared_cell``), or None if the architecture has none.
         Raises ValueError, in words, for a cell that cannot be sheared."""
         return None
+
+    def sheared_thickness(self, shear_rad: FloatArray) -> FloatArray | None:
+        """Thickness [m] of ``sheared_cell`` at each shear angle [rad] of an array (the
+        preform's table), or None if the architecture has none. This default builds one cell
+        per angle; an architecture whose stack takes every angle in one pass overrides it."""
+        from preform.geometry.sheared_cell import thickness_per_angle
+
+        return thickness_per_angle(self.sheared_cell, shear_rad)
 
     def derived(self) -> dict[str, Any]:
         """Derived properties (areal density, locking angle, ...), keys carry their units."""

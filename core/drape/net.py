@@ -152,13 +152,13 @@ def _solve_on_circle(
     status = np.full(m, NodeStatus.NO_INTERSECTION, dtype=np.int8)
     guess, _ = surface.closest_point(a + b - c)
     n0 = np.asarray(surface.normal(guess), dtype=float)
-    frames, phi = kernels.circle_frames(a, b, c, np.asarray(guess, dtype=float), n0, spacing)
-    active = np.flatnonzero(np.isfinite(phi))
+    frames, angle = kernels.circle_frames(a, b, c, np.asarray(guess, dtype=float), n0, spacing)
+    active = np.flatnonzero(np.isfinite(angle[:, 0]))
     used = 0
     for used in range(1, max_iterations + 1):  # the last value is reported
         if active.size == 0:
             break
-        x = kernels.circle_points(frames, phi, active)
+        x = kernels.circle_points(frames, angle, active)
         foot, dist = surface.closest_point(x)
         n = surface.normal(foot)
         active = kernels.newton_updates(
@@ -168,7 +168,7 @@ def _solve_on_circle(
             np.asarray(n, dtype=float),
             np.asarray(dist, dtype=float),
             frames,
-            phi,
+            angle,
             points,
             status,
             tolerance_m,

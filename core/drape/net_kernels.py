@@ -10,8 +10,10 @@ The per-node steps are plain scalar functions:
   ``preform.drape.surface_kernels.plane_node``, and every tool's closest point and normal
   ``preform.drape.surface_kernels`` (:func:`_query` picks them);
 - :func:`_circle_frame` and :func:`_newton_update`: the general placement on the circle where
-  the two distance spheres meet (``preform.drape.net``'s module doc), one damped Newton step
-  in the circle angle φ at a time, given the surface's closest point and normal;
+  the two distance spheres meet (``preform.drape.net``'s module doc): the start where the
+  circle crosses the tangent plane at the guess, then one damped Newton step along the circle
+  at a time, given the surface's closest point and normal; the angle is carried as the
+  offset (r cos φ, r sin φ) and turned without a sine, cosine or arctangent;
 - :func:`_front_members`: which nodes front k holds and which are ready;
 - :func:`_check_node` and :func:`_write_node`: the checks every new node goes through (past
   the tool's bounds, folded cell, residual) and its write into the net.
@@ -75,6 +77,9 @@ def _row(array: FloatArray, i: int) -> Vec:
     """Row i of an (m, 3) array as a tuple."""
     return array[i, 0], array[i, 1], array[i, 2]
 
+
+#: Machine epsilon.
+_EPS = float(np.finfo(float).eps)
 
 #: Most parameters a kind of compiled surface may take (``compiled_surface``).
 MAX_PARAMS = 16
@@ -208,18 +213,31 @@ def _circle_frame(a: Vec, b: Vec, c: Vec, guess: Vec, n0: Vec, spacing: float):
     """The frame of the node at chord ``spacing`` from a and b, away from c: the circle
     P(φ) = M + r(cos φ·a1 + sin φ·a2), a1 the surface normal ``n0`` (at ``guess``, the closest
     point to a + b − c) seen from the chord, a2 pointing away from c, as the tuple (M, a1, a2,
-    r) (``FRAME`` numbers). Returns (the starting angle φ of ``guess``, or NaN when there is
-    no circle (|AB| ≥ 2d or a degenerate frame); the frame)."""
+    r) (``FRAME`` numbers). Returns (the start as its offset from M along a1 and a2, r·cos φ
+    and r·sin φ [m], both NaN when there is no circle (|AB| ≥ 2d or a degenerate frame); the
+    frame).
+
+    The start is where the circle crosses the tangent plane at ``guess`` on the side away
+    from c. On a pin-jointed net (a Chebyshev net: ∂²r/∂u∂v is normal to the surface) the
+    node differs from the parallelogram point a + b − c by a mostly normal offset, so the
+    guess is within O(d³) of it along the surface and the crossing within O(d⁶) of the
+    surface: the first point on the circle is the node, with no Newton step, on smooth tools
+    at the usual spacings (the sphere at 145² and finer: every node). Where the circle misses
+    that plane (|cos φ| > 1, a tangency or an edge of the tool) the start is the guess's
+    direction from M in the circle's plane instead, φ kept in [0, π]."""
     mx, my, mz = 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])
     ex, ey, ez = b[0] - a[0], b[1] - a[1], b[2] - a[2]
     half2 = 0.25 * (ex * ex + ey * ey + ez * ez)
     radius2 = spacing * spacing - half2
-    e_len = math.sqrt(4.0 * half2)
-    ex, ey, ez = ex / e_len, ey / e_len, ez / e_len
+    # one division and three products per unit vector (the divisions and square roots bound
+    # the fill; a product by the reciprocal differs from the quotient by an ulp at most)
+    inv_e = 1.0 / math.sqrt(4.0 * half2)
+    ex, ey, ez = ex * inv_e, ey * inv_e, ez * inv_e
     along = n0[0] * ex + n0[1] * ey + n0[2] * ez
     a1x, a1y, a1z = n0[0] - along * ex, n0[1] - along * ey, n0[2] - along * ez
-    a1_len = math.sqrt(a1x * a1x + a1y * a1y + a1z * a1z)
-    a1x, a1y, a1z = a1x / a1_len, a1y / a1_len, a1z / a1_len
+    a1_len2 = a1x * a1x + a1y * a1y + a1z * a1z
+    inv_a1 = 1.0 / math.sqrt(a1_len2)
+    a1x, a1y, a1z = a1x * inv_a1, a1y * inv_a1, a1z * inv_a1
     a2x = ey * a1z - ez * a1y
     a2y = ez * a1x - ex * a1z
     a2z = ex * a1y - ey * a1x
@@ -228,11 +246,23 @@ def _circle_frame(a: Vec, b: Vec, c: Vec, guess: Vec, n0: Vec, spacing: float):
     radius = math.sqrt(max(radius2, 0.0))
     frame = (mx, my, mz, a1x, a1y, a1z, a2x, a2y, a2z, radius)
     rx, ry, rz = guess[0] - mx, guess[1] - my, guess[2] - mz
-    phi = math.atan2(rx * a2x + ry * a2y + rz * a2z, rx * a1x + ry * a1y + rz * a1z)
-    phi = min(max(phi, 0.0), math.pi)
-    if not (radius2 > 0.0 and math.isfinite(a1x) and math.isfinite(phi)):
-        return np.nan, frame
-    return phi, frame
+    # (P(φ) − guess)·n0 = 0 with a2·n0 = 0 and a1·n0 = |n0 − (n0·e)e| (unit n0 or not):
+    # r cos φ = (guess − M)·n0 / |n0 − (n0·e)e|, r sin φ ≥ 0 (the side away from c)
+    p1 = (rx * n0[0] + ry * n0[1] + rz * n0[2]) * inv_a1
+    if p1 * p1 <= radius2:
+        p2 = math.sqrt(radius2 - p1 * p1)
+    else:
+        along_a1 = rx * a1x + ry * a1y + rz * a1z
+        along_a2 = rx * a2x + ry * a2y + rz * a2z
+        length = math.sqrt(along_a1 * along_a1 + along_a2 * along_a2)
+        if along_a2 < 0.0 or length == 0.0:
+            p1, p2 = radius, 0.0
+        else:
+            to_circle = radius / length
+            p1, p2 = along_a1 * to_circle, along_a2 * to_circle
+    if not (radius2 > 0.0 and math.isfinite(a1x) and math.isfinite(p1)):
+        return np.nan, np.nan, frame
+    return p1, p2, frame
 
 
 @_per_node
@@ -243,14 +273,13 @@ def _frame_row(frames: FloatArray, i: int):
 
 
 @_per_node
-def _on_circle(frame, cos_p: float, sin_p: float) -> Vec:
-    """P(φ) [m] of a frame, given cos φ and sin φ (computed once per step: the Newton update
-    at the same φ needs them too)."""
-    r = frame[9]
+def _on_circle(frame, p1: float, p2: float) -> Vec:
+    """P(φ) = M + p1·a1 + p2·a2 [m] of a frame, the angle given as the offset (p1, p2) =
+    (r cos φ, r sin φ) [m] from M (how the Newton step carries it, see ``_newton_update``)."""
     return (
-        frame[0] + r * (cos_p * frame[3] + sin_p * frame[6]),
-        frame[1] + r * (cos_p * frame[4] + sin_p * frame[7]),
-        frame[2] + r * (cos_p * frame[5] + sin_p * frame[8]),
+        frame[0] + p1 * frame[3] + p2 * frame[6],
+        frame[1] + p1 * frame[4] + p2 * frame[7],
+        frame[2] + p1 * frame[5] + p2 * frame[8],
     )
 
 
@@ -261,9 +290,8 @@ _GOING, _DONE, _FAILED_OFF_TOOL, _FAILED = 0, 1, 2, 3
 @_per_node
 def _newton_update(
     frame,
-    phi: float,
-    cos_p: float,
-    sin_p: float,
+    p1: float,
+    p2: float,
     x: float,
     y: float,
     z: float,
@@ -277,58 +305,78 @@ def _newton_update(
     tolerance_m: float,
     last_try: bool,
 ):
-    """One damped Newton step in φ on the signed distance g(φ) = (P(φ) − foot)·n from the
-    surface, given cos φ, sin φ, the closest point ``foot`` of P(φ) = (x, y, z), its normal and
-    distance. Returns (new φ, outcome)."""
+    """One damped Newton step on the signed distance g = (P − foot)·n from the surface along
+    the circle, given the angle as the offset (p1, p2) = (r cos φ, r sin φ) [m] of P(φ) =
+    (x, y, z) from M, the closest point ``foot`` of P, its normal and distance. Returns (new
+    p1, new p2, outcome).
+
+    The step is Newton's in t = tan(Δφ/2), the half-angle tangent of the turn from φ: the turn
+    by cos Δφ = (1 − t²)/(1 + t²), sin Δφ = 2t/(1 + t²) keeps the point on the circle with one
+    division and no sine or cosine, and since dφ/dt = 2 at t = 0 the step t = −g/(2 g'(φ)) is
+    half the step in φ and converges as fast. Damped to |Δφ| ≤ 2·atan(0.25) ≈ 0.49 rad (|t| ≤
+    0.25, the step in φ clamped to ±0.5 rad); φ stays in [0, π] (sin φ ≥ 0, the side away
+    from the opposite node)."""
     if dist <= tolerance_m:
-        return phi, _DONE
+        return p1, p2, _DONE
     ox, oy, oz = x - fx, y - fy, z - fz
     g = ox * nx + oy * ny + oz * nz
-    r = frame[9]
     n_a1 = nx * frame[3] + ny * frame[4] + nz * frame[5]
     n_a2 = nx * frame[6] + ny * frame[7] + nz * frame[8]
-    slope = r * (-sin_p * n_a1 + cos_p * n_a2)
+    slope = -p2 * n_a1 + p1 * n_a2  # g'(φ) = r(−sin φ n·a1 + cos φ n·a2)
     step = -g / slope
     if math.isnan(step):
         step = 0.0
     step = min(max(step, -0.5), 0.5)
-    new_phi = min(max(phi + step, 0.0), math.pi)
-    stuck = abs(new_phi - phi) <= 1e-15 * math.pi
+    t = 0.5 * step
+    w = 1.0 / (1.0 + t * t)
+    cos_t, sin_t = (1.0 - t * t) * w, 2.0 * t * w
+    new_p1 = p1 * cos_t - p2 * sin_t
+    new_p2 = p2 * cos_t + p1 * sin_t
+    # Stuck: the turn is below 1e-15·π rad, or g is zero to its rounding (the offset from the
+    # foot is tangential: past an edge of the tool, where Newton then only turns by rounding
+    # noise); past φ = 0 or φ = π (|Δφ| < π/2) the point stops there, stuck if it was there.
+    noise = 8.0 * _EPS * (abs(x) + abs(y) + abs(z) + abs(fx) + abs(fy) + abs(fz))
+    stuck = abs(step) <= 1e-15 * math.pi or abs(g) <= noise
+    if new_p2 < 0.0:
+        r = frame[9]
+        new_p1, new_p2 = (r if new_p1 > 0.0 else -r), 0.0
+        stuck = p2 <= 1e-15 * math.pi * r or abs(g) <= noise
     if not (stuck or last_try):
-        return new_phi, _GOING
+        return new_p1, new_p2, _GOING
     # A point whose closest point is an edge of the tool has an offset with a tangential
     # part; an interior closest point has a purely normal one.
     tx, ty, tz = ox - g * nx, oy - g * ny, oz - g * nz
     if math.sqrt(tx * tx + ty * ty + tz * tz) > 0.5 * dist:
-        return new_phi, _FAILED_OFF_TOOL
-    return new_phi, _FAILED
+        return new_p1, new_p2, _FAILED_OFF_TOOL
+    return new_p1, new_p2, _FAILED
 
 
 @_jit
 def circle_frames(
     a: FloatArray, b: FloatArray, c: FloatArray, guess: FloatArray, n0: FloatArray, spacing: float
 ):
-    """Frames (m, FRAME) and starting angles φ (m,) [rad] of m nodes (NaN: no circle)."""
+    """Frames (m, FRAME) and starting angles (m, 2) of m nodes, as offsets (r cos φ, r sin φ)
+    [m] from the circle's centre (NaN: no circle)."""
     m = a.shape[0]
     frames = np.empty((m, FRAME))
-    phi = np.empty(m)
+    angle = np.empty((m, 2))
     for i in range(m):
-        phi[i], f = _circle_frame(
+        angle[i, 0], angle[i, 1], f = _circle_frame(
             _row(a, i), _row(b, i), _row(c, i), _row(guess, i), _row(n0, i), spacing
         )
         frames[i, 0], frames[i, 1], frames[i, 2], frames[i, 3], frames[i, 4] = f[:5]
         frames[i, 5], frames[i, 6], frames[i, 7], frames[i, 8], frames[i, 9] = f[5:]
-    return frames, phi
+    return frames, angle
 
 
 @_jit
-def circle_points(frames: FloatArray, phi: FloatArray, rows: IntArray) -> FloatArray:
-    """P(φ) (len(rows), 3) [m] of the nodes ``rows``."""
+def circle_points(frames: FloatArray, angle: FloatArray, rows: IntArray) -> FloatArray:
+    """P(φ) (len(rows), 3) [m] of the nodes ``rows``, their angles as (r cos φ, r sin φ)."""
     out = np.empty((rows.shape[0], 3))
     for k in range(rows.shape[0]):
         i = rows[k]
         out[k, 0], out[k, 1], out[k, 2] = _on_circle(
-            _frame_row(frames, i), math.cos(phi[i]), math.sin(phi[i])
+            _frame_row(frames, i), angle[i, 0], angle[i, 1]
         )
     return out
 
@@ -341,23 +389,23 @@ def newton_updates(
     normal: FloatArray,
     dist: FloatArray,
     frames: FloatArray,
-    phi: FloatArray,
+    angle: FloatArray,
     points: FloatArray,
     status: StatusArray,
     tolerance_m: float,
     last_try: bool,
 ) -> IntArray:
     """One Newton update of the nodes ``rows`` (their P(φ) ``x``, closest points, normals and
-    distances given); writes placed ``points`` and ``status`` and returns the rows still going."""
+    distances given; their angles (r cos φ, r sin φ) updated in ``angle``); writes placed
+    ``points`` and ``status`` and returns the rows still going."""
     going = np.empty(rows.shape[0], dtype=np.int64)
     count = 0
     for k in range(rows.shape[0]):
         i = rows[k]
-        new_phi, outcome = _newton_update(
+        angle[i, 0], angle[i, 1], outcome = _newton_update(
             _frame_row(frames, i),
-            phi[i],
-            math.cos(phi[i]),
-            math.sin(phi[i]),
+            angle[i, 0],
+            angle[i, 1],
             x[k, 0],
             x[k, 1],
             x[k, 2],
@@ -371,7 +419,6 @@ def newton_updates(
             tolerance_m,
             last_try,
         )
-        phi[i] = new_phi
         if outcome == _DONE:
             points[i, 0], points[i, 1], points[i, 2] = x[k, 0], x[k, 1], x[k, 2]
             status[i] = _PLACED
@@ -400,16 +447,15 @@ def _newton_node(
     gx, gy, gz, n0x, n0y, n0z, _ = _query(
         kind, params, a[0] + b[0] - c[0], a[1] + b[1] - c[1], a[2] + b[2] - c[2]
     )
-    phi, frame = _circle_frame(a, b, c, (gx, gy, gz), (n0x, n0y, n0z), spacing)
+    p1, p2, frame = _circle_frame(a, b, c, (gx, gy, gz), (n0x, n0y, n0z), spacing)
     nan = np.nan
-    if math.isnan(phi):
+    if math.isnan(p1):
         return nan, nan, nan, _NO_INTERSECTION, 0, nan, nan, nan, nan
     for used in range(1, max_iterations + 1):
-        cos_p, sin_p = math.cos(phi), math.sin(phi)
-        x, y, z = _on_circle(frame, cos_p, sin_p)
+        x, y, z = _on_circle(frame, p1, p2)
         fx, fy, fz, nx, ny, nz, dist = _query(kind, params, x, y, z)
-        phi, outcome = _newton_update(
-            frame, phi, cos_p, sin_p, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m,
+        p1, p2, outcome = _newton_update(
+            frame, p1, p2, x, y, z, fx, fy, fz, nx, ny, nz, dist, tolerance_m,
             used == max_iterations,
         )  # fmt: skip
         if outcome == _DONE:
@@ -517,9 +563,12 @@ def _check_node(
             st = _FOLDED
     if st != _PLACED:
         return st, 0.0
-    to_a = math.sqrt((px - a[0]) ** 2 + (py - a[1]) ** 2 + (pz - a[2]) ** 2)
-    to_b = math.sqrt((px - b[0]) ** 2 + (py - b[1]) ** 2 + (pz - b[2]) ** 2)
-    return st, max(abs(to_a - spacing), abs(to_b - spacing), dist)
+    # |PA| − d = (|PA|² − d²)/(|PA| + d), and |PA| + d = 2d to the residual's own relative size:
+    # no square root, and the same rounding (an ulp of d²/2d against one of |PA|)
+    to_a2 = (px - a[0]) ** 2 + (py - a[1]) ** 2 + (pz - a[2]) ** 2
+    to_b2 = (px - b[0]) ** 2 + (py - b[1]) ** 2 + (pz - b[2]) ** 2
+    d2, over_2d = spacing * spacing, 0.5 / spacing
+    return st, max(abs(to_a2 - d2) * over_2d, abs(to_b2 - d2) * over_2d, dist)
 
 
 @_per_node

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from preform.drape.result import DrapeResult
 from preform.geometry.permeability import Arrangement, fabric_permeability
-from preform.geometry.sheared_cell import MAX_SHEAR
+from preform.geometry.sheared_cell import MAX_SHEAR, thickness_per_angle
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -68,13 +68,20 @@ class PreformResponse:
         grid = np.unique(np.concatenate([grid, [m for m in marks if 0.0 <= m <= MAX_SHEAR]]))
         # Before the first family locks no tow changes: the thickness is the flat cell's and
         # the fraction grows as 1/cos γ over the shrinking area (exact in the sheared cell),
-        # so only the angles from locking on need the cell itself (ms each for a satin).
+        # so only the angles from locking on need the cell itself, all in one call (an
+        # architecture without a vectorised stack builds one cell per angle).
         free = grid < flat.locking_angle
-        cells = [fabric.sheared_cell(float(g)) for g in grid[~free]]
+        locked = grid[~free]
+        thickness_over = getattr(fabric, "sheared_thickness", None)
+        if callable(thickness_over):
+            sheared = thickness_over(locked)
+        else:  # a fabric object that only has the per-angle cell
+            sheared = thickness_per_angle(fabric.sheared_cell, locked)
         thickness = np.full(grid.shape, flat.thickness)
         fraction = flat.fibre_volume_fraction / np.cos(grid)
-        thickness[~free] = [c.thickness for c in cells]
-        fraction[~free] = [c.fibre_volume_fraction for c in cells]
+        thickness[~free] = sheared
+        # the sheared cell's own fraction: fibre volume over (area₀ cos γ) × thickness
+        fraction[~free] = flat.fibre_volume / (flat.area * np.cos(locked) * sheared)
         return cls(
             shear=grid,
             thickness=thickness,

@@ -377,12 +377,14 @@ def _needs_optimum(scene: Scene) -> tuple[str, ...]:
 
 
 def write_cells_csv(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.tables import cells_table, write_table
+    from preform.export.csv_columns import write_csv_columns
+    from preform.export.tables import cell_columns
 
     ply: DrapedPly = ctx.products["drape"]
     energy = ctx.products["thickness"].applied(ply.result, ply.energy)  # the case's one thickness
     preform = ctx.products.get("permeability")  # only when the scene asks for it
-    write_table(cells_table(ply.result, energy, preform), ctx.case_dir / "cells.csv")
+    # without pandas: its import costs a worker more than the table (preform.export.csv_columns)
+    write_csv_columns(cell_columns(ply.result, energy, preform), ctx.case_dir / "cells.csv")
     return {"cells_csv": "cells.csv"}
 
 

@@ -73,8 +73,16 @@ def _unit_scaled(x: float, y: float, z: float):
 # more made the closed-form sphere fill ~25 % slower).
 @_jit_inline
 def _sphere(kind: int, params: FloatArray, x: float, y: float, z: float):
-    ux, uy, uz = _unit_scaled(x - params[0], y - params[1], z - params[2])
+    rx, ry, rz = x - params[0], y - params[1], z - params[2]
     radius = params[3]
+    length = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if length >= 1e-100:
+        # One division (the reciprocal's products differ from the quotients by an ulp at
+        # most): the Newton fill queries twice a node, and divisions and square roots bound it.
+        inv = 1.0 / length
+        ux, uy, uz = rx * inv, ry * inv, rz * inv
+    else:
+        ux, uy, uz = _unit_scaled(rx, ry, rz)
     if kind == TRIMMED_SPHERE:
         floor = (params[4] - params[2]) / radius
         if uz < floor:
@@ -86,11 +94,13 @@ def _sphere(kind: int, params: FloatArray, x: float, y: float, z: float):
                 fx, fy = 1.0, 0.0
             ring = math.sqrt(1.0 - floor * floor)
             ux, uy, uz = ring * fx, ring * fy, floor
+            qx, qy, qz = params[0] + radius * ux, params[1] + radius * uy, params[2] + radius * uz
+            return qx, qy, qz, ux, uy, uz, _distance(x, y, z, qx, qy, qz)
     qx = params[0] + radius * ux
     qy = params[1] + radius * uy
     qz = params[2] + radius * uz
-    dx, dy, dz = x - qx, y - qy, z - qz
-    return qx, qy, qz, ux, uy, uz, math.sqrt(dx * dx + dy * dy + dz * dz)
+    # on the sphere's radial line the distance is | |p − o| − R |, no second square root
+    return qx, qy, qz, ux, uy, uz, abs(length - radius)
 
 
 # --------------------------------------------------------------------------------------------

@@ -45,7 +45,8 @@ FloatArray = NDArray[np.float64]
 SHEARED_CELL = "sheared unit cell"
 CONSTANT_FIBRE_VOLUME = "constant fibre volume fraction (1/cos γ)"
 
-#: Fabrics whose sheared-cell table is kept in memory (tabulating costs 0.1–2 s per fabric).
+#: Fabrics whose sheared-cell table is kept in memory (tabulating costs 0.5–2.5 ms per fabric,
+#: benchmarks/README.md (j)).
 CACHE_SIZE = 16
 _TABLES: OrderedDict[str, PreformResponse | None] = OrderedDict()
 

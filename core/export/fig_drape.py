@@ -3,10 +3,11 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,7 +18,6 @@ from preform.export.figures import new_figure, save_figure
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
-    from mpl_toolkits.mplot3d.axes3d import Axes3D
 
 #: Colours of the two fibre families in the top view.
 U_COLOUR = "#1f3b73"
@@ -144,9 +144,15 @@ def _top_view(ax: Axes, result: DrapeResult, tow_every: int, edge: np.ndarray | 
     if result.status[i0, j0] == NodeStatus.PLACED:
         ax.plot(1e3 * start[0], 1e3 * start[1], "o", color="k", ms=5, label="start node")
     ax.set_aspect("equal", adjustable="datalim")
+    # Round ticks inside the view only: matplotlib makes a tick object (lines and texts) for
+    # every value its locator returns, the ones past the limits too.
+    ax.xaxis.set_major_locator(_in_view_locator(8))
+    ax.yaxis.set_major_locator(_in_view_locator(8))
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
-    ax.set_title("Fibre pattern, top view (bold: generators)")
+    # y given: matplotlib then skips measuring every tick label to place the title above them
+    # (nothing is drawn above this axes); that was a tenth of the figure's drawing time.
+    ax.set_title("Fibre pattern, top view (bold: generators)", y=1.0)
     ax.legend(loc="upper right", fontsize="small")
 
 
@@ -228,11 +234,245 @@ def shear_view_quads(
     )
 
 
-def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyField | None) -> None:
+#: Where the 3D shear view is seen from [deg]: elevation above the xy-plane and azimuth about +z
+#: from +x (mplot3d's default view, the one this panel had when it was drawn by mplot3d). A
+#: drawing choice, not a modelling one.
+VIEW_ELEVATION_DEG = 30.0
+VIEW_AZIMUTH_DEG = -60.0
+
+#: Light grey of the back panes and of their grid lines (RGBA), as mplot3d draws them.
+PANE_COLOUR = (0.95, 0.95, 0.95, 1.0)
+GRID_COLOUR = (0.8, 0.8, 0.8, 1.0)
+
+
+def view_axes(elevation_deg: float, azimuth_deg: float) -> np.ndarray:
+    """The orthographic view's unit vectors (3, 3) in model axes (x, y, z): rows are the
+    screen's right, the screen's up and the direction towards the viewer (right-handed)."""
+    el, az = math.radians(elevation_deg), math.radians(azimuth_deg)
+    towards = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    right = np.array([-math.sin(az), math.cos(az), 0.0])
+    return np.stack([right, np.cross(towards, right), towards])
+
+
+def painter_order(polygons: np.ndarray, towards: np.ndarray) -> np.ndarray:
+    """Indices that draw ``polygons`` (n, m, 3) farthest first, by the depth of each polygon's
+    vertex mean along ``towards`` (3,), the direction to the viewer (mplot3d's "average" sort).
+    Drawn in this order, nearer cells paint over the ones they hide, on a convex tool or not."""
+    return np.argsort(polygons.mean(axis=1) @ np.asarray(towards, dtype=float), kind="stable")
+
+
+@functools.cache
+def _in_view_locator_type() -> type:
+    from matplotlib.ticker import MaxNLocator
+
+    class InViewLocator(MaxNLocator):
+        """Round tick values [mm] (1, 2, 2.5, 5 × 10^k apart) within the axis's view."""
+
+        def __call__(self) -> Any:
+            lo, hi = sorted(self.axis.get_view_interval())  # type: ignore[union-attr]
+            ticks = super().__call__()
+            return ticks[(ticks >= lo) & (ticks <= hi)]
+
+    return InViewLocator
+
+
+def _in_view_locator(bins: int) -> Any:
+    return _in_view_locator_type()(bins, steps=[1, 2, 2.5, 5, 10])
+
+
+def _nice_ticks(lo: float, hi: float, bins: int) -> np.ndarray:
+    """At most ``bins`` + 1 round values [mm] within [lo, hi]."""
+    from matplotlib.ticker import MaxNLocator
+
+    ticks = np.asarray(MaxNLocator(bins, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi))
+    return ticks[(ticks >= lo - 1e-9 * (hi - lo)) & (ticks <= hi + 1e-9 * (hi - lo))]
+
+
+def _tick_text(value: float) -> str:
+    text = f"{value:.6g}"
+    return "0" if text == "-0" else text.replace("-", "\N{MINUS SIGN}")
+
+
+class _Panel:
+    """Artists drawn on the figure in their own coordinates [mm on the screen], one scale both
+    ways, centred in ``rect`` (left, bottom, width, height) [figure fraction]: what a plain
+    axes with its axis off gives, without making an axes (its axis, tick prototypes, spines
+    and patch: a twentieth of the figure's time). ``fit`` sets the scale once the drawing's
+    extent is known; every artist added before follows it."""
+
+    def __init__(self, fig: Figure, rect: tuple[float, float, float, float]) -> None:
+        from matplotlib.transforms import Affine2D
+
+        self.fig = fig
+        self.rect = rect
+        self.affine = Affine2D()
+        self.transform = self.affine + fig.transFigure
+
+    def add(self, artist: Any) -> Any:
+        artist.set_transform(self.transform)
+        self.fig.add_artist(artist)
+        return artist
+
+    def text(self, x: float, y: float, text: str, **style: Any) -> Any:
+        from matplotlib.text import Text
+
+        return self.add(Text(x, y, text, **style))
+
+    def annotate(
+        self, text: str, xy: tuple[float, float], offset_pt: tuple[float, float], **style: Any
+    ) -> Any:
+        """``text`` ``offset_pt`` [points] away from ``xy`` (panel coordinates)."""
+        from matplotlib.text import Annotation
+
+        note = Annotation(
+            text, xy, xycoords=self.transform, xytext=offset_pt, textcoords="offset points", **style
+        )
+        self.fig.add_artist(note)
+        return note
+
+    def fit(self, x0: float, x1: float, y0: float, y1: float) -> float:
+        """Scale [x0, x1] × [y0, y1] to fill the panel's rectangle at one scale, centred;
+        returns the top of the drawing [figure fraction]."""
+        width_in, height_in = self.fig.get_size_inches()
+        left, bottom, width, height = self.rect
+        scale = min(width * width_in / (x1 - x0), height * height_in / (y1 - y0))  # in per unit
+        sx, sy = scale / width_in, scale / height_in
+        cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+        self.affine.clear().translate(-cx, -cy).scale(sx, sy)
+        self.affine.translate(left + 0.5 * width, bottom + 0.5 * height)
+        return bottom + 0.5 * height + sy * (y1 - cy)
+
+
+def _box_frame(ax: _Panel, lo: np.ndarray, hi: np.ndarray, view: np.ndarray) -> np.ndarray:
+    """The 3D axes drawn in 2D: the three back panes of the box [lo, hi] [mm] with grid lines at
+    the ticks, and each axis's ticks and label [mm] along a front edge of the box. Returns
+    screen points (k, 2) that the frame and its labels reach, for the panel's limits."""
+    from matplotlib.collections import LineCollection, PolyCollection
+
+    towards = view[2]
+    span = hi - lo
+    # About a tick per eighth of the drawing along each axis's edge on the screen (2 to 6 gaps).
+    on_screen = span * np.hypot(view[0], view[1])
+    bins = np.clip(np.round(8 * on_screen / on_screen.max()), 2, 6).astype(int)
+    ticks = [_nice_ticks(lo[a], hi[a], int(bins[a])) for a in range(3)]
+    for a in range(3):
+        if on_screen[a] < 0.1 * on_screen.max() and len(ticks[a]) > 1:
+            # an edge seen nearly end-on (a flat net's z): one tick, its labels would overlap
+            middle = 0.5 * (lo[a] + hi[a])
+            ticks[a] = ticks[a][[int(np.argmin(np.abs(ticks[a] - middle)))]]
+    # The pane of axis a lies on the side of the box away from the viewer.
+    back = np.where(towards > 0, lo, hi)
+    front = np.where(towards > 0, hi, lo)
+    panes, grid = [], []
+    for a in range(3):
+        b, c = (a + 1) % 3, (a + 2) % 3
+        pane = np.empty((4, 3))
+        pane[:, a] = back[a]
+        pane[:, b] = [lo[b], hi[b], hi[b], lo[b]]
+        pane[:, c] = [lo[c], lo[c], hi[c], hi[c]]
+        panes.append(pane)
+        for along, other in ((b, c), (c, b)):
+            for t in ticks[along]:
+                line = np.empty((2, 3))
+                line[:, a] = back[a]
+                line[:, along] = t
+                line[:, other] = [lo[other], hi[other]]
+                grid.append(line)
+    screen = view[:2].T
+    ax.add(
+        PolyCollection(
+            [p @ screen for p in panes], facecolors=PANE_COLOUR, edgecolors="0.6", linewidths=0.6
+        )
+    )
+    ax.add(LineCollection([g @ screen for g in grid], colors=GRID_COLOUR, lw=0.6))
+    corners = np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
+    reach = [corners @ screen]
+    size = float(np.ptp(reach[0], axis=0).max())
+    centre = 0.5 * (lo + hi) @ screen
+    marks = []
+    for a, name in enumerate("xyz"):
+        edge = np.empty(3)
+        if a == 2:
+            # z up the vertical edge farthest right on the screen
+            xy = [(x, y) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
+            edge[:2] = max(xy, key=lambda p: p[0] * view[0, 0] + p[1] * view[0, 1])
+        else:
+            # x and y along the floor's front edges (the floor: the z pane)
+            edge[1 - a] = front[1 - a]
+            edge[2] = back[2]
+        points = np.repeat(edge[None], len(ticks[a]), axis=0)
+        points[:, a] = ticks[a]
+        middle = edge.copy()
+        middle[a] = 0.5 * (lo[a] + hi[a])
+        outward = middle @ screen - centre
+        outward /= max(float(np.hypot(*outward)), 1e-12)
+        ha = "left" if outward[0] > 0.35 else "right" if outward[0] < -0.35 else "center"
+        va = "bottom" if outward[1] > 0.35 else "top" if outward[1] < -0.35 else "center"
+        tick_in = points @ screen
+        tick_out = tick_in + 0.015 * size * outward
+        marks.append(np.stack([tick_in, tick_out], axis=1))
+        for (x, y), t in zip(tick_out + 0.01 * size * outward, ticks[a], strict=True):
+            ax.text(x, y, _tick_text(float(t)), ha=ha, va=va, fontsize="small", gid=f"{name} tick")
+        direction = view[:2, a]
+        angle = math.degrees(math.atan2(direction[1], direction[0]))
+        angle = (angle + 90.0) % 180.0 - 90.0  # upright text
+        label = middle @ screen + 0.12 * size * outward
+        ax.text(label[0], label[1], f"{name} [mm]", ha="center", va="center", rotation=angle)
+        reach.append(np.array([label + 0.04 * size * outward]))
+        reach.append(tick_out + 0.07 * size * outward)
+    ax.add(LineCollection(list(np.concatenate(marks)), colors="0.2", lw=0.8))
+    return np.concatenate(reach)
+
+
+def _colour_scale(
+    ax: _Panel, norm: Any, cmap: Any, box: tuple[float, float, float, float], label: str
+) -> None:
+    """A vertical colour bar of ``cmap`` over ``norm``'s range drawn in the panel at ``box``
+    (left, bottom, width, height) in its coordinates, with round ticks and ``label``: what
+    ``Figure.colorbar`` draws, without the extra Axes (half the shear panel's drawing time)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.image import BboxImage
+    from matplotlib.patches import Rectangle
+    from matplotlib.transforms import Bbox, TransformedBbox
+
+    left, bottom, width, height = box
+    image = BboxImage(
+        TransformedBbox(Bbox.from_bounds(left, bottom, width, height), ax.transform),
+        cmap=cmap,
+        norm=norm,
+        origin="lower",
+        interpolation="nearest",
+        gid="colour scale",
+    )
+    image.set_data(np.linspace(norm.vmin, norm.vmax, 256)[:, None])
+    ax.fig.add_artist(image)
+    ax.add(Rectangle((left, bottom), width, height, fill=False, lw=0.8, ec="k"))
+    ticks = _nice_ticks(norm.vmin, norm.vmax, 6)
+    y = bottom + height * (ticks - norm.vmin) / (norm.vmax - norm.vmin)
+    right = left + width
+    ax.add(LineCollection([[(right, v), (right + 0.25 * width, v)] for v in y], colors="k", lw=0.8))
+    for value, v in zip(ticks, y, strict=True):
+        ax.annotate(_tick_text(float(value)), (right, v), (6, 0), ha="left", va="center")
+    ax.annotate(
+        label, (right, bottom + 0.5 * height), (40, 0), ha="center", va="center", rotation=90
+    )
+
+
+def _shear_view(
+    fig: Figure,
+    rect: tuple[float, float, float, float],
+    result: DrapeResult,
+    energy: EnergyField | None,
+) -> None:
+    """The net in 3D, coloured by signed shear, in ``rect`` [figure fraction]: an orthographic
+    view projected here and drawn as one 2D collection of polygons in depth order (see
+    ``painter_order``), with the box's panes, ticks in mm and a colour scale (``_Panel``)."""
     from matplotlib import colormaps
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import CenteredNorm
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import CenteredNorm, to_rgba
+    from matplotlib.text import Annotation
 
     valid = np.asarray(result.cell_status == CellStatus.VALID)
     if result.part_share is not None:
@@ -245,45 +485,91 @@ def _shear_view(fig: Figure, ax: Axes3D, result: DrapeResult, energy: EnergyFiel
     half_range = max(float(np.max(np.abs(shear_deg))) if shear_deg.size else 0.0, 1.0)
     norm = CenteredNorm(vcenter=0.0, halfrange=half_range)
     cmap = colormaps["RdBu_r"]
+    axes = view_axes(VIEW_ELEVATION_DEG, VIEW_AZIMUTH_DEG)
+    screen = axes[:2].T
+    ax = _Panel(fig, rect)
+    folds = 1e3 * fold_triangles(result)
     if len(quads):
-        edge = np.tile([0.3, 0.3, 0.3, 0.6], (len(quads), 1))
-        widths = np.full(len(quads), 0.15)
+        pts = np.concatenate([quads.reshape(-1, 3), folds.reshape(-1, 3)])
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+    else:  # nothing to draw: the frame of a 1 mm box, the colour scale
+        lo, hi = np.zeros(3), np.ones(3)
+    # A flat net has no z extent: give every axis a little room so the box is not flat.
+    pad = 0.01 * float(np.max(hi - lo)) + 1e-9
+    lo, hi = lo - pad, hi + pad
+    hi = np.maximum(hi, lo + 0.02 * float(np.max(hi - lo)))
+    reach = _box_frame(ax, lo, hi, axes)
+    if len(quads):
+        # One collection: the cells, then the folds' triangles (as quads with a repeated corner).
+        polygons = np.concatenate([quads, folds[:, [0, 1, 2, 2]]]) if len(folds) else quads
+        faces = np.concatenate(
+            [cmap(norm(shear_deg)), np.tile(to_rgba(FOLD_COLOUR), (len(folds), 1))]
+        )
+        edge = np.tile([0.3, 0.3, 0.3, 0.6], (len(polygons), 1))
+        widths = np.full(len(polygons), 0.15)
         if view.locked is not None:
             # Cells past locking get a black outline: that is where wrinkles are expected.
-            edge[view.locked] = (0.0, 0.0, 0.0, 1.0)
-            widths[view.locked] = 0.8
-        ax.add_collection3d(
-            Poly3DCollection(
-                quads, facecolors=cmap(norm(shear_deg)), edgecolors=edge, linewidths=widths
-            )
+            edge[: len(quads)][view.locked] = (0.0, 0.0, 0.0, 1.0)
+            widths[: len(quads)][view.locked] = 0.8
+        order = painter_order(polygons, axes[2])
+        cells = PolyCollection(
+            polygons[order] @ screen,
+            closed=True,
+            facecolors=faces[order],
+            edgecolors=edge[order],
+            linewidths=widths[order],
+            gid="shear cells",
         )
-        folds = fold_triangles(result)
+        ax.add(cells)
         if len(folds):
-            ax.add_collection3d(Poly3DCollection(1e3 * folds, facecolors=FOLD_COLOUR))
-            centre = 1e3 * folds.mean(axis=1)
-            ax.scatter(*centre.T, marker="X", s=80, color=FOLD_COLOUR, edgecolors="k")
-        pts = quads.reshape(-1, 3)
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        # A flat net has no z extent: give every axis a little room so the limits are not singular.
-        pad = 0.01 * float(np.max(hi - lo)) + 1e-9
-        lo, hi = lo - pad, hi + pad
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(lo[1], hi[1])
-        ax.set_zlim(lo[2], hi[2])
-        span = hi - lo
-        ax.set_box_aspect(tuple(np.maximum(span, 0.02 * span.max())), zoom=0.9)
-    from matplotlib.ticker import MaxNLocator
+            from matplotlib.lines import Line2D
 
-    ax.zaxis.set_major_locator(MaxNLocator(4))
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_zlabel("z [mm]")
+            centre = folds.mean(axis=1) @ screen
+            ax.add(
+                Line2D(
+                    centre[:, 0],
+                    centre[:, 1],
+                    marker="X",
+                    color=FOLD_COLOUR,
+                    ms=9,
+                    mec="k",
+                    mew=0.6,
+                    ls="none",
+                    gid="fold marks",
+                )
+            )
+    (x0, y0), (x1, y1) = reach.min(axis=0), reach.max(axis=0)
+    # The colour scale right of the drawing: 0.7 of its height (as a colour bar shrunk to 0.7),
+    # but never shorter than 0.45 of its width (a flat part's panel grows to take it).
+    width, height = x1 - x0, y1 - y0
+    bar = max(0.7 * height, 0.45 * width)
+    middle = 0.5 * (y0 + y1)
+    y0, y1 = min(y0, middle - 0.6 * bar), max(y1, middle + 0.6 * bar)
+    _colour_scale(
+        ax,
+        norm,
+        cmap,
+        (x1 + 0.04 * width, middle - 0.5 * bar, 0.035 * width, bar),
+        "signed shear angle γ [deg]",
+    )
+    top = ax.fit(x0, x1 + 0.3 * width, y0, y1)
     title = "Shear angle" + (" (black outline: past locking)" if energy is not None else "")
     if view.block > 1:
         title += f"\none quad per {view.block} × {view.block} cells (their largest |γ|)"
-    ax.set_title(title)
-    colour_bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.7, pad=0.12)
-    colour_bar.set_label("signed shear angle γ [deg]")
+    # centred over the panel, 6 points above the drawing, at an axes title's size
+    fig.add_artist(
+        Annotation(
+            title,
+            (rect[0] + 0.5 * rect[2], top),
+            xycoords="figure fraction",
+            xytext=(0, 6),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize="large",
+            gid="shear title",
+        )
+    )
 
 
 def fibre_pattern_figure(
@@ -302,18 +588,24 @@ def fibre_pattern_figure(
     The top view draws every ``tow_every``-th line of nodes of both fibre families (the lines
     through the start node, the generators, always and in bold), broken wherever a node is not
     placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
-    colour bar in degrees; with ``energy``, cells past locking are outlined and the total energy
-    [J] goes into the title. A net of more than ``SHEAR_VIEW_MAX_QUADS`` cells is drawn one quad
-    per k × k block there, and the panel's title says k (``shear_view_quads``). Where the net folded (a sharp vertex's shadow), the cell that would
-    turn over is filled orange in both views and the count goes into the title. Axes in mm. ``size_px`` is the saved (width, height) [pixels].
-    A net clipped to a part is drawn over the part only (cells with area in it, and their
-    nodes); with ``part`` its edge is drawn dashed in the top view.
+    colour scale in degrees; with ``energy``, cells past locking are outlined and the total
+    energy [J] goes into the title. It is an orthographic view from ``VIEW_ELEVATION_DEG``,
+    ``VIEW_AZIMUTH_DEG`` projected here and drawn on the figure itself (no axes), the cells as one
+    collection farthest first (``painter_order``), the box's back panes, ticks [mm] and the
+    colour scale drawn with it: mplot3d's look at a fraction of its cost (benchmarks/README.md,
+    section (m)). A net of more than ``SHEAR_VIEW_MAX_QUADS`` cells is drawn one quad per k × k
+    block there, and the panel's title says k (``shear_view_quads``). Where the net folded (a
+    sharp vertex's shadow), the cell that would turn over is filled orange in both views and
+    the count goes into the title. Axes in mm. ``size_px`` is the saved (width, height)
+    [pixels]. A net clipped to a part is drawn over the part only (cells with area in it, and
+    their nodes); with ``part`` its edge is drawn dashed in the top view.
     Returns the figure (already saved).
     """
     fig = new_figure(size_px)
     edge = part_edge_segments(result, part) if part is not None else None
     _top_view(fig.add_subplot(1, 2, 1), result, tow_every, edge)
-    _shear_view(fig, cast("Axes3D", fig.add_subplot(1, 2, 2, projection="3d")), result, energy)
+    right = fig.add_gridspec(1, 2)[0, 1].get_position(fig)  # where add_subplot(1, 2, 2) goes
+    _shear_view(fig, tuple(right.bounds), result, energy)
     summary = (
         f"generator angle {np.degrees(result.generator_angle):.1f}°, "
         f"{result.nodes_placed}/{result.nodes_total} nodes placed"

@@ -57,6 +57,77 @@ PREFORM_COLUMNS: tuple[str, ...] = (
 )
 
 
+def cell_columns(
+    result: DrapeResult, energy: EnergyField | None = None, preform: PreformField | None = None
+) -> dict[str, Any]:
+    """The columns of ``cells_table`` as numpy arrays (name -> values, in column order), one
+    entry a cell: what ``cells_csv`` writes without building a DataFrame. ``status`` is a list
+    of CellStatus names; ``past_locking`` and ``past_failure`` are masked bool arrays (masked:
+    not known). Values as ``cells_table`` describes."""
+    n1, n2 = np.asarray(result.cell_status).shape
+    ii, jj = np.meshgrid(np.arange(n1), np.arange(n2), indexing="ij")
+    valid = np.asarray(result.cell_status == CellStatus.VALID).ravel()
+
+    def on_valid(values: Any) -> np.ndarray:
+        out = np.asarray(values, dtype=float).ravel().copy()
+        out[~valid] = np.nan
+        return out
+
+    def flags(values: Any | None) -> np.ma.MaskedArray:
+        if values is None:
+            return np.ma.MaskedArray(np.zeros(n1 * n2, dtype=bool), mask=True)
+        return np.ma.MaskedArray(np.asarray(values, dtype=bool).ravel(), mask=~valid)
+
+    centroid_mm = 1e3 * np.asarray(result.centroid, dtype=float).reshape(-1, 3)
+    centroid_mm[~valid] = np.nan
+    shear = on_valid(result.shear)
+    names = {int(s): s.name for s in CellStatus}
+    codes = np.asarray(result.cell_status, dtype=np.int64).ravel().tolist()
+    status = [names.get(code, f"UNKNOWN_{code}") for code in codes]
+
+    reference_mm = None
+    if energy is not None:
+        energy_density = on_valid(energy.energy_density)
+        thickness_ratio = on_valid(energy.thickness_ratio)
+        reference_mm = energy.thickness_reference_mm
+    else:
+        energy_density = np.full(n1 * n2, np.nan)
+        thickness_ratio = 1.0 / np.cos(shear)
+    thickness_mm = thickness_ratio * (np.nan if reference_mm is None else reference_mm)
+    columns: dict[str, Any] = {
+        "i": ii.ravel(),
+        "j": jj.ravel(),
+        "status": status,
+        "in_part": np.asarray(result.in_part, dtype=bool).ravel(),
+        "part_share": np.asarray(result.part_weight, dtype=float).ravel(),
+        "x_mm": centroid_mm[:, 0],
+        "y_mm": centroid_mm[:, 1],
+        "z_mm": centroid_mm[:, 2],
+        "shear_deg": np.degrees(shear),
+        "area_mm2": 1e6 * on_valid(result.area),
+        "thickness_ratio": thickness_ratio,
+        "thickness_mm": thickness_mm,
+        "energy_J_per_m2": energy_density,
+        "past_locking": flags(None if energy is None else energy.past_locking),
+        "past_failure": flags(None if energy is None else energy.past_failure),
+    }
+    assert tuple(columns) == CELL_COLUMNS
+    if preform is not None:
+        direction = np.asarray(preform.principal_direction, dtype=float).reshape(-1, 3)
+        columns.update(
+            {
+                "preform_thickness_mm": 1e3 * on_valid(preform.thickness),
+                "fibre_volume_fraction": on_valid(preform.fibre_volume_fraction),
+                "permeability_k1_m2": on_valid(preform.principal_permeability[..., 0]),
+                "permeability_k2_m2": on_valid(preform.principal_permeability[..., 1]),
+                "permeability_k1_dir_x": on_valid(direction[:, 0]),
+                "permeability_k1_dir_y": on_valid(direction[:, 1]),
+                "permeability_k1_dir_z": on_valid(direction[:, 2]),
+            }
+        )
+    return columns
+
+
 def cells_table(
     result: DrapeResult, energy: EnergyField | None = None, preform: PreformField | None = None
 ) -> pd.DataFrame:
@@ -75,73 +146,16 @@ def cells_table(
     the thickness ratio then follows from the shear as 1/cos γ. With ``preform`` (the ``permeability``
     output) the ``PREFORM_COLUMNS`` follow: the sheared cell's thickness [mm] and fabric fibre
     volume fraction [-], the principal in-plane permeabilities k1 ≥ k2 [m²] and k1's unit
-    direction in the tool's axes.
+    direction in the tool's axes. The same columns as arrays: ``cell_columns``.
     """
     import pandas as pd
 
-    n1, n2 = np.asarray(result.cell_status).shape
-    ii, jj = np.meshgrid(np.arange(n1), np.arange(n2), indexing="ij")
-    valid = np.asarray(result.cell_status == CellStatus.VALID).ravel()
-
-    def on_valid(values: Any) -> np.ndarray:
-        out = np.asarray(values, dtype=float).ravel().copy()
-        out[~valid] = np.nan
-        return out
-
-    def flags(values: Any | None) -> pd.arrays.BooleanArray:
-        if values is None:
-            return pd.array([pd.NA] * (n1 * n2), dtype="boolean")
-        return pd.arrays.BooleanArray(np.asarray(values, dtype=bool).ravel(), ~valid)
-
-    centroid_mm = 1e3 * np.asarray(result.centroid, dtype=float).reshape(-1, 3)
-    centroid_mm[~valid] = np.nan
-    shear = on_valid(result.shear)
-    names = {int(s): s.name for s in CellStatus}
-    codes = np.asarray(result.cell_status, dtype=np.int64).ravel().tolist()
-    status = [names.get(code, f"UNKNOWN_{code}") for code in codes]
-
-    reference_mm = None
-    if energy is not None:
-        energy_density = on_valid(energy.energy_density)
-        thickness_ratio = on_valid(energy.thickness_ratio)
-        reference_mm = energy.thickness_reference_mm
-    else:
-        energy_density = np.full(n1 * n2, np.nan)
-        thickness_ratio = 1.0 / np.cos(shear)
-    thickness_mm = thickness_ratio * (np.nan if reference_mm is None else reference_mm)
-    table = pd.DataFrame(
-        {
-            "i": ii.ravel(),
-            "j": jj.ravel(),
-            "status": pd.array(status, dtype="string"),
-            "in_part": np.asarray(result.in_part, dtype=bool).ravel(),
-            "part_share": np.asarray(result.part_weight, dtype=float).ravel(),
-            "x_mm": centroid_mm[:, 0],
-            "y_mm": centroid_mm[:, 1],
-            "z_mm": centroid_mm[:, 2],
-            "shear_deg": np.degrees(shear),
-            "area_mm2": 1e6 * on_valid(result.area),
-            "thickness_ratio": thickness_ratio,
-            "thickness_mm": thickness_mm,
-            "energy_J_per_m2": energy_density,
-            "past_locking": flags(None if energy is None else energy.past_locking),
-            "past_failure": flags(None if energy is None else energy.past_failure),
-        }
-    )
-    table = table.loc[:, list(CELL_COLUMNS)]
-    if preform is not None:
-        direction = np.asarray(preform.principal_direction, dtype=float).reshape(-1, 3)
-        columns = {
-            "preform_thickness_mm": 1e3 * on_valid(preform.thickness),
-            "fibre_volume_fraction": on_valid(preform.fibre_volume_fraction),
-            "permeability_k1_m2": on_valid(preform.principal_permeability[..., 0]),
-            "permeability_k2_m2": on_valid(preform.principal_permeability[..., 1]),
-            "permeability_k1_dir_x": on_valid(direction[:, 0]),
-            "permeability_k1_dir_y": on_valid(direction[:, 1]),
-            "permeability_k1_dir_z": on_valid(direction[:, 2]),
-        }
-        table = table.assign(**columns)
-    return table
+    columns = cell_columns(result, energy, preform)
+    columns["status"] = pd.array(columns["status"], dtype="string")
+    for name in ("past_locking", "past_failure"):
+        flags = columns[name]
+        columns[name] = pd.arrays.BooleanArray(np.ma.getdata(flags), np.ma.getmaskarray(flags))
+    return pd.DataFrame(columns)
 
 
 def write_table(table: pd.DataFrame, path: str | os.PathLike[str]) -> None:

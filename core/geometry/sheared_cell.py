@@ -37,9 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.geometry.unit_cell import TowPath, UnitCell
-
-FloatArray = NDArray[np.float64]
+from preform.geometry.unit_cell import FloatArray, TowPath, UnitCell
 
 #: Largest |γ| [rad] a sheared cell is built for: the cell's area vanishes at 90°.
 MAX_SHEAR = math.radians(89.0)
@@ -58,11 +56,15 @@ def pin_jointed_stretch(gamma: float, reference_direction: float) -> FloatArray:
     return np.asarray(along * np.outer(b, b) + across * np.outer(n, n), dtype=float)
 
 
-def check_shear(gamma: float) -> None:
-    """Refuse a shear angle the cell cannot take, in words."""
-    if not math.isfinite(gamma) or abs(gamma) > MAX_SHEAR:
+def check_shear(gamma: ArrayLike) -> None:
+    """Refuse a shear angle [rad] the cell cannot take, in words; for an array of angles, the
+    first such angle."""
+    angles = np.asarray(gamma, dtype=float)
+    refused = ~(np.abs(angles) <= MAX_SHEAR)  # NaN compares False: refused too
+    if refused.any():
+        first = float(angles[refused].flat[0])
         raise ValueError(
-            f"shear angle {math.degrees(gamma):g}° is outside ±{math.degrees(MAX_SHEAR):g}°: "
+            f"shear angle {math.degrees(first):g}° is outside ±{math.degrees(MAX_SHEAR):g}°: "
             "a pin-jointed cell has no area at 90°"
         )
 
@@ -223,6 +225,22 @@ class ShearedCell:
             "locked": self.locked,
             "jammed": self.jammed,
         }
+
+
+def thickness_per_angle(
+    sheared_cell: Callable[[float], ShearedCell | None], shear: ArrayLike
+) -> FloatArray | None:
+    """Thickness [m] of ``sheared_cell(γ)`` at each shear angle γ [rad], one cell per angle;
+    None when the architecture has no sheared cell. (An architecture whose stack takes every
+    angle in one pass says so by its own ``FabricBase.sheared_thickness``.)"""
+    angles = np.asarray(shear, dtype=float)
+    thickness = np.empty(angles.shape)
+    for index, gamma in np.ndenumerate(angles):
+        cell = sheared_cell(float(gamma))
+        if cell is None:
+            return None
+        thickness[index] = cell.thickness
+    return thickness
 
 
 def sheared_paths(cell: UnitCell, stretch: FloatArray, z_shift: float = 0.0) -> UnitCell:

@@ -7,13 +7,24 @@ derived-property code only see this. Lengths are metres.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import NDArray
 
     FloatArray = NDArray[np.float64]
+
+
+def __getattr__(name: str) -> Any:
+    # ``FloatArray`` for modules that import it at run time, built when first asked for, so
+    # that importing this module (a fabric's geometry does) imports no numpy.
+    if name == "FloatArray":
+        import numpy as np
+        from numpy.typing import NDArray
+
+        return NDArray[np.float64]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)

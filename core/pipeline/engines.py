@@ -213,6 +213,26 @@ def start_fork_server(preload: tuple[str, ...]) -> None:
     forkserver.ensure_running()
 
 
+def stop_fork_server() -> None:
+    """Stop the fork server at once, when the command ends (nothing is forked any more; a
+    no-op where none runs). Left to itself it exits only once this process has gone, and
+    finalises the interpreter it preloaded (numpy, matplotlib, numba) first, 0.2-0.7 s, while
+    whoever reads the command's output through a pipe (``| tee``, a CI log) waits for it: it
+    holds the same stderr. A later pool in this process starts a new server."""
+    from multiprocessing import forkserver
+
+    server = forkserver._forkserver
+    pid = getattr(server, "_forkserver_pid", None)
+    if pid is None:
+        return
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGTERM)  # no handler there: it ends without finalising
+    # reaps it and forgets it, so that a later pool starts a fresh one (private, 3.8+)
+    stop = getattr(server, "_stop", None)
+    if callable(stop):
+        stop()
+
+
 class ProcessEngine(Engine):
     """A pebble process pool of ``workers`` processes, forked from a fork server that imported
     ``preload`` (see the module docstring); ``warm_up`` runs once in each worker."""

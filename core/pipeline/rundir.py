@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import json
+import math
 import os
 import time
 from collections.abc import Iterable, Mapping
@@ -135,6 +136,47 @@ def table_row(record: Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(value, bool | int | float | str) or value is None:
             row[key] = value
     return row
+
+
+def parquet_table(columns: Mapping[str, list[Any]]) -> Any:
+    """results.parquet's table (pyarrow) from the table's columns: each column booleans,
+    integers (nullable int64), numbers (float64) or text by what its values are; a column that
+    mixes kinds (a number in one case, text in another), holds a non-finite number or
+    overflows int64 becomes text, which every value can be. None is missing.
+
+    Read through pyarrow's JSON reader with the schema given: building arrays from Python
+    values (``pyarrow.array``) imports pandas, which this process otherwise never needs."""
+    import io
+
+    import pyarrow
+    import pyarrow.json
+
+    fields = []
+    values_by_name: dict[str, list[Any]] = {}
+    for name, values in columns.items():
+        present = [v for v in values if v is not None]
+        kinds = {type(v) for v in present}
+        kind: Any = pyarrow.string()
+        if kinds <= {bool}:
+            kind = pyarrow.bool_()
+        elif kinds <= {int} and all(-(2**63) <= v < 2**63 for v in present):
+            kind = pyarrow.int64()
+        elif kinds <= {int, float} and all(math.isfinite(v) for v in present):
+            kind = pyarrow.float64()
+        if kind == pyarrow.string():
+            values = [None if v is None else str(v) for v in values]
+        fields.append(pyarrow.field(name, kind))
+        values_by_name[name] = values
+    names = list(values_by_name)
+    if not names or not columns[names[0]]:
+        return pyarrow.schema(fields).empty_table()
+    lines = (
+        json.dumps(dict(zip(names, row, strict=True)), allow_nan=False)
+        for row in zip(*values_by_name.values(), strict=True)
+    )
+    text = "\n".join(lines).encode("utf-8")
+    options = pyarrow.json.ParseOptions(explicit_schema=pyarrow.schema(fields))
+    return pyarrow.json.read_json(io.BytesIO(text), parse_options=options)
 
 
 class RunDirectory:
@@ -302,25 +344,20 @@ class RunDirectory:
         if not force and throttled and now - self._tables_written_at < TABLE_INTERVAL_S:
             return
         self._tables_written_at = now
-        import pandas as pd
+        from preform.export.csv_columns import rows_to_columns, write_csv_columns
 
+        # without pandas: a run's `preform` process would import it only for these tables
+        # (about 0.5 s, with pyarrow's compute module), on a core its workers need
         rows = [table_row(self.records[c]) for c in sorted(self.records)]
-        table = pd.DataFrame(rows)
-        with atomic_path(self.path / "results.csv") as tmp:
-            table.to_csv(tmp, index=False)
+        columns = rows_to_columns(rows)
+        write_csv_columns(columns, self.path / "results.csv")
         try:
-            import pyarrow  # noqa: F401
+            import pyarrow.parquet
         except ImportError:
             return
+        table = parquet_table(columns)
         with atomic_path(self.path / "results.parquet") as tmp:
-            # mixed object columns (a result that is a number in one case and text in
-            # another) would stop pyarrow; text is what both can be
-            for column in [c for c in table.columns if table[c].dtype.kind == "O"]:
-                values = table[column]
-                if values.map(lambda v: isinstance(v, str) or v is None).all():
-                    continue
-                table[column] = values.map(lambda v: None if v is None else str(v))
-            table.to_parquet(tmp, index=False)
+            pyarrow.parquet.write_table(table, tmp)
 
     def summaries(self, case_ids: Iterable[str]) -> list[dict[str, Any]]:
         """The records of these cases, those that have one."""

@@ -34,10 +34,10 @@ from preform.pipeline.engines import (
     Engine,
     SerialEngine,
     open_engine,
-    start_fork_server,
     time_limit,
 )
 from preform.pipeline.planner import plan
+from preform.pipeline.preload import worker_preload
 from preform.pipeline.rundir import (
     RunDirectory,
     RunDirectoryError,
@@ -213,67 +213,6 @@ def _worker_host(case: Case) -> PluginHost:
     if key not in _WORKER_HOSTS:
         warm_worker((key,))
     return _WORKER_HOSTS[key]
-
-
-#: Libraries the default study's steps import when they first run (its figures and cells.csv):
-#: a process pool's fork server imports them once, so no worker pays them in its first case.
-#: A name that is not installed is skipped. The compiled net kernels (numba, 0.3 s to import)
-#: are there because every drape runs them; not scipy, which the default study does not use
-#: (2.0 s to import on a Dask worker). Since built-in steps, laws and architectures are
-#: registered by import path, the plugin host no longer imports their modules, so the default
-#: study's are named here too (the default study 7.3-8.8 s -> 6.4-8.6 s on 2 workers, quiet,
-#: alternated runs of ``preform pipeline run --force``).
-WORKER_PRELOAD = (
-    "matplotlib.figure",
-    "matplotlib.backends.backend_agg",
-    "mpl_toolkits.mplot3d",
-    "pandas",
-    "numba",
-    "preform.drape.net_kernels",
-    "preform.drape.generator_kernels",
-    "preform.drape.field_kernels",
-    "preform.shear.surrogate_kernels",
-    "preform.pipeline.core_steps",
-    "preform.drape.steps",
-    "preform.drape.preform_steps",
-    "preform.optimise.search_steps",
-    "preform.export.fig_drape",
-    "preform.export.tables",
-    "preform.plugins.surfaces.basic",
-    "preform.plugins.woven.model",
-    "preform.plugins.woven.shear",
-    "preform.plugins.warpknit.model",
-    "preform.plugins.warpknit.shear",
-)
-
-
-def worker_preload() -> tuple[str, ...]:
-    """Modules a worker pool imports once before its first case: preform's own modules this
-    process has loaded (the steps it plans to run) and ``WORKER_PRELOAD``. Plugin modules
-    are not among them: a worker loads those in its warm-up, where their failures are
-    contained and recorded like in this process."""
-    import sys
-
-    own = [m for m in list(sys.modules) if m == "preform" or m.startswith("preform.")]
-    return (*sorted(own), *WORKER_PRELOAD)
-
-
-def start_workers_early() -> None:
-    """Start the process pool's fork server before the run's library and scenes are read (the
-    command line calls it first): meanwhile it imports the runner, preform's own plugins (the
-    steps they register) and ``WORKER_PRELOAD``, and the workers of the pool the run opens
-    later are forked from it."""
-    from importlib import metadata
-
-    from preform.plugin_manager import ENTRY_POINT_GROUP
-
-    own_plugins = sorted(
-        ep.value.split(":")[0]
-        for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)
-        if ep.value.startswith("preform.")
-    )
-    modules = ("preform.pipeline.runner", *own_plugins, *worker_preload())
-    start_fork_server(tuple(dict.fromkeys(modules)))
 
 
 def warm_worker(hosts: tuple[tuple[bool, tuple[tuple[str, str], ...]], ...]) -> None:
@@ -587,11 +526,11 @@ def run_cases(
     maybe_todo = [c for c in cases if force or previous_result(c) is None]
     with _EngineSession(maybe_todo, host, engine, workers, scheduler) as session:
         # the table writers' imports, now rather than at the first finished case: a Ctrl-C
-        # that lands inside a half-done `import pandas` would leave it broken for the run
-        import pandas  # noqa: F401
+        # that lands inside a half-done import would leave the module broken for the run
+        import preform.export.csv_columns  # noqa: F401
 
         with contextlib.suppress(ImportError):
-            import pyarrow  # noqa: F401
+            import pyarrow.parquet  # noqa: F401
         return _run_in_directory(
             cases,
             out_dir,

@@ -30,6 +30,7 @@ density.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from itertools import pairwise
@@ -597,12 +598,13 @@ class WarpKnitGeometry:
     @property
     def thickness(self) -> float:
         """Stack height from the face to the top of the back [m]."""
+        return float(self.stack_thickness([t.tow.height for t in self.tow_layers]))
+
+    def stack_thickness(self, tow_heights: Sequence[float | FloatArray]) -> float | FloatArray:
+        """Stack height [m] with the tow layers' heights [m] given in layer order (floats, or
+        arrays over shear angles: every angle's stack in one pass, the sheared cell's table)."""
         loop_band = max(t.diameter for t in self.thread_levels)
-        return (
-            loop_band
-            + sum(t.tow.height for t in self.tow_layers)
-            + sum(t.diameter for t in self.thread_levels)
-        )
+        return loop_band + sum(tow_heights) + sum(t.diameter for t in self.thread_levels)
 
     def _leg_depth(self, k: int) -> float:
         _, underlap_z, loop_z = self._stack

@@ -35,7 +35,7 @@ from .lapping import LappingSyntaxError, parse_lapping
 
 if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
     from preform.geometry.sheared_cell import ShearedCell
-    from preform.geometry.unit_cell import UnitCell
+    from preform.geometry.unit_cell import FloatArray, UnitCell
 
 MM = 1e-3
 #: Relative gap between the derived and the datasheet areal density that ``check`` reports.
@@ -300,11 +300,7 @@ class WarpKnitFabric(FabricBase):
     def unit_cell(self) -> UnitCell:
         """The repeating cell in metres (x = stitch direction); raises ValueError on an entry
         with errors."""
-        problems = self.errors()
-        if problems:
-            loc, message = problems[0]
-            raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
-        cell = self.geometry.unit_cell()
+        cell = self._checked_geometry().unit_cell()
         return dataclasses.replace(
             cell, reference_direction=math.radians(self.reference_direction_deg())
         )
@@ -314,11 +310,25 @@ class WarpKnitFabric(FabricBase):
         (``sheared_warp_knit_cell``); raises ValueError on an entry with errors."""
         from preform.plugins.warpknit.sheared_cell import sheared_warp_knit_cell
 
+        geometry = self._checked_geometry()
+        return sheared_warp_knit_cell(geometry, shear_rad, self.reference_direction_deg())
+
+    def sheared_thickness(self, shear_rad: FloatArray) -> FloatArray:
+        """Thickness [m] of the sheared cell at each angle [rad] of an array, every angle's
+        stack in one pass (``sheared_stack``, the same stack ``sheared_cell`` builds); raises
+        ValueError on an entry with errors."""
+        from preform.plugins.warpknit.sheared_cell import sheared_stack
+
+        geometry = self._checked_geometry()
+        return sheared_stack(geometry, shear_rad, self.reference_direction_deg())[2]
+
+    def _checked_geometry(self) -> WarpKnitGeometry:
+        """``geometry``; raises ValueError naming the entry's first error."""
         problems = self.errors()
         if problems:
             loc, message = problems[0]
             raise ValueError(f"{'.'.join(map(str, loc))}: {message}")
-        return sheared_warp_knit_cell(self.geometry, shear_rad, self.reference_direction_deg())
+        return self.geometry
 
     def derived(self) -> dict[str, Any]:
         """Areal densities [g/m²], stitch direction [deg], cell size and thickness [mm], tow

@@ -5,7 +5,8 @@ locking and compact up to the jamming fraction, then thicken (the bundle law of
 ``preform.plugins.woven.tow_jamming``, shared with the woven cell). The cell at γ is the
 geometry rebuilt with the layers' tows at their width and height at γ (the stack and so the
 thickness follow the new heights), then mapped in-plane by the pin-jointed stretch about the
-fabric's reference direction. The stitching threads are mapped with the fabric; their own
+fabric's reference direction (``sheared_stack``: every angle of the preform's table in one pass,
+the heights arrays over γ). The stitching threads are mapped with the fabric; their own
 strain belongs to the stitch shear law, and they are not reinforcement, so no fraction here
 counts them.
 
@@ -19,15 +20,19 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from preform.geometry.fibres import fibre, fibre_area_m2
 from preform.geometry.sheared_cell import (
     ShearedCell,
     TowFamily,
+    TowState,
     check_shear,
     pin_jointed_stretch,
     sheared_paths,
 )
-from preform.geometry.unit_cell import UnitCell
+from preform.geometry.unit_cell import FloatArray, UnitCell
 from preform.plugins.warpknit.geometry import WarpKnitGeometry
 from preform.plugins.woven.tow_jamming import TowCompaction, jamming_fraction
 
@@ -80,24 +85,32 @@ def tow_families(
     return families
 
 
+def sheared_stack(
+    geo: WarpKnitGeometry,
+    gamma: ArrayLike,
+    reference_deg: float,
+    compaction: TowCompaction | None = None,
+) -> tuple[list[TowFamily], tuple[TowState, ...], FloatArray]:
+    """The layers' tow families (as built), their states at shear angle(s) ``gamma`` [rad]
+    about ``reference_deg`` [deg] and the stack's thickness [m] (arrays shaped like γ): every
+    angle in one pass (``WarpKnitGeometry.stack_thickness``)."""
+    g = np.asarray(gamma, dtype=float)
+    check_shear(g)
+    families = tow_families(geo, reference_deg, compaction)
+    states = tuple(f.state(g) for f in families)
+    thickness = geo.stack_thickness([s.height for s in states])
+    return families, states, np.asarray(thickness, dtype=float)
+
+
 def sheared_warp_knit_cell(
     geo: WarpKnitGeometry,
     gamma: float,
     reference_deg: float,
     compaction: TowCompaction | None = None,
 ) -> ShearedCell:
-    """The warp-knit cell at shear angle ``gamma`` [rad] about ``reference_deg`` [deg]."""
-    check_shear(gamma)
-    families = tow_families(geo, reference_deg, compaction)
-    states = tuple(f.state(gamma) for f in families)
-    layers = tuple(
-        dataclasses.replace(
-            layer,
-            tow=dataclasses.replace(layer.tow, width=float(s.width), height=float(s.height)),
-        )
-        for layer, s in zip(geo.tow_layers, states, strict=True)
-    )
-    sheared = dataclasses.replace(geo, tow_layers=layers)
+    """The warp-knit cell at shear angle ``gamma`` [rad] about ``reference_deg`` [deg]: the
+    stack of ``sheared_stack`` at that one angle, and the cell it draws on demand."""
+    families, states, thickness = sheared_stack(geo, gamma, reference_deg, compaction)
     # Fibre volume per period: each layer's tows fill the period's area at their spacing, so
     # fibre area × (area / spacing) is the layer's fibre area times its tow length per period.
     length, width = geo.cell_fit.size
@@ -107,6 +120,14 @@ def sheared_warp_knit_cell(
     stretch = pin_jointed_stretch(gamma, math.radians(reference_deg))
 
     def draw() -> UnitCell:
+        layers = tuple(
+            dataclasses.replace(
+                layer,
+                tow=dataclasses.replace(layer.tow, width=float(s.width), height=float(s.height)),
+            )
+            for layer, s in zip(geo.tow_layers, states, strict=True)
+        )
+        sheared = dataclasses.replace(geo, tow_layers=layers)
         cell = dataclasses.replace(
             sheared.unit_cell(), reference_direction=math.radians(reference_deg)
         )
@@ -115,7 +136,7 @@ def sheared_warp_knit_cell(
     return ShearedCell(
         shear=float(gamma),
         area=area0 * math.cos(gamma),
-        thickness=sheared.thickness,
+        thickness=float(thickness),
         fibre_volume=total,
         families=tuple(families),
         states=states,

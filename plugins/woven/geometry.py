@@ -23,10 +23,11 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, cast
 
 from preform.geometry.fibres import Fibre, fibre_area_m2
 from preform.geometry.unit_cell import TowPath, UnitCell
@@ -34,6 +35,9 @@ from preform.plugins.woven.crossover import CrossoverGeometry
 
 if TYPE_CHECKING:  # numpy is imported where a method computes: a listing needs none
     from preform.geometry.unit_cell import FloatArray
+
+    #: A tow height [m]: one value, or an array of them over shear angles.
+    Height = float | FloatArray
 
 #: Where a problem is, as a path in the weave description, e.g. ("weave", "matrix", 2, 0).
 IssueLocation = tuple[str | int, ...]
@@ -481,30 +485,39 @@ class WovenUnitCell:
 
     @cached_property
     def _heights_z(self) -> dict[tuple[int, int, int], float]:
-        """Centreline z [m] of each level at each column, keyed (i, j, level)."""
+        """Centreline z [m] of each level at each column, keyed (i, j, level), as built."""
+        return cast(
+            dict[tuple[int, int, int], float],
+            self.stack_z(lambda key: self.tow_type(key).height),
+        )
+
+    def stack_z(self, height: Callable[[TowKey], Height]) -> dict[tuple[int, int, int], Height]:
+        """Centreline z [m] of each level at each column, keyed (i, j, level), with the tows'
+        heights [m] given by ``height`` (a float, or an array over shear angles: every z is
+        then an array of the same shape, one stack per angle in one pass)."""
         weave = self.weave
-        z: dict[tuple[int, int, int], float] = {}
+        z: dict[tuple[int, int, int], Height] = {}
         for i, row in enumerate(weave.matrix):
             for j, entry in enumerate(row):
-                height = {lv: self.tow_type(self._key_at(i, j, lv)).height for lv in entry}
+                h = {lv: height(self._key_at(i, j, lv)) for lv in entry}
                 stacked = [lv for lv in entry if lv not in weave.binder_levels]
                 # Bottom edge of each stacked tow, the stack centred on z = 0.
-                bottom = -sum(height[lv] for lv in stacked) / 2.0
-                edge: dict[int, float] = {}
+                bottom = -sum(h[lv] for lv in stacked) / 2.0
+                edge: dict[int, Height] = {}
                 for lv in stacked:
                     edge[lv] = bottom
-                    bottom += height[lv]
+                    bottom = bottom + h[lv]  # never in place: edge[lv] may be this array
                 top = bottom
                 for k, lv in enumerate(entry):
                     if lv in edge:
-                        z[(i, j, lv)] = edge[lv] + height[lv] / 2.0
+                        z[(i, j, lv)] = edge[lv] + h[lv] / 2.0
                         continue
                     below = [b for b in entry[:k] if b in edge]
                     above = [a for a in entry[k + 1 :] if a in edge]
                     if not below:  # under the whole stack
-                        z[(i, j, lv)] = edge[stacked[0]] - height[lv] / 2.0 if stacked else 0.0
+                        z[(i, j, lv)] = edge[stacked[0]] - h[lv] / 2.0 if stacked else 0.0
                     elif not above:  # over the whole stack
-                        z[(i, j, lv)] = top + height[lv] / 2.0
+                        z[(i, j, lv)] = top + h[lv] / 2.0
                     else:  # on the interface it passes through
                         z[(i, j, lv)] = edge[above[0]]
         return z
@@ -617,13 +630,29 @@ class WovenUnitCell:
 
     def thickness(self) -> float:
         """Fabric thickness [m]: envelope of the tow centrelines ± half their heights."""
-        tops, bottoms = [], []
+        return float(self.stack_thickness(lambda key: self.tow_type(key).height))
+
+    def stack_thickness(self, height: Callable[[TowKey], Height]) -> Height:
+        """Envelope [m] of the tow centrelines ± half their heights, the tows' heights [m] given
+        by ``height`` (floats, or arrays over shear angles: the envelope of each angle's stack,
+        all angles in one pass; ``preform.plugins.woven.sheared_cell``)."""
+        import numpy as np
+
+        self._require_valid()
+        z = self.stack_z(height)
+        top: Height | None = None
+        bottom: Height | None = None
+        # The crossover points bound a tow's centreline: its two ends on the period boundary
+        # sit halfway between its last and first crossover, never beyond them.
         for key in self.tow_keys():
-            z = self.tow_points(key)[:, 2]
-            h = self.tow_type(key).height
-            tops.append(z.max() + h / 2.0)
-            bottoms.append(z.min() - h / 2.0)
-        return float(max(tops) - min(bottoms))
+            h = height(key)
+            for i, j in self._columns_along(key):
+                centre = z[(i, j, key.level)]
+                up, down = centre + h / 2.0, centre - h / 2.0
+                top = up if top is None else np.maximum(top, up)
+                bottom = down if bottom is None else np.minimum(bottom, down)
+        assert top is not None and bottom is not None  # a valid cell has tows
+        return top - bottom
 
     def tow_volume_fraction(self, family: Family) -> float:
         """Fibre volume fraction inside the tows of one family [-], length-weighted."""

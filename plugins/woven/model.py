@@ -45,7 +45,7 @@ from preform.plugins.woven.geometry import TowType, WeaveDescription, WovenUnitC
 
 if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
     from preform.geometry.sheared_cell import ShearedCell
-    from preform.geometry.unit_cell import UnitCell
+    from preform.geometry.unit_cell import FloatArray, UnitCell
 
 TowTypeAssignment = str | tuple[str | tuple[str, ...], ...]
 
@@ -517,6 +517,13 @@ class WovenFabric(FabricBase):
         from preform.plugins.woven.sheared_cell import sheared_woven_cell
 
         return sheared_woven_cell(self._require_valid(), shear_rad)
+
+    def sheared_thickness(self, shear_rad: FloatArray) -> FloatArray:
+        """Thickness [m] of the sheared cell at each angle [rad] of an array, every angle's
+        stack in one pass (``sheared_stack``, the same stack ``sheared_cell`` builds)."""
+        from preform.plugins.woven.sheared_cell import sheared_stack
+
+        return sheared_stack(self._require_valid(), shear_rad).thickness
 
     def crossover_geometry(self) -> CrossoverGeometry:
         """Mean crossover description for the friction–compaction shear law (SI units)."""

@@ -20,6 +20,19 @@ from preform.export.fig_drape import (
 from preform.export.fig_unit_cell import refine_polyline, tow_ribbon, unit_cell_figure
 
 
+def by_gid(fig, gid):
+    """The one artist of ``fig`` (the shear view's are the figure's own) with that gid."""
+    (artist,) = [a for a in fig.get_children() if a.get_gid() == gid]
+    return artist
+
+
+def panel_texts(fig):
+    """The texts the 3D shear view draws (on the figure, not in an axes)."""
+    from matplotlib.text import Text
+
+    return [a.get_text() for a in fig.artists if isinstance(a, Text)]
+
+
 def assert_real_picture(pixels: np.ndarray, size_px: tuple[int, int], min_colours: int) -> None:
     width, height = size_px
     assert pixels.shape[:2] == (height, width)
@@ -88,7 +101,7 @@ def test_fibre_pattern_figure(tmp_path, damaged_net, make_energy, read_png):
     )
     assert_real_picture(read_png(path), (1200, 600), min_colours=100)
 
-    top, shear_view = fig.axes[0], fig.axes[1]
+    (top,) = fig.axes  # the shear view is drawn on the figure (fig_drape._Panel)
     u_fibres = top.get_lines()[0].get_xydata()
     # Lines of constant j through the start node (j0 = 6) every 2nd: j = 0, 2, ..., 10.
     assert fibre_lines(damaged_net, "u", 2) == [0, 2, 4, 6, 8, 10]
@@ -99,11 +112,19 @@ def test_fibre_pattern_figure(tmp_path, damaged_net, make_energy, read_png):
     np.testing.assert_allclose(u_fibres[1], 1e3 * damaged_net.nodes[1, 0, :2])
     # Node (9, 5) is unplaced but j = 5 is not drawn at tow_every=2; j = 4 is whole.
     assert np.all(np.isfinite(u_fibres[2 * 11 : 2 * 11 + 10]))
-    assert len(shear_view.collections[0].get_paths()) == np.count_nonzero(damaged_net.valid)
-    colour_bar = fig.axes[2]
-    assert "deg" in colour_bar.get_ylabel()
-    low, high = colour_bar.get_ylim()
-    assert low == pytest.approx(-high)  # centred at zero
+    cells = by_gid(fig, "shear cells")
+    assert len(cells.get_paths()) == np.count_nonzero(damaged_net.valid)
+    # The colour scale spans the largest |γ| drawn, centred at zero, labelled in degrees.
+    scale = by_gid(fig, "colour scale")
+    half = np.degrees(np.max(np.abs(damaged_net.shear[damaged_net.valid])))
+    assert scale.norm.vmin == pytest.approx(-half) and scale.norm.vmax == pytest.approx(half)
+    values = scale.get_array()
+    assert values.min() == pytest.approx(-half) and values.max() == pytest.approx(half)
+    texts = panel_texts(fig)
+    assert "signed shear angle γ [deg]" in texts
+    assert {"x [mm]", "y [mm]", "z [mm]"} <= set(texts)
+    title = by_gid(fig, "shear title").get_text()
+    assert title.startswith("Shear angle (black outline: past locking)")
 
 
 def test_fibre_pattern_figure_without_energy_on_a_flat_net(tmp_path, make_net, read_png):
@@ -236,11 +257,10 @@ def test_fibre_pattern_of_a_fine_net_draws_blocks_and_says_so(
 ):
     net = make_net(120, 120, dome=True)
     fig = fibre_pattern_figure(net, make_energy(net), tmp_path / "fine.png", size_px=(800, 400))
-    shear_view = fig.axes[1]
     cells = np.count_nonzero(np.asarray(net.valid) & (np.asarray(net.part_weight) > 0))
-    drawn = len(shear_view.collections[0].get_paths())
+    drawn = len(by_gid(fig, "shear cells").get_paths())
     assert drawn <= SHEAR_VIEW_MAX_QUADS < cells
-    assert "one quad per 3 × 3 cells" in shear_view.get_title()
+    assert "one quad per 3 × 3 cells" in by_gid(fig, "shear title").get_text()
     assert_real_picture(read_png(tmp_path / "fine.png"), (800, 400), min_colours=30)
 
 

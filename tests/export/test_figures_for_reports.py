@@ -24,6 +24,12 @@ def _curve(best: float, energy: float, lock: float) -> list[tuple[float, float]]
 
 
 def _units_on_every_axis(fig) -> None:
+    from matplotlib.text import Text
+
+    # what is drawn on the figure by hand (the 3D view): every word label gives its unit
+    words = [a.get_text() for a in fig.artists if isinstance(a, Text)]
+    words = [w for w in words if not w.replace("\N{MINUS SIGN}", "-").lstrip("-")[:1].isdigit()]
+    assert all("[" in w for w in words if not w.startswith("Shear angle")), words
     for ax in fig.axes:
         if ax.get_label() == "<colorbar>":
             continue

@@ -9,6 +9,8 @@ first case.
 from __future__ import annotations
 
 import multiprocessing
+import os
+import subprocess
 import sys
 import textwrap
 from pathlib import Path
@@ -16,8 +18,9 @@ from typing import Any
 
 import pytest
 
-from preform.pipeline import engines, runner
+from preform.pipeline import engines
 from preform.pipeline.engines import ProcessEngine, open_engine
+from preform.pipeline.preload import WORKER_PRELOAD, worker_preload
 
 # Test modules are imported by path (--import-mode=importlib): what workers run lives in a
 # module written to a folder that only this test puts on sys.path.
@@ -90,11 +93,23 @@ def test_the_warm_up_runs_once_per_worker_before_its_first_case(probe):
 
 
 def test_the_runner_asks_for_its_own_modules_and_the_lazy_libraries():
-    preload = runner.worker_preload()
-    assert "preform.pipeline.runner" in preload
-    own = preload[: -len(runner.WORKER_PRELOAD)]
-    assert preload[len(own) :] == runner.WORKER_PRELOAD
+    preload = worker_preload()
+    assert "preform.pipeline.runner" in WORKER_PRELOAD
+    own = preload[: -len(WORKER_PRELOAD)]
+    assert preload[len(own) :] == WORKER_PRELOAD
     assert all(m == "preform" or m.startswith("preform.") for m in own)
+
+
+def test_the_fork_server_starts_before_the_command_imports_numpy_or_pydantic():
+    """`preform pipeline run` starts the server first, so its imports overlap the command's
+    own (scene and summary models, library): the module doing it imports neither."""
+    code = (
+        "import sys; import preform.cli, preform.pipeline.preload; "
+        "print(sorted({'numpy', 'pydantic'} & set(sys.modules)))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
 
 
 @pytest.mark.skipif(
@@ -103,6 +118,48 @@ def test_the_runner_asks_for_its_own_modules_and_the_lazy_libraries():
 )
 def test_the_pool_forks_from_a_fork_server():
     assert engines.pool_context().get_start_method() == "forkserver"
+
+
+@pytest.mark.skipif(
+    "forkserver" not in multiprocessing.get_all_start_methods(),
+    reason="no fork server on this platform",
+)
+def test_the_fork_server_is_gone_when_the_command_exits():
+    """The command's exit stops its fork server at once (a server left to itself finalises
+    numpy & co. after the command has gone, and a pipe reading the command's output waits for
+    it); a pool opened after a stop forks from a new server."""
+    script = textwrap.dedent(
+        """
+        import multiprocessing, os, sys
+        from multiprocessing import forkserver
+        from preform.pipeline.engines import stop_fork_server
+        from preform.pipeline.preload import start_workers_early
+
+        start_workers_early()
+        context = multiprocessing.get_context("forkserver")
+        child = context.Process(target=os.getpid)
+        child.start(); child.join()
+        first = forkserver._forkserver._forkserver_pid
+        stop_fork_server()
+        try:
+            os.kill(first, 0)
+            sys.exit("the stopped server still runs")
+        except ProcessLookupError:
+            pass
+        child = context.Process(target=os.getpid)
+        child.start(); child.join()
+        assert child.exitcode == 0, child.exitcode
+        second = forkserver._forkserver._forkserver_pid
+        assert second not in (None, first), (first, second)
+        print(second, flush=True)  # left running: the exit must stop it
+        """
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    server = int(done.stdout.split()[-1])
+    # no wait: stopped (and reaped) before the command's own exit
+    with pytest.raises(ProcessLookupError):
+        os.kill(server, 0)
 
 
 def test_a_warm_up_that_fails_fails_the_case_not_the_caller(probe):
@@ -123,7 +180,7 @@ def test_every_preform_module_the_workers_preload_exists():
     its import in its first case again."""
     import importlib
 
-    own = [m for m in runner.WORKER_PRELOAD if m.startswith("preform.")]
+    own = [m for m in WORKER_PRELOAD if m.startswith("preform.")]
     assert own, "the workers preload none of preform's modules"
     for module in own:
         importlib.import_module(module)
