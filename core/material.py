@@ -27,6 +27,7 @@ Three kinds of value check, from hard to soft:
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 import os
 import typing
@@ -58,6 +59,15 @@ def _has_numeric_leaf(annotation: Any) -> bool:
     if isinstance(annotation, type):
         return False
     return any(_has_numeric_leaf(arg) for arg in typing.get_args(annotation) if arg is not Ellipsis)
+
+
+@functools.cache
+def _numeric_fields(model: type[BaseModel]) -> frozenset[str]:
+    """The fields of a model class whose annotation holds an int or a float: worked out once
+    per class, not at every entry validated (the check runs on every nested model)."""
+    return frozenset(
+        name for name, info in model.model_fields.items() if _has_numeric_leaf(info.annotation)
+    )
 
 
 def _boolean_errors(value: Any, loc: tuple[str | int, ...] = ()) -> Iterator[InitErrorDetails]:
@@ -98,10 +108,10 @@ class ParamsModel(BaseModel):
         # validators on discriminator fields, and each error still gets its exact location.
         if not isinstance(data, dict):
             return data
+        numeric = _numeric_fields(cls)
         errors: list[InitErrorDetails] = []
         for name, value in data.items():
-            field = cls.model_fields.get(name) if isinstance(name, str) else None
-            if field is not None and _has_numeric_leaf(field.annotation):
+            if name in numeric:
                 errors += _boolean_errors(value, (name,))
         if errors:
             raise ValidationError.from_exception_data(cls.__name__, errors)
@@ -352,10 +362,10 @@ def plausibility_checks(model: BaseModel, base: Location = ()) -> list[Plausibil
     Generic over any pydantic model: a plugin's architecture or law gets its ranges checked by
     marking its fields, nothing else."""
     out: list[PlausibilityCheck] = []
-    for name, info in type(model).model_fields.items():
+    for name, rules, may_nest in _checked_fields(type(model)):
         value = getattr(model, name, None)
         where = (*base, name)
-        for rule in _rules(info):
+        for rule in rules:
             if value is None:
                 continue
             if rule.measure is not None:
@@ -370,8 +380,41 @@ def plausibility_checks(model: BaseModel, base: Location = ()) -> list[Plausibil
                     for i, v in enumerate(value)
                     if _is_number(v)
                 ]
-        out += _nested_checks(value, where)
+        if may_nest:
+            out += _nested_checks(value, where)
     return out
+
+
+@functools.cache
+def _checked_fields(model: type[BaseModel]) -> list[tuple[str, list[Plausible], bool]]:
+    """Per field of a model class: its name, its ranges, and whether its value may hold a
+    model (whose fields are checked in turn); worked out once per class, so that validating a
+    library does not walk every number of a weaving matrix looking for models."""
+    return [
+        (name, _rules(info), _may_hold_model(info.annotation))
+        for name, info in model.model_fields.items()
+    ]
+
+
+def _may_hold_model(annotation: Any) -> bool:
+    """False only when the annotation rules a model out (numbers, text, Literal tags and
+    containers of them); anything it cannot read (Any, a bare container, a forward reference)
+    may hold one."""
+    origin = typing.get_origin(annotation)
+    if origin is typing.Literal:
+        return False
+    args = typing.get_args(annotation)
+    if origin is typing.Annotated:
+        return _may_hold_model(args[0])
+    if args:
+        return any(_may_hold_model(arg) for arg in args if arg is not Ellipsis)
+    if annotation in (int, float, str, bool, bytes, type(None)):
+        return False
+    if isinstance(annotation, type) and origin is None:
+        return issubclass(annotation, BaseModel) or not issubclass(
+            annotation, int | float | str | bytes
+        )
+    return True
 
 
 def _nested_checks(value: Any, where: Location) -> list[PlausibilityCheck]:

@@ -7,11 +7,24 @@ derived-property code only see this. Lengths are metres.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+    FloatArray = NDArray[np.float64]
+
+
+def __getattr__(name: str) -> Any:
+    # ``FloatArray`` for modules that import it at run time, built when first asked for, so
+    # that importing this module (a fabric's geometry does) imports no numpy.
+    if name == "FloatArray":
+        import numpy as np
+        from numpy.typing import NDArray
+
+        return NDArray[np.float64]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -35,6 +48,8 @@ class TowPath:
 
     def length(self) -> float:
         """Polyline length [m]."""
+        import numpy as np
+
         return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
 
 
@@ -53,11 +68,15 @@ class UnitCell:
     @property
     def area(self) -> float:
         """Area of one period [m²]."""
+        import numpy as np
+
         a1, a2 = np.asarray(self.period, dtype=float)
         return float(abs(a1[0] * a2[1] - a1[1] * a2[0]))
 
     def tiled(self, n1: int, n2: int) -> UnitCell:
         """The same fabric, n1 × n2 periods of it, as one cell (for viewing)."""
+        import numpy as np
+
         if n1 < 1 or n2 < 1:
             raise ValueError(f"repeats must be at least 1x1, got {n1}x{n2}")
         a1, a2 = np.asarray(self.period, dtype=float)

@@ -26,13 +26,14 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Sequence
-from typing import Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol
 
-import numpy as np
-from numpy.polynomial import polynomial as npoly
-from numpy.typing import ArrayLike, NDArray
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import ArrayLike, NDArray
 
-FloatArray = NDArray[np.float64]
+    FloatArray = NDArray[np.float64]
+
 
 #: Largest shear-angle magnitude [rad] a branch is defined on (fibre families parallel).
 DOMAIN_END = math.pi / 2
@@ -53,11 +54,15 @@ class Branch(Protocol):
 
 
 def _clamp_angle(u: ArrayLike) -> FloatArray:
+    import numpy as np
+
     return np.clip(np.abs(np.asarray(u, dtype=float)), 0.0, DOMAIN_END)
 
 
 def _horner(coeffs: FloatArray, idx: NDArray[np.intp], x: FloatArray) -> FloatArray:
     """Evaluate row ``idx`` of an ascending-power coefficient matrix at local x, elementwise."""
+    import numpy as np
+
     out = np.zeros_like(x)
     for k in range(coeffs.shape[1] - 1, -1, -1):
         out = out * x + coeffs[idx, k]
@@ -69,6 +74,9 @@ def _cos_antiderivative(p: FloatArray) -> tuple[FloatArray, FloatArray]:
 
     Differentiating gives (S + S'')cos + (S' - S')sin, so S = p - p'' + p'''' - ... (finite).
     """
+    import numpy as np
+    from numpy.polynomial import polynomial as npoly
+
     s = np.array(p, dtype=float)
     term = np.array(p, dtype=float)
     sign = 1.0
@@ -94,6 +102,9 @@ class PiecewiseBranch:
     def __init__(
         self, breaks: Sequence[float], pieces: Sequence[ArrayLike], weight: Weight = "one"
     ) -> None:
+        import numpy as np
+        from numpy.polynomial import polynomial as npoly
+
         b = [float(v) for v in breaks]
         if len(b) != len(pieces) or not b or b[0] != 0.0:
             raise ValueError("breaks must start at 0 and give one start per piece")
@@ -147,6 +158,8 @@ class PiecewiseBranch:
         self._cumulative = np.concatenate([[0.0], np.cumsum(piece_integral)])
 
     def _primitive(self, idx: NDArray[np.intp], x: FloatArray) -> FloatArray:
+        import numpy as np
+
         if self.weight == "one":
             return _horner(self._anti, idx, x)
         angle = x + self.breaks[idx]
@@ -156,6 +169,8 @@ class PiecewiseBranch:
 
     def _integral(self, idx: NDArray[np.intp], x: FloatArray) -> FloatArray:
         """∫_0^x of piece ``idx``'s magnitude in its local variable, elementwise."""
+        import numpy as np
+
         closed = self._primitive(idx, x) - self._primitive(idx, np.zeros_like(x))
         quad = np.ravel(self._quadrature[idx])
         if not np.any(quad):
@@ -169,12 +184,16 @@ class PiecewiseBranch:
         return out.reshape(np.shape(closed))
 
     def _locate(self, u: ArrayLike) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
+        import numpy as np
+
         uu = _clamp_angle(u)
         idx = np.clip(np.searchsorted(self.breaks, uu, side="right") - 1, 0, self.breaks.size - 1)
         return idx, uu - self.breaks[idx], uu
 
     def magnitude(self, u: ArrayLike) -> FloatArray:
         """Torque magnitude M(u) ≥ 0 [N·m/m²] at shear-angle magnitudes u [rad]."""
+        import numpy as np
+
         idx, x, uu = self._locate(u)
         value = _horner(self._coef, idx, x)
         if self.weight == "cos":
@@ -183,6 +202,8 @@ class PiecewiseBranch:
 
     def energy(self, u: ArrayLike) -> FloatArray:
         """Strain energy W(u) [J/m²], exact up to floating-point rounding."""
+        import numpy as np
+
         idx, x, _ = self._locate(u)
         partial = self._integral(idx, x)
         return np.maximum(self._cumulative[idx] + partial, 0.0)
@@ -195,6 +216,9 @@ def _non_negative_parts(
 
     Each part is returned as (its start, its coefficients in its own local variable).
     """
+    import numpy as np
+    from numpy.polynomial import polynomial as npoly
+
     length = end - start
     cuts = [0.0, length]
     # Drop leading-power coefficients too small to change p on this interval: they would only
@@ -244,6 +268,9 @@ def _non_negative_parts(
 
 def _shift(coef: FloatArray, a: float) -> FloatArray:
     """Coefficients of q(x) = p(x + a), ascending powers."""
+    import numpy as np
+    from numpy.polynomial import polynomial as npoly
+
     out = np.zeros(1)
     for c in coef[::-1]:
         out = npoly.polyadd(npoly.polymul(out, [a, 1.0]), [c])
@@ -254,6 +281,8 @@ _GL_CACHE: dict[int, tuple[FloatArray, FloatArray]] = {}
 
 
 def _gauss_legendre(order: int) -> tuple[FloatArray, FloatArray]:
+    import numpy as np
+
     if order not in _GL_CACHE:
         nodes, weights = np.polynomial.legendre.leggauss(order)
         _GL_CACHE[order] = (np.asarray(nodes), np.asarray(weights))
@@ -276,6 +305,8 @@ class QuadratureBranch:
         panel_width: float = math.radians(0.5),
         order: int = 8,
     ) -> None:
+        import numpy as np
+
         if panel_width <= 0.0 or order < 1:
             raise ValueError("panel_width must be > 0 and order >= 1")
         self.magnitude_of = magnitude_of
@@ -292,6 +323,8 @@ class QuadratureBranch:
         self._cumulative = np.concatenate([[0.0], np.cumsum(panels)])
 
     def _rule(self, lo: FloatArray, hi: FloatArray) -> FloatArray:
+        import numpy as np
+
         nodes, weights = _gauss_legendre(self.order)
         half = 0.5 * (hi - lo)
         points = (0.5 * (hi + lo))[..., None] + half[..., None] * nodes
@@ -300,10 +333,14 @@ class QuadratureBranch:
 
     def magnitude(self, u: ArrayLike) -> FloatArray:
         """Torque magnitude M(u) ≥ 0 [N·m/m²] at shear-angle magnitudes u [rad]."""
+        import numpy as np
+
         return np.maximum(np.asarray(self.magnitude_of(_clamp_angle(u)), dtype=float), 0.0)
 
     def energy(self, u: ArrayLike) -> FloatArray:
         """Strain energy W(u) [J/m²] (error bound in the module docstring)."""
+        import numpy as np
+
         uu = _clamp_angle(u)
         idx = np.clip(np.searchsorted(self.edges, uu, side="right") - 1, 0, self.edges.size - 2)
         lo = self.edges[idx]

@@ -13,12 +13,13 @@ W [J/m²]; normalised picture-frame shear force F_s/L [N/mm].
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import ArrayLike, NDArray
 
-FloatArray = NDArray[np.float64]
+    FloatArray = NDArray[np.float64]
 
 
 @runtime_checkable
@@ -46,6 +47,8 @@ def force_per_length_N_per_mm(law: ShearLaw, gamma: ArrayLike) -> FloatArray:
     (N/m, divided by 1000 for N/mm). At |γ| → 90° the frame is singular; cos γ is floored at
     1e-9 so the result stays finite and grows without bound, as the kinematics say it must.
     """
+    import numpy as np
+
     g = np.asarray(gamma, dtype=float)
     cos_g = np.maximum(np.cos(g), 1e-9)
     return np.asarray(law.torque(g), dtype=float) / cos_g / 1000.0

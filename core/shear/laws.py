@@ -16,13 +16,11 @@ clipped curve.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
-from typing import Annotated, Any, Literal, Self
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
-import numpy as np
-from numpy.polynomial import polynomial as npoly
-from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, Field, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
 
@@ -30,7 +28,12 @@ from preform.material import ParamsModel, Plausible, size_limit
 from preform.shear.energy import DOMAIN_END, Branch, PiecewiseBranch
 from preform.shear.law import ShearLaw
 
-FloatArray = NDArray[np.float64]
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import ArrayLike, NDArray
+
+    FloatArray = NDArray[np.float64]
+
 
 #: N/mm of picture-frame force per unit length → N/m, the unit of torque per area.
 N_PER_MM_TO_N_PER_M = 1000.0
@@ -80,36 +83,104 @@ TORQUE_POINT = Plausible(
 )
 
 
+#: Points of the grid ``polynomial_extremes`` evaluates a polynomial and its slope on.
+EXTREMES_GRID = 513
+
+
 def polynomial_extremes(
     coefficients_per_deg: ArrayLike, start_deg: float, end_deg: float
 ) -> tuple[float, float, float]:
     """(smallest value, the angle [deg] where it is, largest value) of Σ a_k·(γ/deg)^k over
-    [start_deg, end_deg]: from the interval ends, the real roots of the derivative inside it,
-    and a dense grid as a guard against roots the companion matrix misplaces."""
-    c = np.trim_zeros(np.atleast_1d(np.asarray(coefficients_per_deg, dtype=float)), "b")
-    if c.size == 0:
+    [start_deg, end_deg]: from the interval ends, a dense grid, and the roots of the
+    derivative inside it (each sign change of the slope between grid points, bisected to
+    full precision).
+
+    Plain Python, no numpy: the library's validation calls it for every polynomial law, and a
+    listing of the library must not pay for importing numpy (issue 15). Two roots of the slope
+    closer than one grid step (a wiggle of the size of the grid's own error) are bounded by
+    the grid values."""
+    return _extremes(tuple(_float_list(coefficients_per_deg)), start_deg, end_deg)
+
+
+@functools.lru_cache(maxsize=256)
+def _extremes(
+    coefficients: tuple[float, ...], start_deg: float, end_deg: float
+) -> tuple[float, float, float]:
+    # Cached: a law's validator and its plausible-range check ask for the same polynomial
+    # over the same range.
+    c = list(coefficients)
+    while c and c[-1] == 0.0:
+        c.pop()
+    if not c:
         return 0.0, start_deg, 0.0
-    candidates = [start_deg, end_deg, *np.linspace(start_deg, end_deg, 513)]
-    # Leading terms too small to change the value on the interval would only send roots of
-    # the derivative to infinity (or overflow the companion matrix): drop them for the roots.
-    size = np.abs(c) * max(abs(start_deg), abs(end_deg), 1.0) ** np.arange(c.size)
-    significant = np.nonzero(size > 1e-14 * size.max())[0] if size.max() > 0 else [0]
-    trimmed = c[: int(significant[-1]) + 1]
-    if trimmed.size > 2:
-        with np.errstate(all="ignore"):
-            try:
-                roots = npoly.polyroots(npoly.polyder(trimmed))
-            except np.linalg.LinAlgError:  # the grid still bounds the extremes
-                roots = np.array([])
-            for root in roots:
-                if abs(root.imag) <= 1e-9 * max(1.0, abs(root.real)):
-                    if start_deg < root.real < end_deg:
-                        candidates.append(float(root.real))
-    angles = np.asarray(candidates)
-    with np.errstate(all="ignore"):
-        values = npoly.polyval(angles, c)
-    k = int(np.argmin(values))
-    return float(values[k]), float(angles[k]), float(np.max(values))
+    last = EXTREMES_GRID - 1
+    step = (end_deg - start_deg) / last
+    grid = [k * step + start_deg for k in range(last)] + [end_deg]
+    angles = [float(start_deg), float(end_deg), *grid]
+    top = c[-1]
+    lower = c[-2::-1]  # the other coefficients, highest power first (Horner's order)
+    values: list[float] = []
+    slopes: list[float] = []
+    for x in angles:  # value and slope by Horner's scheme, inlined: 515 points per call
+        value, slope = top, 0.0
+        for a in lower:
+            slope = slope * x + value
+            value = value * x + a
+        values.append(value)
+        slopes.append(slope)
+    slopes = slopes[2:]  # the grid's
+    for k in range(last):
+        if slopes[k] * slopes[k + 1] < 0.0:
+            root = _slope_root(c, grid[k], grid[k + 1], slopes[k])
+            if start_deg < root < end_deg:
+                angles.append(root)
+                values.append(_value_and_slope(c, root)[0])
+    if any(v != v for v in values):  # NaN (overflow): reported as such, like numpy's argmin
+        k = next(i for i, v in enumerate(values) if v != v)
+        return math.nan, angles[k], math.nan
+    k = min(range(len(values)), key=values.__getitem__)
+    return values[k], angles[k], max(values)
+
+
+def _float_list(values: ArrayLike) -> list[float]:
+    """A coefficient sequence (list, tuple, 1-D array) or a single number as a list of floats."""
+    try:
+        return [float(v) for v in values]  # type: ignore[union-attr, arg-type]
+    except TypeError:  # a single number
+        return [float(values)]  # type: ignore[arg-type]
+
+
+def polynomial_value(coefficients: list[float], x: float) -> float:
+    """Σ c_k·x^k at x by Horner's scheme, in the order of operations of
+    ``numpy.polynomial.polynomial.polyval`` (so the same float), without numpy."""
+    return _value_and_slope(coefficients, x)[0] if coefficients else 0.0
+
+
+def _value_and_slope(c: list[float], x: float) -> tuple[float, float]:
+    """Σ c_k·x^k and its derivative at x, by Horner's scheme (the value in the same order of
+    operations as ``numpy.polynomial.polynomial.polyval``)."""
+    value = c[-1]
+    slope = 0.0
+    for a in reversed(c[:-1]):
+        slope = slope * x + value
+        value = value * x + a
+    return value, slope
+
+
+def _slope_root(c: list[float], lo: float, hi: float, slope_lo: float) -> float:
+    """The root of the derivative between lo and hi, where it changes sign, by bisection until
+    the bracket cannot shrink."""
+    while True:
+        mid = 0.5 * (lo + hi)
+        if not lo < mid < hi:
+            return mid
+        slope = _value_and_slope(c, mid)[1]
+        if slope == 0.0:
+            return mid
+        if (slope < 0.0) == (slope_lo < 0.0):
+            lo, slope_lo = mid, slope
+        else:
+            hi = mid
 
 
 def negative_stretch(
@@ -227,6 +298,8 @@ class SignedShearLaw:
 
     def torque(self, gamma: ArrayLike) -> FloatArray:
         """Torque per unit undeformed area C(γ) [N·m/m²] at signed shear angles γ [rad]."""
+        import numpy as np
+
         g = np.asarray(gamma, dtype=float)
         u = np.abs(g)
         if self.symmetric:
@@ -241,6 +314,8 @@ class SignedShearLaw:
 
     def energy(self, gamma: ArrayLike) -> FloatArray:
         """Strain energy per unit undeformed area W(γ) = ∫_0^γ C [J/m²], W ≥ 0."""
+        import numpy as np
+
         g = np.asarray(gamma, dtype=float)
         u = np.abs(g)
         if self.symmetric:
@@ -253,6 +328,8 @@ class SignedShearLaw:
 
 def degree_polynomial_to_radians(coefficients_per_deg: ArrayLike) -> FloatArray:
     """Ascending coefficients a_k of a polynomial in γ [deg] → the same polynomial in γ [rad]."""
+    import numpy as np
+
     a = np.atleast_1d(np.asarray(coefficients_per_deg, dtype=float))
     return np.asarray(a * (180.0 / math.pi) ** np.arange(a.size), dtype=float)
 
@@ -269,6 +346,9 @@ def polynomial_branch(
     is F_s/L [N/mm] for ``quantity="force"`` or C [N·m/m²] for ``"torque"``. ``max_angle_deg``:
     end of the fitted range [deg].
     """
+    import numpy as np
+    from numpy.polynomial import polynomial as npoly
+
     p = degree_polynomial_to_radians(coefficients_per_deg)
     if quantity == "force":
         p = p * N_PER_MM_TO_N_PER_M
@@ -430,6 +510,8 @@ def tabulated_branch(
     non-negative data give a non-negative curve. A point (0, 0) is added when the first angle is
     above zero: the fabric is unloaded in its undeformed state.
     """
+    import numpy as np
+
     a = np.asarray(angle_deg, dtype=float)
     v = np.asarray(values, dtype=float)
     if a[0] > 0.0:
@@ -515,6 +597,8 @@ class TabulatedParams(ParamsModel):
 def _check_table(params: BaseModel, angles_field: str, values_field: str) -> None:
     """One value per angle, angles strictly ascending in [0, 90]°, values ≥ 0; each error
     located at the list (or the item) at fault."""
+    import numpy as np
+
     angles: list[float] = getattr(params, angles_field)
     values: list[float] = getattr(params, values_field)
     model = type(params).__name__

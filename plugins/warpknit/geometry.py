@@ -29,14 +29,13 @@ density.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from itertools import pairwise
 from math import gcd, lcm
-
-import numpy as np
-from numpy.typing import NDArray
+from typing import TYPE_CHECKING
 
 from preform.geometry.fibres import fibre, fibre_area_m2
 from preform.geometry.unit_cell import TowPath, UnitCell
@@ -44,7 +43,12 @@ from preform.material import Location
 
 from .lapping import LappingSequence
 
-FloatArray = NDArray[np.float64]
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import NDArray
+
+    FloatArray = NDArray[np.float64]
+
 
 INCH_M = 0.0254
 #: Relative disagreement between gauge and needle distance tolerated (datasheet rounding).
@@ -56,6 +60,48 @@ MAX_REPEATS = 24
 MAX_PATHS_PER_CELL = 10_000
 SPACING_TOLERANCE = 0.01
 ANGLE_TOLERANCE_DEG = 0.5
+
+
+def _isclose(a: float, b: float) -> bool:
+    """``numpy.isclose(a, b, rtol=1e-9)`` for two numbers: |a − b| ≤ 1e-8 + 1e-9·|b|."""
+    return abs(a - b) <= 1e-8 + 1e-9 * abs(b)
+
+
+def polyline_length(points: list[tuple[float, float, float]]) -> float:
+    """Length of a polyline [m] without numpy, the same float as
+    ``np.linalg.norm(np.diff(points, axis=0), axis=1).sum()`` (numpy's order of operations:
+    each segment's squares summed in order, the segments summed pairwise)."""
+    segments = [
+        math.sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0) + (z1 - z0) * (z1 - z0))
+        for (x0, y0, z0), (x1, y1, z1) in pairwise(points)
+    ]
+    return _pairwise_sum(segments)
+
+
+def _pairwise_sum(values: list[float]) -> float:
+    """Σ values in numpy's order for float arrays: eight running sums over blocks of at most
+    128 values, halves of longer runs summed separately (so a length computed here is the same
+    float as before numpy left this module's checks)."""
+    n = len(values)
+    if n < 8:
+        total = 0.0
+        for v in values:
+            total += v
+        return total
+    if n <= 128:
+        sums = values[:8]
+        full = n - n % 8
+        for i in range(8, full, 8):
+            sums = [s + v for s, v in zip(sums, values[i : i + 8], strict=True)]
+        total = ((sums[0] + sums[1]) + (sums[2] + sums[3])) + (
+            (sums[4] + sums[5]) + (sums[6] + sums[7])
+        )
+        for v in values[full:]:
+            total += v
+        return total
+    half = n // 2
+    half -= half % 8
+    return _pairwise_sum(values[:half]) + _pairwise_sum(values[half:])
 
 
 def needle_distance_from_gauge(gauge_needles_per_inch: float) -> float:
@@ -70,7 +116,7 @@ def gauge_from_needle_distance(needle_distance: float) -> float:
 
 def thread_diameter(linear_density_tex: float, density_g_cm3: float) -> float:
     """Diameter [m] of a thread taken as a solid round section of its fibre area [C]."""
-    return float(np.sqrt(4.0 * fibre_area_m2(linear_density_tex, density_g_cm3) / np.pi))
+    return math.sqrt(4.0 * fibre_area_m2(linear_density_tex, density_g_cm3) / math.pi)
 
 
 @dataclass(frozen=True)
@@ -165,11 +211,15 @@ class StitchPath:
     @property
     def overlap_vectors(self) -> FloatArray:
         """In-plane vectors from each loop's down-leg to its up-leg (courses, 2) [m]."""
+        import numpy as np
+
         return np.array([o[-1, :2] - o[0, :2] for o in self.overlaps])
 
     @property
     def underlap_vectors(self) -> FloatArray:
         """In-plane underlap vectors (courses, 2) [m]."""
+        import numpy as np
+
         return np.asarray(self.underlaps[:, 1, :2] - self.underlaps[:, 0, :2])
 
 
@@ -206,6 +256,60 @@ class CellFit:
         return (
             self.repeats[0] * self.stitch_repeat[0],
             self.repeats[1] * self.stitch_repeat[1],
+        )
+
+
+#: The candidate cells (m_x, m_y) stitch repeats, in the order ``cell_fit`` prefers them:
+#: smallest area first, then fewest repeats along the stitch.
+_CELLS_BY_AREA = sorted(
+    ((m_x, m_y) for m_x in range(1, MAX_REPEATS + 1) for m_y in range(1, MAX_REPEATS + 1)),
+    key=lambda cell: (cell[0] * cell[1], cell[0], cell[1]),
+)
+
+
+class _LayerLattice:
+    """One tow layer drawn on candidate cells of m_x × m_y stitch repeats: the tow lattice
+    indices nearest its spacing and angle, and how far from them the drawn tows are (a score
+    ≤ 1 is within ``SPACING_TOLERANCE`` and ``ANGLE_TOLERANCE_DEG``)."""
+
+    def __init__(self, layer: TowLayer, length: float, width: float, row_length: int) -> None:
+        self.layer = layer
+        self.row_length = row_length
+        theta = math.radians(layer.orientation_deg)
+        sin, cos = math.sin(theta), math.cos(theta)
+        # The index along one axis depends on that axis's repeats only: (k, k / period) per m.
+        self._along = [self._index(m * length, sin) for m in range(1, MAX_REPEATS + 1)]
+        self._across = [self._index(m * width, cos) for m in range(1, MAX_REPEATS + 1)]
+
+    def _index(self, period: float, direction: float) -> tuple[int, float]:
+        k = float(round(period * direction / self.layer.spacing))  # half to even, as rint
+        return int(k), k / period
+
+    def _drawn(self, m_x: int, m_y: int) -> tuple[float, float]:
+        """Spacing [m] and angle [deg] of the tows as drawn on the cell."""
+        (_, u), (_, v) = self._along[m_x - 1], self._across[m_y - 1]
+        q = math.hypot(u, v)
+        return (1.0 / q if q > 0 else math.inf), math.degrees(math.atan2(u, v))
+
+    def score(self, m_x: int, m_y: int) -> float:
+        k_x, k_y = self._along[m_x - 1][0], self._across[m_y - 1][0]
+        tows = gcd(abs(k_x), abs(k_y))
+        if tows == 0 or tows % self.row_length != 0:  # the placement pattern must repeat
+            return math.inf
+        spacing, angle = self._drawn(m_x, m_y)
+        d_angle = (angle - self.layer.orientation_deg + 90.0) % 180.0 - 90.0
+        return max(
+            abs(spacing / self.layer.spacing - 1.0) / SPACING_TOLERANCE,
+            abs(d_angle) / ANGLE_TOLERANCE_DEG,
+        )
+
+    def fitted(self, m_x: int, m_y: int) -> FittedLayer:
+        spacing, angle = self._drawn(m_x, m_y)
+        return FittedLayer(
+            k_machine=self._along[m_x - 1][0],
+            k_cross=self._across[m_y - 1][0],
+            spacing=spacing,
+            orientation_deg=angle,
         )
 
 
@@ -313,7 +417,7 @@ class WarpKnitGeometry:
         first = self.thread_levels[0]
         for k, level in enumerate(self.thread_levels[1:], start=1):
             p0, pk = pitches[0], pitches[k]
-            if p0 is not None and pk is not None and not np.isclose(p0, pk, rtol=1e-9):
+            if p0 is not None and pk is not None and not _isclose(p0, pk):
                 out.append(
                     (
                         ("threads", k, "needle_distance_mm"),
@@ -321,7 +425,7 @@ class WarpKnitGeometry:
                         f"a needle distance of {pk * 1e3:.4g} mm, level 1 has {p0 * 1e3:.4g} mm",
                     )
                 )
-            if not np.isclose(level.stitch_length, first.stitch_length, rtol=1e-9):
+            if not _isclose(level.stitch_length, first.stitch_length):
                 out.append(
                     (
                         ("threads", k, "stitch_length_mm"),
@@ -441,13 +545,13 @@ class WarpKnitGeometry:
                 if not self._is_level(level_no):
                     continue
                 level = self.thread_levels[level_no - 1]
-                path = self.stitch_path(level_no - 1).points
-                lo, hi = float(path[:, 1].min()), float(path[:, 1].max())
+                across = [y for _, y, _ in self._stitch_points(level_no - 1)]
+                lo, hi = min(across), max(across)
                 centre = (layer.offset + j * fitted.spacing) % width
                 half = layer.tow.width / 2.0
                 pitch = level.thread_pitch
                 # Nearest thread copy below the tow's upper edge, and whether it reaches the tow.
-                n = np.floor((centre + half - lo) / pitch)
+                n = math.floor((centre + half - lo) / pitch)
                 reaches = lo + n * pitch <= centre + half and hi + n * pitch >= centre - half
                 if not reaches:
                     out.append(
@@ -513,44 +617,51 @@ class WarpKnitGeometry:
     # -- stitching --------------------------------------------------------------------------
     def stitch_path(self, k: int) -> StitchPath:
         """The path of one thread of level k (0-based) over one repeat of its sequence [m]."""
+        import numpy as np
+
+        points = np.array(self._stitch_points(k), dtype=float)
+        courses = len(self.thread_levels[k].sequence.courses)
+        overlaps = tuple(points[5 * c : 5 * c + 5].copy() for c in range(courses))
+        underlaps = np.array(
+            [[points[5 * c + 4], points[5 * c + 5]] for c in range(courses)], dtype=float
+        )
+        return StitchPath(overlaps=overlaps, underlaps=underlaps, points=points)
+
+    def _stitch_points(self, k: int) -> list[tuple[float, float, float]]:
+        """``stitch_path(k).points`` as plain floats: the library's checks (listing the library)
+        need the thread's extent and length, not numpy. Five points per course's loop (top of
+        the down-leg, face, loop tip, face, top of the up-leg), then the first point again one
+        repeat further on."""
         level = self.thread_levels[k]
         d_needle = level.needle_pitch
         _, underlap_z, loop_z = self._stack
         z_top = underlap_z[k]
         depth = z_top - loop_z
-        overlaps: list[FloatArray] = []
-        courses = level.sequence.courses
-        for c, course in enumerate(courses):
+        points: list[tuple[float, float, float]] = []
+        for c, course in enumerate(level.sequence.courses):
             a, b = course.overlap
             x = c * level.stitch_length
             centre = 0.5 * (a + b) * d_needle
             half_sep = self._leg_separation(level, abs(b - a)) / 2.0
-            y_a = centre + np.sign(a - b) * half_sep
-            y_b = centre + np.sign(b - a) * half_sep
+            side = (a > b) - (a < b)  # the sign of a - b
+            y_a = centre + side * half_sep
+            y_b = centre + -side * half_sep
             half_arc = max(level.overlap_length / 2.0 - depth, half_sep)
-            reach = np.sqrt(max(half_arc**2 - half_sep**2, 0.0))
-            overlaps.append(
-                np.array(
-                    [
-                        [x, y_a, z_top],
-                        [x, y_a, loop_z],
-                        [x + reach, centre, loop_z],
-                        [x, y_b, loop_z],
-                        [x, y_b, z_top],
-                    ]
-                )
-            )
-        underlaps = np.array(
-            [[overlaps[c][-1], overlaps[(c + 1) % len(courses)][0]] for c in range(len(courses))]
-        )
-        underlaps[-1, 1, 0] += level.repeat_length
-        points = np.vstack([*overlaps, underlaps[-1, 1][None, :]])
-        return StitchPath(overlaps=tuple(overlaps), underlaps=underlaps, points=points)
+            reach = math.sqrt(max(half_arc**2 - half_sep**2, 0.0))
+            points += [
+                (x, y_a, z_top),
+                (x, y_a, loop_z),
+                (x + reach, centre, loop_z),
+                (x, y_b, loop_z),
+                (x, y_b, z_top),
+            ]
+        x0, y0, z0 = points[0]
+        points.append((x0 + level.repeat_length, y0, z0))
+        return points
 
     def thread_length_per_repeat(self, k: int) -> float:
         """Length of one thread of level k over one repeat of its sequence [m]."""
-        p = self.stitch_path(k).points
-        return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+        return polyline_length(self._stitch_points(k))
 
     def stitch_areal_density_g_m2(self, k: int) -> float:
         """Areal mass of thread level k [g/m²]: thread length per area × tex."""
@@ -574,58 +685,45 @@ class WarpKnitGeometry:
 
     @cached_property
     def cell_fit(self) -> CellFit:
-        """The unit cell the tow layers fit on (module docstring)."""
+        """The unit cell the tow layers fit on (module docstring).
+
+        Plain Python (the library's validation asks for it, and listing the library imports no
+        numpy): the candidate cells are tried smallest area first, then fewest repeats along
+        the stitch, and the first within tolerance is taken; when none is, the one with the
+        smallest score (the first in repeat order on a tie)."""
         length, width = self.stitch_repeat()
-        m = np.arange(1, MAX_REPEATS + 1)
-        m_x, m_y = np.meshgrid(m, m, indexing="ij")
-        score = np.zeros(m_x.shape)
-        fits = []
-        for i, layer in enumerate(self.tow_layers):
-            theta = np.radians(layer.orientation_deg)
-            period_x, period_y = m_x * length, m_y * width
-            k_x = np.rint(period_x * np.sin(theta) / layer.spacing)
-            k_y = np.rint(period_y * np.cos(theta) / layer.spacing)
-            q = np.hypot(k_x / period_x, k_y / period_y)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                spacing = np.where(q > 0, 1.0 / q, np.inf)
-            angle = np.degrees(np.arctan2(k_x / period_x, k_y / period_y))
-            d_angle = (angle - layer.orientation_deg + 90.0) % 180.0 - 90.0
-            layer_score = np.maximum(
-                np.abs(spacing / layer.spacing - 1.0) / SPACING_TOLERANCE,
-                np.abs(d_angle) / ANGLE_TOLERANCE_DEG,
-            )
-            tows = np.gcd(np.abs(k_x).astype(int), np.abs(k_y).astype(int))
-            repeats = (tows > 0) & (tows % self._row_length(i) == 0)
-            layer_score = np.where(repeats, layer_score, np.inf)
-            score = np.maximum(score, layer_score)
-            fits.append((k_x, k_y, spacing, angle))
-        area = m_x * m_y
-        order = np.lexsort((m_y.ravel(), m_x.ravel(), area.ravel()))
-        ok = score.ravel()[order] <= 1.0
-        if ok.any():
-            best = int(order[int(np.argmax(ok))])
-        else:
-            finite = np.where(np.isfinite(score.ravel()), score.ravel(), np.inf)
-            best = int(np.argmin(finite))
-        a, b = np.unravel_index(best, m_x.shape)
-        layers = tuple(
-            FittedLayer(
-                k_machine=int(k_x[a, b]),
-                k_cross=int(k_y[a, b]),
-                spacing=float(spacing[a, b]),
-                orientation_deg=float(angle[a, b]),
-            )
-            for k_x, k_y, spacing, angle in fits
-        )
+        layers = [
+            _LayerLattice(layer, length, width, self._row_length(i))
+            for i, layer in enumerate(self.tow_layers)
+        ]
+
+        def fits(m_x: int, m_y: int) -> bool:  # stops at the first layer that does not fit
+            return all(lattice.score(m_x, m_y) <= 1.0 for lattice in layers)
+
+        def score(m_x: int, m_y: int) -> float:
+            return max((lattice.score(m_x, m_y) for lattice in layers), default=0.0)
+
+        # Most fabrics fit one of the first cells: the scan stops there.
+        chosen = next((cell for cell in _CELLS_BY_AREA if fits(*cell)), None)
+        within = chosen is not None
+        if chosen is None:  # none fits: the smallest finite score, the first in (m_x, m_y) order
+            chosen, best = (1, 1), math.inf
+            for m_x in range(1, MAX_REPEATS + 1):
+                for m_y in range(1, MAX_REPEATS + 1):
+                    value = score(m_x, m_y)
+                    if value < best:
+                        chosen, best = (m_x, m_y), value
         return CellFit(
             stitch_repeat=(length, width),
-            repeats=(int(m_x[a, b]), int(m_y[a, b])),
-            layers=layers,
-            within_tolerance=bool(score[a, b] <= 1.0),
+            repeats=chosen,
+            layers=tuple(lattice.fitted(*chosen) for lattice in layers),
+            within_tolerance=within,
         )
 
     def tow_paths(self) -> list[TowPath]:
         """Every tow of the cell as straight pieces wrapped into the cell [m]."""
+        import numpy as np
+
         fit = self.cell_fit
         size = np.array(fit.size)
         tow_z, _, _ = self._stack
@@ -657,6 +755,8 @@ class WarpKnitGeometry:
 
     def thread_paths(self) -> list[TowPath]:
         """Every stitching thread of the cell, one polyline per thread and repeat [m]."""
+        import numpy as np
+
         fit = self.cell_fit
         length, width = fit.size
         paths: list[TowPath] = []
@@ -683,6 +783,8 @@ class WarpKnitGeometry:
     def unit_cell(self) -> UnitCell:
         """The repeating cell: tows (kind "tow", levels 1..L_tow) and threads (kind "stitch",
         levels L_tow + 1 ...); x is the stitch direction, the reference for signed shear."""
+        import numpy as np
+
         length, width = self.cell_fit.size
         levels: dict[int, str] = {}
         for i, layer in enumerate(self.tow_layers):
@@ -714,6 +816,8 @@ def _wrap_segment(
     start: FloatArray, end: FloatArray, size: FloatArray
 ) -> list[tuple[FloatArray, FloatArray]]:
     """Split the segment start→end at the cell's edges and shift each piece into the cell."""
+    import numpy as np
+
     delta = end - start
     cuts = {0.0, 1.0}
     for axis in range(2):

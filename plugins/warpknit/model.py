@@ -11,14 +11,11 @@ from __future__ import annotations
 import dataclasses
 import math
 from functools import cached_property
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-import numpy as np
 from pydantic import Field, field_validator
 
 from preform.geometry.fibres import FIBRES, fibre
-from preform.geometry.sheared_cell import ShearedCell
-from preform.geometry.unit_cell import FloatArray, UnitCell
 from preform.material import (
     FILAMENT_DIAMETER,
     TOW_HEIGHT,
@@ -35,6 +32,10 @@ from preform.material import (
 
 from .geometry import ThreadLevel, TowLayer, TowType, WarpKnitGeometry
 from .lapping import LappingSyntaxError, parse_lapping
+
+if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
+    from preform.geometry.sheared_cell import ShearedCell
+    from preform.geometry.unit_cell import FloatArray, UnitCell
 
 MM = 1e-3
 #: Relative gap between the derived and the datasheet areal density that ``check`` reports.
@@ -353,7 +354,7 @@ class WarpKnitFabric(FabricBase):
                 t.tow.linear_density_tex
                 / (1000.0 * fibre(t.tow.fibre).density_g_cm3)
                 * 1e-6
-                / (np.pi / 4.0 * t.tow.width * t.tow.height)
+                / (math.pi / 4.0 * t.tow.width * t.tow.height)
                 for t in geo.tow_layers
             ],
         }

@@ -33,16 +33,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Annotated, Any, Literal, Self
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 
-import numpy as np
-from numpy.polynomial import polynomial as npoly
 from pydantic import BaseModel, Field, model_validator
 
 from preform.material import ParamsModel, Plausible
 from preform.shear.energy import DOMAIN_END, PiecewiseBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import (
+    EXTREMES_GRID,
     FAILURE_ANGLE,
     FIT_END,
     LOCKING_ANGLE,
@@ -56,8 +55,12 @@ from preform.shear.laws import (
     negative_stretch,
     polynomial_branch,
     polynomial_extremes,
+    polynomial_value,
     raise_located,
 )
+
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
 
 _COEFFICIENTS = "ascending powers of the shear-angle magnitude in degrees; a_k in N/mm/deg^k"
 
@@ -208,19 +211,29 @@ class StitchPolynomialParams(ParamsModel):
         extrapolated past the failure angle may turn negative inside the drop."""
         assert self.failure_angle_deg is not None
         assert self.post_failure_force_coefficients_N_per_mm is not None
-        angle = self.failure_angle_deg + self.failure_width_deg * np.linspace(0.0, 1.0, 513)
-        t = (angle - self.failure_angle_deg) / self.failure_width_deg
-        smooth = t * t * (3.0 - 2.0 * t)
-        p1 = npoly.polyval(angle, self.parallel_force_coefficients_N_per_mm)
-        p2 = npoly.polyval(angle, self.post_failure_force_coefficients_N_per_mm)
-        force = p1 + smooth * (p2 - p1)
-        k = int(np.argmin(force))
-        scale = float(np.max(np.abs(force)))
-        return (float(force[k]), float(angle[k])) if force[k] < -1e-9 * scale else None
+        # Plain Python (validation runs when a library is listed, without numpy): the same
+        # 513-point grid and the same operations as numpy's linspace and polyval.
+        start, width = self.failure_angle_deg, self.failure_width_deg
+        last = EXTREMES_GRID - 1
+        fractions = [k * (1.0 / last) for k in range(last)] + [1.0]
+        angles = [start + width * f for f in fractions]
+        force = []
+        for angle in angles:
+            t = (angle - start) / width
+            smooth = t * t * (3.0 - 2.0 * t)
+            p1 = polynomial_value(self.parallel_force_coefficients_N_per_mm, angle)
+            p2 = polynomial_value(self.post_failure_force_coefficients_N_per_mm, angle)
+            force.append(p1 + smooth * (p2 - p1))
+        k = min(range(len(force)), key=force.__getitem__)
+        scale = max(abs(f) for f in force)
+        return (force[k], angles[k]) if force[k] < -1e-9 * scale else None
 
 
 def _shifted(coef_rad: np.ndarray, origin: float) -> np.ndarray:
     """Coefficients of p(x + origin), ascending powers."""
+    import numpy as np
+    from numpy.polynomial import polynomial as npoly
+
     out = np.zeros(1)
     for c in coef_rad[::-1]:
         out = npoly.polyadd(npoly.polymul(out, [origin, 1.0]), [c])
@@ -229,6 +242,9 @@ def _shifted(coef_rad: np.ndarray, origin: float) -> np.ndarray:
 
 def parallel_branch(params: StitchPolynomialParams) -> PiecewiseBranch:
     """The parallel-sense (γ > 0) branch: pre-failure, smoothstep drop, post-failure, tail."""
+    import numpy as np
+    from numpy.polynomial import polynomial as npoly
+
     if params.failure_angle_deg is None or params.post_failure_force_coefficients_N_per_mm is None:
         return polynomial_branch(
             params.parallel_force_coefficients_N_per_mm,

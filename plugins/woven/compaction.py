@@ -22,18 +22,30 @@ reports the shear angle at which V_c is reached.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import ArrayLike, NDArray
 
-FloatArray = NDArray[np.float64]
+    FloatArray = NDArray[np.float64]
+
 
 #: Square packing of round fibres, the default maximum attainable fraction V_a.
 SQUARE_PACKING = math.pi / 4
 
-_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(24)
+
+@functools.cache
+def _gauss_legendre() -> tuple[FloatArray, FloatArray]:
+    """24-point Gauss–Legendre nodes and weights on [-1, 1] (computed on first use, so that
+    importing the law's parameters does not import numpy)."""
+    import numpy as np
+
+    nodes, weights = np.polynomial.legendre.leggauss(24)
+    return nodes, weights
 
 
 def gutowski_coefficient(fibre_modulus: float, span_to_height: float) -> float:
@@ -48,6 +60,8 @@ def gutowski_stress(
 
     Zero for V_f ≤ V_o; +inf for V_f ≥ V_a (the pole; use ``BundleCompaction`` for a guarded law).
     """
+    import numpy as np
+
     v = np.asarray(volume_fraction, dtype=float)
     safe = np.clip(v, onset_fraction, max_fraction)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -63,6 +77,8 @@ def gutowski_stiffness(
     volume_fraction: ArrayLike, coefficient: float, onset_fraction: float, max_fraction: float
 ) -> FloatArray:
     """dσ/dV_f [Pa] of Gutowski's law for V_o < V_f < V_a (0 below V_o)."""
+    import numpy as np
+
     v = np.asarray(volume_fraction, dtype=float)
     safe = np.clip(v, onset_fraction, max_fraction * (1 - 1e-12))
     s = np.sqrt(safe / onset_fraction)
@@ -88,6 +104,8 @@ class BundleCompaction:
     cap_fraction: float = field(init=False)
 
     def __post_init__(self) -> None:
+        import numpy as np
+
         if not 0.0 < self.onset_fraction < self.max_fraction:
             raise ValueError("need 0 < V_o < V_a")
         if not 0.0 < self.packing_margin < 1.0:
@@ -138,6 +156,8 @@ class BundleCompaction:
 
     def _denominator(self, v: FloatArray) -> FloatArray:
         # F_bb − F_bl²/F11, relative to F_bb: 1 − F_bl² E_f V σ'(V) V² / V_f0.
+        import numpy as np
+
         slope = self._gutowski_slope(v)
         return np.asarray(
             1.0
@@ -151,9 +171,13 @@ class BundleCompaction:
 
     def _bundle_slope(self, v: FloatArray) -> FloatArray:
         """dσ_b/dV_f [Pa] below the cap."""
+        import numpy as np
+
         return np.asarray(self._gutowski_slope(v) / self._denominator(v), dtype=float)
 
     def _uncapped(self, v: FloatArray) -> FloatArray:
+        import numpy as np
+
         if self.coupling_compliance == 0.0:
             args = (self.coefficient, self.onset_fraction, self.max_fraction)
             return np.asarray(
@@ -162,11 +186,14 @@ class BundleCompaction:
             )
         lo = self.initial_fraction
         half = 0.5 * (v - lo)
-        points = (0.5 * (v + lo))[..., None] + half[..., None] * _GL_NODES
-        return np.asarray(half * (self._bundle_slope(points) @ _GL_WEIGHTS), dtype=float)
+        nodes, weights = _gauss_legendre()
+        points = (0.5 * (v + lo))[..., None] + half[..., None] * nodes
+        return np.asarray(half * (self._bundle_slope(points) @ weights), dtype=float)
 
     def stress(self, volume_fraction: ArrayLike) -> FloatArray:
         """Compaction stress σ_b [Pa] ≥ 0 added over the as-woven state at fraction V_f."""
+        import numpy as np
+
         v = np.maximum(np.asarray(volume_fraction, dtype=float), self.initial_fraction)
         cap = self.cap_fraction
         inside = np.minimum(v, cap)

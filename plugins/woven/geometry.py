@@ -27,19 +27,21 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
-from typing import Literal, cast
-
-import numpy as np
+from typing import TYPE_CHECKING, Literal, cast
 
 from preform.geometry.fibres import Fibre, fibre_area_m2
-from preform.geometry.unit_cell import FloatArray, TowPath, UnitCell
+from preform.geometry.unit_cell import TowPath, UnitCell
 from preform.plugins.woven.crossover import CrossoverGeometry
+
+if TYPE_CHECKING:  # numpy is imported where a method computes: a listing needs none
+    from preform.geometry.unit_cell import FloatArray
+
+    #: A tow height [m]: one value, or an array of them over shear angles.
+    Height = float | FloatArray
 
 #: Where a problem is, as a path in the weave description, e.g. ("weave", "matrix", 2, 0).
 IssueLocation = tuple[str | int, ...]
 Family = Literal["warp", "weft"]
-#: A tow height [m]: one value, or an array of them over shear angles.
-Height = float | FloatArray
 
 
 @dataclass(frozen=True)
@@ -462,6 +464,8 @@ class WovenUnitCell:
     @property
     def period(self) -> FloatArray:
         """Repeat vectors [m]: a1 along the warp (x), a2 along the weft (y)."""
+        import numpy as np
+
         return np.array(
             [
                 [self.weave.repeat_weft * self.tow_spacing_weft, 0.0],
@@ -538,6 +542,8 @@ class WovenUnitCell:
         on the period boundary, halfway between the last and first crossover, so tiled cells
         join up.
         """
+        import numpy as np
+
         self._require_valid()
         weave = self.weave
         columns = self._columns_along(key)
@@ -561,6 +567,8 @@ class WovenUnitCell:
 
     def path_length(self, key: TowKey) -> float:
         """Length of one tow's centreline over one period [m]."""
+        import numpy as np
+
         return float(np.linalg.norm(np.diff(self.tow_points(key), axis=0), axis=1).sum())
 
     def straight_length(self, key: TowKey) -> float:
@@ -628,6 +636,8 @@ class WovenUnitCell:
         """Envelope [m] of the tow centrelines ± half their heights, the tows' heights [m] given
         by ``height`` (floats, or arrays over shear angles: the envelope of each angle's stack,
         all angles in one pass; ``preform.plugins.woven.sheared_cell``)."""
+        import numpy as np
+
         self._require_valid()
         z = self.stack_z(height)
         top: Height | None = None
@@ -659,6 +669,8 @@ class WovenUnitCell:
     def cover_factor(self) -> float:
         """Fraction of the plan area covered by tows [-] (tows as strips of their width; the
         widest tow at a position is the one seen from above)."""
+        import numpy as np
+
         self._require_valid()
         gaps_warp = [
             max(

@@ -20,13 +20,11 @@ from __future__ import annotations
 
 import math
 from functools import cached_property
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import Field, ValidationInfo, field_validator
 
 from preform.geometry.fibres import FIBRES, Fibre
-from preform.geometry.sheared_cell import ShearedCell
-from preform.geometry.unit_cell import FloatArray, UnitCell
 from preform.material import (
     FIBRE_DENSITY,
     FIBRE_MODULUS,
@@ -44,6 +42,10 @@ from preform.material import (
 from preform.plugins.woven import weaves
 from preform.plugins.woven.crossover import CrossoverGeometry
 from preform.plugins.woven.geometry import TowType, WeaveDescription, WovenUnitCell
+
+if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
+    from preform.geometry.sheared_cell import ShearedCell
+    from preform.geometry.unit_cell import FloatArray, UnitCell
 
 TowTypeAssignment = str | tuple[str | tuple[str, ...], ...]
 

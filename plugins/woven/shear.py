@@ -49,10 +49,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-import numpy as np
-from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, Field
 
 from preform.material import ParamsModel, Plausible
@@ -62,7 +60,12 @@ from preform.shear.energy import QuadratureBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import SignedShearLaw
 
-FloatArray = NDArray[np.float64]
+if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    import numpy as np
+    from numpy.typing import ArrayLike, NDArray
+
+    FloatArray = NDArray[np.float64]
+
 
 #: Largest shear-angle magnitude [rad] the law evaluates; the crossover is singular at 90°.
 MAX_SHEAR = math.pi / 2 - 1e-9
@@ -75,6 +78,8 @@ def _strip_edge_integral(distance: FloatArray, s_lo: FloatArray, s_hi: FloatArra
     In polar coordinates about the centre, ∫∫ r·r dr dt = (p³/3)∫ sec³t dt, and with x = tan t,
     ∫ sec³ = [x√(1+x²) + asinh x]/2.
     """
+
+    import numpy as np
 
     def g(x: FloatArray) -> FloatArray:
         return np.asarray(x * np.sqrt(1.0 + x * x) + np.arcsinh(x), dtype=float)
@@ -90,6 +95,8 @@ def contact_mean_radius(width_1: ArrayLike, width_2: ArrayLike, gamma: ArrayLike
     the four triangles (centre, edge). For a square of side w it gives w(√2 + ln(1+√2))/6.
     Broadcasts over all arguments.
     """
+    import numpy as np
+
     w1 = np.asarray(width_1, dtype=float)
     w2 = np.asarray(width_2, dtype=float)
     g = np.clip(np.abs(np.asarray(gamma, dtype=float)), 0.0, MAX_SHEAR)
@@ -109,6 +116,8 @@ def contact_mean_radius(width_1: ArrayLike, width_2: ArrayLike, gamma: ArrayLike
 
 def tow_width(gamma: ArrayLike, initial_width: float, spacing: float) -> FloatArray:
     """Tow width Tw [m] at shear angle γ [rad] (paper Eqn 3): Tw0 up to γ_L, then Ts·cos γ."""
+    import numpy as np
+
     g = np.clip(np.abs(np.asarray(gamma, dtype=float)), 0.0, MAX_SHEAR)
     return np.asarray(np.minimum(initial_width, spacing * np.cos(g)), dtype=float)
 
@@ -306,6 +315,8 @@ class FrictionCompactionLaw(SignedShearLaw):
         super().__init__(branch, None, locking_angle=min(locks), failure_angle=None)
 
     def _free_torque(self, u: FloatArray) -> FloatArray:
+        import numpy as np
+
         total = np.zeros(np.shape(u))
         for part in self._parts:
             total = total + part.torque_per_area(u)
@@ -315,6 +326,8 @@ class FrictionCompactionLaw(SignedShearLaw):
         """First angle [rad] in [0, stop] where C/cos γ reaches ``force_N_per_m``; MAX_SHEAR if
         none. A grid finds the first crossing (the force rises monotonically past locking);
         four finer grids inside the bracket refine it to ~1e-12 rad, one vector call each."""
+        import numpy as np
+
         lo, hi = 0.0, stop
         for level in range(5):
             grid = np.linspace(lo, hi, 257)
@@ -330,10 +343,14 @@ class FrictionCompactionLaw(SignedShearLaw):
 
     def torque_magnitude(self, u: FloatArray) -> FloatArray:
         """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]; held past jamming."""
+        import numpy as np
+
         return self._free_torque(np.minimum(np.asarray(u, dtype=float), self._jam))
 
     def contact_force(self, gamma: ArrayLike) -> FloatArray:
         """Mean contact force per crossover F_c [N] of the first geometry."""
+        import numpy as np
+
         return self._parts[0].contact_force(np.asarray(gamma, dtype=float))
 
     def pretension_force(self) -> float:
@@ -342,6 +359,8 @@ class FrictionCompactionLaw(SignedShearLaw):
 
     def effective_radius(self, gamma: ArrayLike) -> FloatArray:
         """R_eff [m] of the first geometry's crossover at γ [rad]."""
+        import numpy as np
+
         return self._parts[0].effective_radius(np.asarray(gamma, dtype=float))
 
 
@@ -459,6 +478,8 @@ class _CrossoverPart:
         return contact_mean_radius(w_wp, w_wt, u)
 
     def contact_force(self, u: FloatArray) -> FloatArray:
+        import numpy as np
+
         g = self.geometry
         w_wp, w_wt = self.widths(u)
         stress = 0.5 * (
@@ -469,6 +490,8 @@ class _CrossoverPart:
         return np.asarray(self.pretension_force + stress * w_wp * w_wt / cos_g, dtype=float)
 
     def torque_per_area(self, u: FloatArray) -> FloatArray:
+        import numpy as np
+
         crossover_torque = self.mu * self.contact_force(u) * self.effective_radius(u)
         return np.asarray(self.geometry.crossovers_per_area * crossover_torque, dtype=float)
 
