@@ -87,7 +87,9 @@ def _sphere(kind: int, params: FloatArray, x: float, y: float, z: float):
         floor = (params[4] - params[2]) / radius
         if uz < floor:
             # Below the floor: the nearest point is on the edge circle at height floor·R.
-            flat = math.sqrt(ux * ux + uy * uy)
+            # hypot: the squares of a tiny horizontal offset would be subnormal, their root
+            # inexact, and the edge direction not a unit vector
+            flat = math.hypot(ux, uy)
             if flat > 0.0:
                 fx, fy = ux / flat, uy / flat
             else:
@@ -353,9 +355,8 @@ def _ellipsoid_foot(y0: float, y1: float, y2: float, a0: float, a1: float, a2: f
         w0 = y0 if s0 else 0.0
         w1 = y1 if s1 else 0.0
         w2 = y2 if s2 else 0.0
-        short_norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-        if short_norm > 0.0:
-            w0, w1, w2 = w0 / short_norm, w1 / short_norm, w2 / short_norm
+        if max(abs(w0), abs(w1), abs(w2)) > 0.0:
+            w0, w1, w2 = _unit_scaled(w0, w1, w2)  # a unit vector where squares are subnormal
         elif s2:
             w2 = 1.0
         elif s1:
