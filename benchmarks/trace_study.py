@@ -45,7 +45,15 @@ def main() -> None:
         run = [sys.executable, "-c", main, "pipeline", "run", "--out", str(out)]
         run += ["--engine", args.engine, "--workers", str(args.workers)]
         subprocess.run(run, check=True, capture_output=True, env=env)  # fills the bytecode cache
-        trace = ["strace", "-f", "--seccomp-bpf", "-tt", "-qq", "-e", "trace=execve,clone,clone3,rename,exit_group"]
+        trace = [
+            "strace",
+            "-f",
+            "--seccomp-bpf",
+            "-tt",
+            "-qq",
+            "-e",
+            "trace=execve,clone,clone3,rename,exit_group",
+        ]
         subprocess.run(
             [*trace, "-o", str(log), *run, "--force"], check=True, capture_output=True, env=env
         )
