@@ -59,13 +59,16 @@ runner.open_engine = traced_open
 from preform.cli import main
 
 sys.argv = ["preform", "pipeline", "run", "--engine", "dask", *sys.argv[1:]]
+code = 0
 try:
     main()
-except SystemExit:
-    pass
+except SystemExit as exc:  # the command's exit code, passed on after the trace is printed
+    code = exc.code if isinstance(exc.code, int) else 1
 mark("exit")
-print("TRACE", *(f"{k}={v:.2f}" for k, v in marks.items()),
-      f"first result={results[0]:.2f}", f"last result={results[-1]:.2f}")
+if results:
+    print("TRACE", *(f"{k}={v:.2f}" for k, v in marks.items()),
+          f"first result={results[0]:.2f}", f"last result={results[-1]:.2f}")
+sys.exit(code)
 """
 
 
@@ -88,7 +91,8 @@ def main() -> None:
             trace = [line for line in proc.stdout.splitlines() if line.startswith("TRACE")]
             if proc.returncode not in (0, 1) or not trace:
                 sys.exit(f"the run failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
-            print(f"{trace[-1][6:]}  wall={wall:.2f}  (load {load:.1f})")
+            failed = "  (some cases failed: exit 1)" if proc.returncode else ""
+            print(f"{trace[-1][6:]}  wall={wall:.2f}  (load {load:.1f}){failed}")
 
 
 if __name__ == "__main__":

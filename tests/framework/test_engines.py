@@ -143,10 +143,11 @@ def test_the_fork_server_is_gone_when_the_command_exits():
         first = forkserver._forkserver._forkserver_pid
         stop_fork_server()
         try:
-            os.kill(first, 0)
-            sys.exit("the stopped server still runs")
+            os.kill(first, 0)  # signal 0: only asks whether the process exists
         except ProcessLookupError:
-            pass
+            pass  # gone, as it must be
+        else:
+            sys.exit("the stopped server still runs")
         child = context.Process(target=os.getpid)
         child.start(); child.join()
         assert child.exitcode == 0, child.exitcode
