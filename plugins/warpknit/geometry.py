@@ -259,6 +259,10 @@ class CellFit:
         )
 
 
+#: Worst-layer scores of two cells within this relative difference are the same score to
+#: ``cell_fit`` when no cell fits (rounding, not geometry, separates them).
+_SCORE_TIE = 1e-9
+
 #: The candidate cells (m_x, m_y) stitch repeats, in the order ``cell_fit`` prefers them:
 #: smallest area first, then fewest repeats along the stitch.
 _CELLS_BY_AREA = sorted(
@@ -689,8 +693,8 @@ class WarpKnitGeometry:
 
         Plain Python (the library's validation asks for it, and listing the library imports no
         numpy): the candidate cells are tried smallest area first, then fewest repeats along
-        the stitch, and the first within tolerance is taken; when none is, the one with the
-        smallest score (the first in repeat order on a tie)."""
+        the stitch, and the first within tolerance is taken; when none is, the one whose worst
+        layer scores least, the smallest sum over the layers deciding between equal ones."""
         length, width = self.stitch_repeat()
         layers = [
             _LayerLattice(layer, length, width, self._row_length(i))
@@ -700,19 +704,25 @@ class WarpKnitGeometry:
         def fits(m_x: int, m_y: int) -> bool:  # stops at the first layer that does not fit
             return all(lattice.score(m_x, m_y) <= 1.0 for lattice in layers)
 
-        def score(m_x: int, m_y: int) -> float:
-            return max((lattice.score(m_x, m_y) for lattice in layers), default=0.0)
-
         # Most fabrics fit one of the first cells: the scan stops there.
         chosen = next((cell for cell in _CELLS_BY_AREA if fits(*cell)), None)
         within = chosen is not None
-        if chosen is None:  # none fits: the smallest finite score, the first in (m_x, m_y) order
-            chosen, best = (1, 1), math.inf
+        if chosen is None:
+            # None fits: the smallest worst-layer score. Cells whose worst layer is the same
+            # (to rounding: a layer's score often does not depend on the other axis's repeats)
+            # are told apart by the sum over the layers, so that the other layers are drawn
+            # as near their spacing and angle as they can be; then the first in (m_x, m_y)
+            # order. Without the sum, the last bit of the rounding picked among them.
+            chosen, best = (1, 1), (math.inf, math.inf)
             for m_x in range(1, MAX_REPEATS + 1):
                 for m_y in range(1, MAX_REPEATS + 1):
-                    value = score(m_x, m_y)
-                    if value < best:
-                        chosen, best = (m_x, m_y), value
+                    scores = [lattice.score(m_x, m_y) for lattice in layers]
+                    worst, total = max(scores, default=0.0), sum(scores)
+                    if not math.isfinite(worst):
+                        continue
+                    tied = math.isclose(worst, best[0], rel_tol=_SCORE_TIE, abs_tol=0.0)
+                    if (worst < best[0] and not tied) or (tied and total < best[1]):
+                        chosen, best = (m_x, m_y), (worst, total)
         return CellFit(
             stitch_repeat=(length, width),
             repeats=chosen,
