@@ -130,7 +130,9 @@ def _extremes(
         slopes.append(slope)
     slopes = slopes[2:]  # the grid's
     for k in range(last):
-        if slopes[k] * slopes[k + 1] < 0.0:
+        # signs compared, not multiplied: the product of two tiny slopes underflows to 0
+        left, right = slopes[k], slopes[k + 1]
+        if (left < 0.0 < right) or (right < 0.0 < left):
             root = _slope_root(c, grid[k], grid[k + 1], slopes[k])
             if start_deg < root < end_deg:
                 angles.append(root)

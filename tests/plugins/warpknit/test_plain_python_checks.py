@@ -226,6 +226,8 @@ COEFFICIENT = st.floats(-1.0, 1.0, allow_subnormal=False)
     st.sampled_from([20.0, 45.0, 60.0, 70.0, 90.0]),
 )
 @example(raw=[0.0, 0.7200358324442404, -1.0, 1.7303754948657723e-13], end=20.0)
+# slopes ~1e-198 and ~1e-195 either side of the hump: their product underflowed to 0
+@example(raw=[0.0, 1.416030275987887e-198, -6.118341350390407e-195], end=20.0)
 def test_polynomial_extremes_agree_with_companion_roots(raw: list[float], end: float) -> None:
     """As extreme as the companion-matrix roots find (those can be off where the other root is
     huge: the example's, 7.7e12, put numpy's maximum 1.1e-7 low) and never past what the
