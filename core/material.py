@@ -26,7 +26,6 @@ Three kinds of value check, from hard to soft:
 
 from __future__ import annotations
 
-import difflib
 import functools
 import math
 import os
@@ -184,6 +183,8 @@ def size_limit_value(name: str) -> int:
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or key not in SIZE_LIMITS:
+            import difflib  # for the message only: off the path of a good listing
+
             close = difflib.get_close_matches(key, SIZE_LIMITS, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ValueError(

@@ -30,7 +30,6 @@ import os
 import sys
 import tempfile
 import threading
-import traceback
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -94,6 +93,8 @@ def _short_error(exc: BaseException) -> str:
         # the message says it all, the class path would be noise
         text = str(exc)
     else:
+        import traceback  # for a failure only: off the path of a good start
+
         # format_exception_only survives an exception whose __str__ itself raises
         text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
     if len(text) > MAX_ERROR_LENGTH:
@@ -138,6 +139,7 @@ class _KeptOpen(io.StringIO):
 _FREE_TRAPS: list[Any] = []
 if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_FREE_TRAPS.clear)
+
 
 
 def _flush_stdout() -> None:

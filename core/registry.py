@@ -25,14 +25,14 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
-from preform.step import Step
-
 if TYPE_CHECKING:
     # imported where a check needs them: the plugin host starts (``preform --help``) without
-    # pydantic or the fabric models
+    # pydantic or the fabric models, and ``materials list`` without the step contract (it
+    # registers steps by import path and never loads one)
     from pydantic import BaseModel
 
     from preform.material import FabricBase
+    from preform.step import Step
 
 
 class RegistrationError(ValueError):
@@ -415,6 +415,8 @@ def _error_text(exc: BaseException) -> str:
 
 def _pick_step(value: Any, name: str, target: str) -> Any:
     """The step named ``name`` at an import path: the object itself, or one of a sequence."""
+    from preform.step import Step
+
     if isinstance(value, list | tuple):
         found = [s for s in value if getattr(s, "name", None) == name]
         if len(found) != 1:
@@ -429,6 +431,8 @@ def _pick_step(value: Any, name: str, target: str) -> Any:
 
 def _check_step(step: Any, kind: str) -> None:
     """What every step must be, whether added directly or loaded from an import path."""
+    from preform.step import Step
+
     if not isinstance(step, Step):
         raise RegistrationError(f"{step!r} is not a preform.Step")
     if not step.provides:
@@ -498,7 +502,7 @@ class SurfaceRegistrar(_TaggedRegistrar):
         self._put(name, SurfaceType(name, params, build))
 
 
-class StepRegistrar(Registrar[Step | LazyStep]):
+class StepRegistrar(Registrar["Step | LazyStep"]):
     kind = "steps"
 
     def add(self, step: Step) -> None:

@@ -38,14 +38,16 @@ from math import gcd, lcm
 from typing import TYPE_CHECKING
 
 from preform.geometry.fibres import fibre, fibre_area_m2
-from preform.geometry.unit_cell import TowPath, UnitCell
 from preform.material import Location
 
 from .lapping import LappingSequence
 
 if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    # (nor the generic cell: a listing fits the cell but never draws its paths)
     import numpy as np
     from numpy.typing import NDArray
+
+    from preform.geometry.unit_cell import TowPath, UnitCell
 
     FloatArray = NDArray[np.float64]
 
@@ -734,6 +736,8 @@ class WarpKnitGeometry:
         """Every tow of the cell as straight pieces wrapped into the cell [m]."""
         import numpy as np
 
+        from preform.geometry.unit_cell import TowPath
+
         fit = self.cell_fit
         size = np.array(fit.size)
         tow_z, _, _ = self._stack
@@ -767,6 +771,8 @@ class WarpKnitGeometry:
         """Every stitching thread of the cell, one polyline per thread and repeat [m]."""
         import numpy as np
 
+        from preform.geometry.unit_cell import TowPath
+
         fit = self.cell_fit
         length, width = fit.size
         paths: list[TowPath] = []
@@ -794,6 +800,8 @@ class WarpKnitGeometry:
         """The repeating cell: tows (kind "tow", levels 1..L_tow) and threads (kind "stitch",
         levels L_tow + 1 ...); x is the stitch direction, the reference for signed shear."""
         import numpy as np
+
+        from preform.geometry.unit_cell import UnitCell
 
         length, width = self.cell_fit.size
         levels: dict[int, str] = {}

@@ -30,11 +30,11 @@ from itertools import pairwise
 from typing import TYPE_CHECKING, Literal, cast
 
 from preform.geometry.fibres import Fibre, fibre_area_m2
-from preform.geometry.unit_cell import TowPath, UnitCell
-from preform.plugins.woven.crossover import CrossoverGeometry
 
 if TYPE_CHECKING:  # numpy is imported where a method computes: a listing needs none
-    from preform.geometry.unit_cell import FloatArray
+    # nor the generic cell or the crossover summary, built only for a run or a law
+    from preform.geometry.unit_cell import FloatArray, UnitCell
+    from preform.plugins.woven.crossover import CrossoverGeometry
 
     #: A tow height [m]: one value, or an array of them over shear angles.
     Height = float | FloatArray
@@ -578,6 +578,8 @@ class WovenUnitCell:
 
     def to_unit_cell(self) -> UnitCell:
         """The generic :class:`UnitCell` (x along the warp, reference direction +45°)."""
+        from preform.geometry.unit_cell import TowPath, UnitCell
+
         self._require_valid()
         tows = []
         for key in self.tow_keys():
@@ -717,6 +719,8 @@ class WovenUnitCell:
         since each contributes friction; interlacings are summed over all tows of both
         families; mean floats are over the tows of the chosen pair's levels.
         """
+        from preform.plugins.woven.crossover import CrossoverGeometry
+
         self._require_valid()
         weave = self.weave
         contacts = self.contacts()

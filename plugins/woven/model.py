@@ -40,12 +40,12 @@ from preform.material import (
     size_limit,
 )
 from preform.plugins.woven import weaves
-from preform.plugins.woven.crossover import CrossoverGeometry
 from preform.plugins.woven.geometry import TowType, WeaveDescription, WovenUnitCell
 
 if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
     from preform.geometry.sheared_cell import ShearedCell
     from preform.geometry.unit_cell import FloatArray, UnitCell
+    from preform.plugins.woven.crossover import CrossoverGeometry
 
 TowTypeAssignment = str | tuple[str | tuple[str, ...], ...]
 
