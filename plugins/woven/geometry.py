@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
-from typing import TYPE_CHECKING, Literal, cast
+from typing import TYPE_CHECKING, Literal, NamedTuple, cast
 
 from preform.geometry.fibres import Fibre, fibre_area_m2
 
@@ -175,9 +175,11 @@ class WeaveDescription:
         return errors
 
 
-@dataclass(frozen=True)
-class TowKey:
-    """Identifies one tow of the repeat: its family, position in the repeat and level id."""
+class TowKey(NamedTuple):
+    """Identifies one tow of the repeat: its family, position in the repeat and level id.
+
+    A named tuple (hashable, compared by value, as a frozen dataclass would be): a dataclass
+    execs its generated methods when its class is created, at every start-up (issue 15l)."""
 
     family: Family
     position: int
