@@ -24,7 +24,7 @@ offending character.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 #: Stitch families told apart by where the loops of one repeat sit (see ``classify``).
 StitchClass = Literal["pillar", "tricot", "cord", "satin", "velvet", "atlas", "custom"]
@@ -51,9 +51,11 @@ class LappingSyntaxError(ValueError):
         return f"  {self.text}\n  {' ' * self.position}^"
 
 
-@dataclass(frozen=True)
-class Course:
-    """One course of a guide bar's lapping movement (lengths in needle spaces)."""
+class Course(NamedTuple):
+    """One course of a guide bar's lapping movement (lengths in needle spaces).
+
+    A named tuple (immutable, compared by value, as a frozen dataclass would be): a dataclass
+    execs its generated methods when its class is created, at every start-up (issue 15l)."""
 
     #: Needle gaps the overlap is made from and to, (a, b).
     overlap: tuple[int, int]
