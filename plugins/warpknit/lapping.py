@@ -23,7 +23,6 @@ offending character.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal, NamedTuple
 
 #: Stitch families told apart by where the loops of one repeat sit (see ``classify``).
@@ -51,11 +50,11 @@ class LappingSyntaxError(ValueError):
         return f"  {self.text}\n  {' ' * self.position}^"
 
 
+# Records without cached properties or dataclasses.replace callers are named tuples: immutable
+# and compared by value as frozen dataclasses are, but creating a dataclass execs its generated
+# methods, which every start-up pays (`materials list` validates the library; issue 15l).
 class Course(NamedTuple):
-    """One course of a guide bar's lapping movement (lengths in needle spaces).
-
-    A named tuple (immutable, compared by value, as a frozen dataclass would be): a dataclass
-    execs its generated methods when its class is created, at every start-up (issue 15l)."""
+    """One course of a guide bar's lapping movement (lengths in needle spaces)."""
 
     #: Needle gaps the overlap is made from and to, (a, b).
     overlap: tuple[int, int]
@@ -76,8 +75,7 @@ class Course(NamedTuple):
         return min(self.overlap)
 
 
-@dataclass(frozen=True)
-class LappingSequence:
+class LappingSequence(NamedTuple):
     """A parsed knitting sequence: one repeat of a guide bar's courses."""
 
     text: str

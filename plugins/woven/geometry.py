@@ -73,8 +73,10 @@ class TowType:
         return self.fibre_area / self.section_area
 
 
-@dataclass(frozen=True)
-class WeaveDescription:
+# Records without cached properties or dataclasses.replace callers are named tuples: immutable
+# and compared by value as frozen dataclasses are, but creating a dataclass execs its generated
+# methods, which every start-up pays (`materials list` validates the library; issue 15l).
+class WeaveDescription(NamedTuple):
     """Levels and weaving matrix of a woven repeat (paper Fig. 1, 2); no dimensions.
 
     ``matrix[i][j]`` lists the level ids met at crossover column (warp position i, weft
@@ -176,18 +178,14 @@ class WeaveDescription:
 
 
 class TowKey(NamedTuple):
-    """Identifies one tow of the repeat: its family, position in the repeat and level id.
-
-    A named tuple (hashable, compared by value, as a frozen dataclass would be): a dataclass
-    execs its generated methods when its class is created, at every start-up (issue 15l)."""
+    """Identifies one tow of the repeat: its family, position in the repeat and level id."""
 
     family: Family
     position: int
     level: int
 
 
-@dataclass(frozen=True)
-class Crossover:
+class Crossover(NamedTuple):
     """One warp-wise tow crossing one weft-wise tow at column (warp_position, weft_position)."""
 
     warp_position: int
