@@ -16,7 +16,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from pydantic import BaseModel, ValidationError
 
@@ -36,9 +36,9 @@ class LibraryError(Exception):
         super().__init__("\n".join(str(e) for e in self.errors))
 
 
-@dataclass(frozen=True)
-class Origin:
-    """Where an entry was defined."""
+class Origin(NamedTuple):
+    """Where an entry was defined. A named tuple, not a frozen dataclass: as immutable and
+    compared by value, without execing generated methods at every start-up (issue 15l)."""
 
     file: str
     line: int

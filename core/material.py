@@ -32,7 +32,7 @@ import os
 import typing
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
@@ -315,9 +315,11 @@ class Plausible:
         return schema
 
 
-@dataclass(frozen=True)
-class PlausibilityCheck:
-    """One range-checked value of a validated model: where, what was found, and its range."""
+class PlausibilityCheck(NamedTuple):
+    """One range-checked value of a validated model: where, what was found, and its range.
+
+    A named tuple, not a frozen dataclass: as immutable and compared by value, without execing
+    generated methods at every start-up (issue 15l)."""
 
     path: Location
     field: str
