@@ -141,7 +141,6 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_FREE_TRAPS.clear)
 
 
-
 def _flush_stdout() -> None:
     for stream in (sys.stdout, sys.__stdout__):
         with contextlib.suppress(Exception):
