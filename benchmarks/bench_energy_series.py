@@ -16,6 +16,9 @@ an illustrative tabulated force curve, and the degree-7 force polynomial hypothe
 (F = (γ/deg)⁵ − 0.001·(γ/deg)⁷ N/mm, held past 60°). The last columns compare the two: the
 largest relative difference at |γ| ≥ 1°, and near zero shear (|γ| < 1°) the largest difference
 relative to the series form's W, where the closed form's rounding of its ~1e16 J/m² terms shows.
+Then both forms' relative error against the exact energy (the closed form in high precision,
+``exact_piece_energy`` of tests/shear/test_energy_rounding.py, mpmath) for ncf-0-90-tricot's
+force polynomial from 1e-6° to 60°.
 
     python benchmarks/bench_energy_series.py [--angles 1000000] [--repeat 5]
 """
@@ -25,19 +28,23 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import pathlib
+import sys
 import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from closed_form_energy_baseline import closed_form_path
+from closed_form_energy_baseline import ClosedFormBranch, closed_form_path
 
 from preform.library import load_library
+from preform.shear.energy import PiecewiseBranch
 from preform.shear.laws import (
     PolynomialParams,
     TabulatedParams,
     build_polynomial,
     build_tabulated,
+    degree_polynomial_to_radians,
 )
 from preform.shear.surrogate import TabulatedSurrogate
 
@@ -111,6 +118,25 @@ def measure(
     )
 
 
+def against_exact() -> None:
+    """Relative error of both forms against the exact W of ncf-0-90-tricot's force polynomial."""
+    sys.path.insert(0, str(pathlib.Path(__file__).parents[1] / "tests" / "shear"))
+    from test_energy_rounding import exact_piece_energy
+
+    force = degree_polynomial_to_radians([0.0, 1.2e-3, 2.5e-5]) * 1000.0  # N/m, as the law
+    series = PiecewiseBranch([0.0], [force], weight="cos")
+    closed = ClosedFormBranch([0.0], [force], weight="cos")
+    print("ncf-0-90-tricot force polynomial, relative error of W against the exact energy")
+    print(f"{'angle deg':>10s} {'series':>9s} {'closed':>9s}")
+    for degrees in [1e-6, 1e-3, 0.1, 1.0, 10.0, 60.0]:
+        u = math.radians(degrees)
+        exact = exact_piece_energy(list(force), 0.0, u, "cos")
+        print(
+            f"{degrees:10g} {float(series.energy(u)) / exact - 1:9.1e}"
+            f" {float(closed.energy(u)) / exact - 1:9.1e}"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--angles", type=int, default=1_000_000)
@@ -134,6 +160,7 @@ def main() -> None:
     )
     for name, build in law_builders().items():
         measure(name, build, gamma, near_zero, far, args.repeat)
+    against_exact()
 
 
 if __name__ == "__main__":
