@@ -26,7 +26,13 @@ Goals (issue 15): process ≥ 1.7× serial and dask ≥ 1.5× serial on 2 cores;
 command ≥ 3× ``before``. The load average before and after is printed: other work on the
 machine makes every ratio smaller.
 
+``--scene NAME`` (repeatable) runs those bundled scenes over the library instead of the default
+one, to see how the engines scale once a run holds more work than its fixed costs (the
+three bundled min-energy scenes make 30 cases); ``before`` is not run then (its scenes differ).
+
     python benchmarks/bench_study.py [--repeat 2] [--workers 2] [--engines before,serial,process,dask]
+    python benchmarks/bench_study.py --engines serial,process,dask --scene hemisphere-min-energy \
+        --scene paraboloid-min-energy --scene hat-stiffener-min-energy
 """
 
 from __future__ import annotations
@@ -48,10 +54,14 @@ REPO = Path(__file__).resolve().parents[1]
 BEFORE_COMMIT = "e649036"
 
 
-def command(python: str, engine: str | None, out: Path, workers: int) -> list[str]:
-    """``preform pipeline run`` of the default scene into ``out``; ``engine`` None: the
-    command's own default engine and workers, as a user runs it."""
+def command(
+    python: str, engine: str | None, out: Path, workers: int, scenes: tuple[str, ...] = ()
+) -> list[str]:
+    """``preform pipeline run`` of ``scenes`` (none: the default scene) into ``out``;
+    ``engine`` None: the command's own default engine and workers, as a user runs it."""
     argv = [python, "-c", MAIN, "pipeline", "run", "--out", str(out), "--force"]
+    for scene in scenes:
+        argv += ["--scene", scene]
     if engine is not None:
         argv += ["--engine", engine]
         if engine != "serial":
@@ -104,14 +114,17 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--engines", default="before,serial,process,dask")
     parser.add_argument("--before", default=BEFORE_COMMIT, help="commit of the 'before' code")
+    parser.add_argument("--scene", action="append", default=[], help="a bundled scene (repeatable)")
     args = parser.parse_args()
     wanted = [e.strip() for e in args.engines.split(",") if e.strip()]
+    scenes = tuple(args.scene)
+    if scenes and "before" in wanted:
+        raise SystemExit("--scene runs today's code only: leave 'before' out of --engines")
     with tempfile.TemporaryDirectory(prefix="preform-bench-study-") as tmp:
         root = Path(tmp)
         runs = {
-            "serial": command(sys.executable, "serial", root / "serial", args.workers),
-            "process": command(sys.executable, "process", root / "process", args.workers),
-            "dask": command(sys.executable, "dask", root / "dask", args.workers),
+            name: command(sys.executable, name, root / name, args.workers, scenes)
+            for name in ("serial", "process", "dask")
         }
         if "before" in wanted:
             python = install_before(args.before, root)
@@ -124,8 +137,8 @@ def main() -> None:
             for name in wanted:
                 times[name] = min(times.get(name, float("inf")), run_once(runs[name], env))
         load_after = os.getloadavg()
-    scene = default_scene_path().stem
-    print(f"default study ({scene}), {os.cpu_count()} cores, best of {args.repeat}")
+    study = ", ".join(scenes) if scenes else f"default study ({default_scene_path().stem})"
+    print(f"{study}, {os.cpu_count()} cores, best of {args.repeat}")
     print(f"{'engine':<10}{'wall s':>9}{'x before':>10}{'x serial':>10}")
     for name, seconds in times.items():
         before = times.get("before", float("nan")) / seconds

@@ -20,16 +20,17 @@ from preform.pipeline.engines import (
 #: a process pool's fork server imports them once, so no worker pays them in its first case.
 #: A name that is not installed is skipped. The compiled net kernels (numba, 0.3 s to import)
 #: are there because every drape runs them; not scipy, which the default study does not use
-#: (2.0 s to import on a Dask worker). Since built-in steps, laws and architectures are
-#: registered by import path, the plugin host no longer imports their modules, so the default
-#: study's are named here too (the default study 7.3-8.8 s -> 6.4-8.6 s on 2 workers, quiet,
-#: alternated runs of ``preform pipeline run --force``). Not pandas: the default study's
-#: tables are written without it (``preform.export.csv_columns``), and pandas 3 imports
-#: pyarrow's compute module (about 0.5 s) when pyarrow is installed.
+#: (2.0 s to import on a Dask worker), nor ``mpl_toolkits.mplot3d``, which only the unit-cell
+#: figure uses now that the fibre-pattern figure projects its 3D view itself (issue 15g).
+#: Since built-in steps, laws and architectures are registered by import path, the plugin host
+#: no longer imports their modules, so the default study's are named here too (the default
+#: study 7.3-8.8 s -> 6.4-8.6 s on 2 workers, quiet, alternated runs of ``preform pipeline run
+#: --force``). Not pandas: the default study's tables are written without it
+#: (``preform.export.csv_columns``), and pandas 3 imports pyarrow's compute module (about
+#: 0.5 s) when pyarrow is installed.
 WORKER_PRELOAD = (
     "matplotlib.figure",
     "matplotlib.backends.backend_agg",
-    "mpl_toolkits.mplot3d",
     "numba",
     "preform.drape.net_kernels",
     "preform.drape.generator_kernels",
