@@ -78,8 +78,8 @@ def _horner(coeffs: FloatArray, idx: NDArray[np.intp], x: FloatArray) -> FloatAr
     return out
 
 
-#: Bound on the cos series' truncation relative to W: 2⁻⁶⁴, a sixteenth of the last bit, so the
-#: cut never shows above rounding.
+#: Bound on the cos series' truncation relative to W: 2⁻⁶⁴, 1/4096 of a unit in the last place
+#: of a double, so the cut never shows above rounding.
 _SERIES_TOLERANCE = 2.0**-64
 
 
