@@ -23,13 +23,20 @@ this order, each step working on the previous one's result:
    out of the solid (positive enclosed volume) and an open piece so that its area-weighted
    mean normal points up (+z, the side the fabric lies on), the convention of
    ``preform.plugins.surfaces.mesh``.
-7. **Long edges** (only when a largest edge length is given): triangles are split (an edge
+7. **Folds.** An edge across which the surface turns back on itself (its two triangles'
+   normals, consistently wound, turn by more than :data:`FOLD_ANGLE_DEG`) is a triangle turned
+   over: a vertex pushed through the surface, a tessellation or export error. Winding cannot
+   see it (the windings agree across the edge; the geometry does not), and a net or a geodesic
+   would follow the fold and bend silently, so it is refused, with where: there is no repair
+   that keeps the user's surface (where the vertex belongs is not known), and a real edge that
+   sharp (a wedge thinner than 180° − :data:`FOLD_ANGLE_DEG`) cannot be draped either.
+8. **Long edges** (only when a largest edge length is given): triangles are split (an edge
    at its midpoint, or a triangle into four) until no edge is longer. New vertices lie on the
    old facets, so the surface is exactly what it was; only its triangles are smaller. A CAD
    tessellation covers a large flat face with a few long triangles, and closest-point
    queries, which bound their search by the largest triangle, slow down by the number of
    triangles there.
-8. **Slivers** (smallest angle below :data:`SLIVER_ANGLE_DEG`) are counted and located, not
+9. **Slivers** (smallest angle below :data:`SLIVER_ANGLE_DEG`) are counted and located, not
    changed: they are real surface, and removing them would open holes.
 
 The :class:`HygieneReport` counts each of these, and says in words what was repaired
@@ -57,6 +64,18 @@ DEFAULT_WELD_TOLERANCE_REL = 1e-6
 #: at 1° the longest edge is about 57 × the triangle's height, where closest-point and
 #: circle-intersection arithmetic loses about two digits).
 SLIVER_ANGLE_DEG = 1.0
+#: The turn [deg] of the surface normal across an edge (between its two triangles' normals,
+#: consistently wound: 0° flat, 90° a right-angled crease, 180° folded flat back) above which
+#: the edge is a fold and the mesh is refused (module docstring, 7) [C]. A choice between two
+#: bounds: above 150°, the sharpest real crease a tool is expected to have (a 30° wedge; sharp
+#: CAD edges of 90-150° must pass, and the feature-crease rule, ``feature_angle_deg`` ≤ 180°,
+#: acts on them), and below 180° − 15°, what a triangle turned over on a tessellation of a
+#: smooth tool still turns against its neighbours when neighbouring facets differ by up to the
+#: CAD tessellation angle (15° by default); in a plane a turned-over triangle turns by 180°.
+#: Measured: every vertex of a dome with facets up to 18° apart pushed past the opposite edge
+#: of a triangle around it turns that triangle by at least 163.6° (tests/surfaces/
+#: test_mesh_folds.py); on facets 25° apart some turn by less and pass.
+FOLD_ANGLE_DEG = 160.0
 #: Rounds of long-edge splitting before giving up (each halves the longest edges).
 _MAX_REFINE_ROUNDS = 64
 #: Rounds of T-junction splitting before giving up (each round splits every open edge at all
@@ -66,7 +85,12 @@ MM = 1e-3
 
 
 class MeshRefused(ValueError):
-    """A tool mesh that cannot be draped even after repair; the message says where and why."""
+    """A tool mesh that cannot be draped even after repair; the message says where and why,
+    and ``where_m`` is that place [m] (None when the refusal has no one place)."""
+
+    def __init__(self, message: str, where_m: FloatArray | None = None) -> None:
+        super().__init__(message)
+        self.where_m = None if where_m is None else np.asarray(where_m, dtype=np.float64)
 
 
 @dataclass
@@ -204,14 +228,16 @@ def repair(
     weld_tolerance_m: float | None = None,
     *,
     max_edge_m: float | None = None,
+    fold_angle_deg: float = FOLD_ANGLE_DEG,
 ) -> RepairedMesh:
     """Repair a triangle mesh (module docstring); ``weld_tolerance_m`` [m] defaults to
     :data:`DEFAULT_WELD_TOLERANCE_REL` × the bounding-box diagonal; ``max_edge_m`` [m], if
-    given, is the longest edge left (step 7).
+    given, is the longest edge left (step 8); ``fold_angle_deg`` [deg] is the normal's turn
+    across an edge above which it is a fold (step 7; 180 turns the check off).
 
     Raises :class:`MeshRefused` for what cannot be repaired (non-manifold edges, a surface
-    that cannot be wound consistently, nothing left with area), saying where in mm and which
-    triangle of the input (counted from 1)."""
+    that cannot be wound consistently, a fold, nothing left with area), saying where in mm and
+    which triangle of the input (counted from 1)."""
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces, dtype=np.int64)
     if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
@@ -232,6 +258,8 @@ def repair(
         raise ValueError(f"weld tolerance must be ≥ 0 m, got {weld_tolerance_m!r}")
     if max_edge_m is not None and not (np.isfinite(max_edge_m) and max_edge_m > 0.0):
         raise ValueError(f"largest edge must be a positive length [m], got {max_edge_m!r}")
+    if not 0.0 < fold_angle_deg <= 180.0:
+        raise ValueError(f"fold angle must be in (0, 180] degrees, got {fold_angle_deg!r}")
     report = HygieneReport(
         triangles_read=int(faces.shape[0]),
         vertices_read=int(vertices.shape[0]),
@@ -266,10 +294,12 @@ def repair(
             f"{crowded.size} non-manifold edge(s): the edge at {_where(midpoint)} is shared by "
             f"{count[e]} triangles (input triangles "
             f"{', '.join(str(int(origin[f]) + 1) for f in sharing[:6])}); a tool surface must "
-            "be one sheet there: remove the fin, internal face or second body in CAD"
+            "be one sheet there: remove the fin, internal face or second body in CAD",
+            midpoint,
         )
     report.open_edges = int(np.count_nonzero(count == 1))
     faces = _orient(vertices, faces, edges, edge_of_face, count, origin, report)
+    _refuse_folds(vertices, faces, edges, edge_of_face, count, origin, fold_angle_deg)
     if max_edge_m is not None:
         before = faces.shape[0]
         vertices, faces, origin = _split_long_edges(vertices, faces, origin, max_edge_m)
@@ -341,6 +371,18 @@ def _edges(faces: IntArray) -> tuple[IntArray, IntArray]:
     directed = np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2)
     edges, inverse = _unique_rows(np.sort(directed, axis=1))
     return edges, inverse.reshape(-1, 3)
+
+
+def _edge_pairs(
+    edge_of_face: IntArray, count: IntArray
+) -> tuple[IntArray, IntArray, IntArray, IntArray, IntArray]:
+    """Every edge shared by exactly two faces (``count`` == 2): the edge, its two faces and
+    the slot (0-2) each face holds it in, in the order of the edges."""
+    shared = np.flatnonzero(count == 2)
+    rows, slots = np.nonzero(np.isin(edge_of_face, shared))
+    order = np.argsort(edge_of_face[rows, slots], kind="stable")
+    rows, slots = rows[order], slots[order]
+    return shared, rows[0::2], rows[1::2], slots[0::2], slots[1::2]
 
 
 def _split_t_junctions(
@@ -420,12 +462,7 @@ def _orient(
     """Wind every piece consistently (module docstring, 6); returns the re-wound faces."""
     n_faces = faces.shape[0]
     # The two faces of every manifold edge, and whether each runs the edge low → high.
-    shared = np.flatnonzero(count == 2)
-    rows, slots = np.nonzero(np.isin(edge_of_face, shared))
-    order = np.argsort(edge_of_face[rows, slots], kind="stable")
-    rows, slots = rows[order], slots[order]
-    pair_a, pair_b = rows[0::2], rows[1::2]
-    slot_a, slot_b = slots[0::2], slots[1::2]
+    _, pair_a, pair_b, slot_a, slot_b = _edge_pairs(edge_of_face, count)
 
     def runs_up(f: IntArray, s: IntArray) -> NDArray[np.bool_]:
         return np.asarray(faces[f, s] < faces[f, (s + 1) % 3])
@@ -451,7 +488,8 @@ def _orient(
         raise MeshRefused(
             f"the surface cannot be wound consistently (it is one-sided, like a Möbius band) "
             f"around {_where(where)} (input triangle {int(origin[g]) + 1}); a tool must have "
-            "an inside and an outside"
+            "an inside and an outside",
+            where,
         )
     flip_of = (as_wound > rewound).astype(np.int64)
     _, piece = np.unique(np.minimum(as_wound, rewound), return_inverse=True)
@@ -486,10 +524,55 @@ def _orient(
     return out
 
 
+def _refuse_folds(
+    vertices: FloatArray,
+    faces: IntArray,
+    edges: IntArray,
+    edge_of_face: IntArray,
+    count: IntArray,
+    origin: IntArray,
+    fold_angle_deg: float,
+) -> None:
+    """Refuse edges across which the consistently wound surface turns by more than
+    ``fold_angle_deg`` [deg] (module docstring, 7), naming the sharpest. ``edge_of_face`` may
+    predate the re-winding of ``faces``: re-winding a face keeps its edges."""
+    shared, pair_a, pair_b, _, _ = _edge_pairs(edge_of_face, count)
+    corners = vertices[faces]
+    doubled = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal = doubled / np.linalg.norm(doubled, axis=1, keepdims=True)
+    a, b = normal[pair_a], normal[pair_b]
+    # atan2 of sine and cosine keeps the turn exact near 180°, where arccos of the cosine
+    # loses half its digits.
+    turn = np.degrees(
+        np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
+    )
+    folded = np.flatnonzero(turn > fold_angle_deg)
+    if not folded.size:
+        return
+    k = int(folded[np.argmax(turn[folded])])
+    midpoint = vertices[edges[shared[k]]].mean(axis=0)
+    first, second = sorted((int(origin[pair_a[k]]) + 1, int(origin[pair_b[k]]) + 1))
+    # A triangle turned over in a smooth surface is folded against all its neighbours: the
+    # triangle on most fold edges is the one to look at.
+    on_folds = np.bincount(np.concatenate([pair_a[folded], pair_b[folded]]))
+    worst = int(np.argmax(on_folds))
+    raise MeshRefused(
+        f"{folded.size} fold edge(s): the surface turns back on itself (the normals of the two "
+        f"triangles on an edge turn by more than {fold_angle_deg:g}°); the sharpest, "
+        f"{turn[k]:.4g}°, is the edge at {_where(midpoint)} between input triangles {first} "
+        f"and {second}, and input triangle {int(origin[worst]) + 1} is folded across "
+        f"{int(on_folds[worst])} of its edges. A triangle turned over (a vertex pushed through "
+        "the surface, a tessellation or export error) makes a net follow the fold: move the "
+        "vertex back or re-tessellate the tool; a real edge this sharp (a wedge thinner than "
+        f"{180.0 - fold_angle_deg:g}°) cannot be draped: round it or give it a thickness in CAD",
+        midpoint,
+    )
+
+
 def _split_long_edges(
     vertices: FloatArray, faces: IntArray, origin: IntArray, max_edge: float
 ) -> tuple[FloatArray, IntArray, IntArray]:
-    """Split triangles until no edge is longer than ``max_edge`` [m] (module docstring, 7).
+    """Split triangles until no edge is longer than ``max_edge`` [m] (module docstring, 8).
 
     Each round marks the long edges, then also the third edge of every triangle with two
     marked (until none has two), puts a vertex at each marked edge's midpoint, and splits a
@@ -561,6 +644,7 @@ def _drop_unused(vertices: FloatArray, faces: IntArray) -> tuple[FloatArray, Int
 
 __all__ = [
     "DEFAULT_WELD_TOLERANCE_REL",
+    "FOLD_ANGLE_DEG",
     "SLIVER_ANGLE_DEG",
     "HygieneReport",
     "MeshRefused",
