@@ -92,7 +92,7 @@ def _cos_series_order(degree: int, width: float) -> int:
     [0, x], so the error of W(x) is at most that times ∫_0^x p. Below 90° cos(b + t) ≥
     (2/π)(π/2 − b − t) ≥ (2/π)(x − t), and for p ≥ 0 of degree d, ∫_0^x p(t)(x − t) dt ≥
     x·∫_0^x p / (d + 2)² (the least ratio over such p, the smallest eigenvalue of their moment
-    problem, is 2 to 5 times this for d ≤ 11: tests/shear/test_energy_rounding.py), so W(x) ≥
+    problem, is 2 to 5.2 times this for d ≤ 15: tests/shear/test_energy_rounding.py), so W(x) ≥
     (2/π)·x·∫_0^x p / (d + 2)². Hence the relative error is at most (π/2)(d + 2)²·h^J/(J + 1)!.
     """
     bound_factor = 0.5 * math.pi * (degree + 2) ** 2

@@ -249,7 +249,7 @@ def _moment_matrix(weight: list[float], size: int, extra: list[float]) -> mpmath
     return out
 
 
-@pytest.mark.parametrize("degree", range(12))
+@pytest.mark.parametrize("degree", range(16))  # the model allows 16 terms
 def test_truncation_bound_mass_lemma(degree: int) -> None:
     """``_cos_series_order`` uses ∫_0^1 p(t)(1 − t) dt ≥ ∫_0^1 p / (d + 2)² for p ≥ 0 of degree
     d. Every such p is σ₀ + t(1 − t)σ₁ (d even) or t·σ₀ + (1 − t)·σ₁ (d odd), σ sums of
