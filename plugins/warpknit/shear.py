@@ -22,11 +22,11 @@ Shape and policy [C]:
   perpendicular on [0, its end], the failure drop itself): that is a bad fit, not a fabric.
 * The drop is handed to the energy integration as sub-pieces, each expanded about its own start
   (``DROP_PIECES``). As one piece over the whole drop, a steep P₁ (extrapolated past the failure
-  angle) and the blend towards P₂ give large high-order coefficients that cancel; the closed-form
-  energy of that piece (antiderivative p − p″ + p⁗ − … against sin and cos) then carries terms
-  millions of times its energy, and its rounding (2e-9 of W for P₁ = 0.001 + 1e9·γ N/mm) made W
-  fall at the end of the drop. Short sub-pieces let the integration's own conditioning guard see
-  this and integrate them by Gauss–Legendre instead, exact to rounding.
+  angle) and the blend towards P₂ give large high-order coefficients that cancel, and every value
+  computed from them carries that cancellation's rounding. (It made W fall at the end of the drop
+  while the energy was the closed form p − p″ + p⁗ − … against sin and cos; the energy's series
+  form in ``preform.shear.energy`` no longer cancels, and the sub-pieces keep each piece's
+  coefficients near the size of the force itself.)
 """
 
 from __future__ import annotations
