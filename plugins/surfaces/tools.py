@@ -368,7 +368,7 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
     try:
         repaired = repair(vertices, faces, weld, max_edge_m=max_edge)
     except MeshRefused as error:
-        raise MeshRefused(f"{path}: {error}") from None
+        raise MeshRefused(f"{path}: {error}", error.where_m) from None
     return ToolMesh(repaired, labels, names, source, feature_angle_deg=p.feature_angle_deg)
 
 

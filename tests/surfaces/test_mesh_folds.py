@@ -298,6 +298,22 @@ def test_a_folded_tool_fails_its_case_saying_where(tmp_path: Path):
     assert "3 fold edge(s)" in result.output
 
 
+def test_a_tool_file_refused_for_a_fold_keeps_the_place(tmp_path: Path):
+    """Read from a file, the refusal names the file and still carries the place [m]."""
+    from preform.plugins.surfaces.tools import MeshTool, build_mesh
+
+    vertices, faces = flat_grid()
+    pushed, turned = push_through(vertices, faces, PUSHED, FAN)
+    write_stl(tmp_path / "folded.stl", TriangleMesh(pushed, faces), binary=False)
+    tool = MeshTool(surface="mesh", file="folded.stl")
+    with pytest.raises(MeshRefused, match=r"folded\.stl: 3 fold edge") as caught:
+        build_mesh(tool, str(tmp_path))
+    assert caught.value.where_m is not None
+    # the file holds millimetres (write_stl's default unit): the place comes back in metres
+    near = np.linalg.norm(edge_midpoints(pushed, faces[turned]) - caught.value.where_m, axis=1)
+    assert near.min() < 1e-6
+
+
 @pytest.mark.parametrize("angle", [0.0, -10.0, 180.5, float("nan")])
 def test_a_fold_angle_outside_0_to_180_degrees_is_refused(angle):
     vertices, faces = flat_grid()
