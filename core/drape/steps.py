@@ -295,6 +295,8 @@ def run_surface(ctx: CaseContext) -> dict[str, Any]:
         hygiene = getattr(surface, "hygiene", None)
         for repaired in hygiene.repairs() if hygiene is not None else ():
             ctx.warn(f"tool mesh: {repaired}")
+        for caution in hygiene.cautions() if hygiene is not None else ():
+            ctx.warn(f"tool mesh: {caution}")
     return {"surface": surface}
 
 

@@ -29,7 +29,10 @@ this order, each step working on the previous one's result:
    see it (the windings agree across the edge; the geometry does not), and a net or a geodesic
    would follow the fold and bend silently, so it is refused, with where: there is no repair
    that keeps the user's surface (where the vertex belongs is not known), and a real edge that
-   sharp (a wedge thinner than 180° − :data:`FOLD_ANGLE_DEG`) cannot be draped either.
+   sharp (a wedge thinner than 180° − :data:`FOLD_ANGLE_DEG`) is beyond what a pin-jointed net
+   is known to follow. A caller who knows the edge is real raises ``fold_angle_deg`` past it
+   (a scene: ``tool.fold_angle_deg``); the edges that lets through are counted and said
+   (:meth:`HygieneReport.cautions`).
 8. **Long edges** (only when a largest edge length is given): triangles are split (an edge
    at its midpoint, or a triangle into four) until no edge is longer. New vertices lie on the
    old facets, so the surface is exactly what it was; only its triangles are smaller. A CAD
@@ -120,6 +123,13 @@ class HygieneReport:
     open_edges: int = 0
     triangles: int = 0
     vertices: int = 0
+    #: The fold angle in force [deg] (step 7): ``FOLD_ANGLE_DEG`` unless the caller raised it.
+    fold_angle_deg: float = FOLD_ANGLE_DEG
+    #: Edges turning by more than ``FOLD_ANGLE_DEG`` that a raised ``fold_angle_deg`` let
+    #: through, the sharpest turn [deg] and where it is [m] (None without such edges).
+    folds_allowed: int = 0
+    sharpest_fold_deg: float | None = None
+    sharpest_fold_at_m: tuple[float, float, float] | None = None
 
     def repairs(self) -> list[str]:
         """What was repaired, in words (empty for a clean mesh)."""
@@ -179,6 +189,21 @@ class HygieneReport:
             )
         return out
 
+    def cautions(self) -> list[str]:
+        """What the mesh holds that the drape may not follow, let through because the caller
+        asked (a raised fold angle), in words (empty otherwise)."""
+        if not self.folds_allowed:
+            return []
+        assert self.sharpest_fold_deg is not None and self.sharpest_fold_at_m is not None
+        x, y, z = (c / MM for c in self.sharpest_fold_at_m)
+        return [
+            f"{self.folds_allowed} edge(s) where the surface turns back by more than "
+            f"{FOLD_ANGLE_DEG:g}° (the sharpest {self.sharpest_fold_deg:.4g}° at ({x:.4g}, "
+            f"{y:.4g}, {z:.4g}) mm) were let through by a fold angle of "
+            f"{self.fold_angle_deg:g}°: a net or geodesic follows such an edge as it is, and "
+            "one from a triangle turned over bends it; check the drape there"
+        ]
+
     def summary(self) -> dict[str, float | int | str]:
         """Scalars for a case's summary (``mesh_*``; the largest edge only when one was asked)."""
         out: dict[str, float | int | str] = {
@@ -199,6 +224,8 @@ class HygieneReport:
             "mesh_open_edges": self.open_edges,
             "mesh_repairs": "; ".join(self.repairs()) or "none",
             "mesh_remarks": "; ".join(self.remarks()) or "none",
+            "mesh_fold_angle_deg": self.fold_angle_deg,
+            "mesh_folds_allowed": self.folds_allowed,
         }
         if self.max_edge_m is not None:
             out["mesh_max_edge_mm"] = self.max_edge_m / MM
@@ -299,7 +326,8 @@ def repair(
         )
     report.open_edges = int(np.count_nonzero(count == 1))
     faces = _orient(vertices, faces, edges, edge_of_face, count, origin, report)
-    _refuse_folds(vertices, faces, edges, edge_of_face, count, origin, fold_angle_deg)
+    report.fold_angle_deg = float(fold_angle_deg)
+    _refuse_folds(vertices, faces, edges, edge_of_face, count, origin, fold_angle_deg, report)
     if max_edge_m is not None:
         before = faces.shape[0]
         vertices, faces, origin = _split_long_edges(vertices, faces, origin, max_edge_m)
@@ -532,10 +560,13 @@ def _refuse_folds(
     count: IntArray,
     origin: IntArray,
     fold_angle_deg: float,
+    report: HygieneReport,
 ) -> None:
     """Refuse edges across which the consistently wound surface turns by more than
-    ``fold_angle_deg`` [deg] (module docstring, 7), naming the sharpest. ``edge_of_face`` may
-    predate the re-winding of ``faces``: re-winding a face keeps its edges."""
+    ``fold_angle_deg`` [deg] (module docstring, 7), naming the sharpest; with a fold angle
+    raised past ``FOLD_ANGLE_DEG``, count in ``report`` the edges it let through.
+    ``edge_of_face`` may predate the re-winding of ``faces``: re-winding a face keeps its
+    edges."""
     shared, pair_a, pair_b, _, _ = _edge_pairs(edge_of_face, count)
     corners = vertices[faces]
     doubled = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -546,6 +577,13 @@ def _refuse_folds(
     turn = np.degrees(
         np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
     )
+    let_through = np.flatnonzero((turn > FOLD_ANGLE_DEG) & (turn <= fold_angle_deg))
+    if let_through.size:
+        k = int(let_through[np.argmax(turn[let_through])])
+        report.folds_allowed = int(let_through.size)
+        report.sharpest_fold_deg = float(turn[k])
+        midpoint = vertices[edges[shared[k]]].mean(axis=0)
+        report.sharpest_fold_at_m = (float(midpoint[0]), float(midpoint[1]), float(midpoint[2]))
     folded = np.flatnonzero(turn > fold_angle_deg)
     if not folded.size:
         return
@@ -564,7 +602,9 @@ def _refuse_folds(
         f"{int(on_folds[worst])} of its edges. A triangle turned over (a vertex pushed through "
         "the surface, a tessellation or export error) makes a net follow the fold: move the "
         "vertex back or re-tessellate the tool; a real edge this sharp (a wedge thinner than "
-        f"{180.0 - fold_angle_deg:g}°) cannot be draped: round it or give it a thickness in CAD",
+        f"{180.0 - fold_angle_deg:g}°) is beyond what a net is known to follow: round it or give "
+        "it a thickness in CAD, or, to drape it as it is, set the fold angle (a scene's "
+        f"tool.fold_angle_deg) to at least {turn[k]:.4g}° (180: no fold check)",
         midpoint,
     )
 

@@ -39,7 +39,7 @@ from preform.plugins.surfaces.mesh import (
     obj_triangles,
     stl_triangles,
 )
-from preform.plugins.surfaces.mesh_hygiene import MeshRefused, repair
+from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, MeshRefused, repair
 from preform.plugins.surfaces.tool_mesh import ToolMesh, ToolSource
 
 MM = 1e-3
@@ -212,6 +212,16 @@ class MeshTool(BaseModel):
         "every spacing a chord; 20 suits tools whose sharp creases lie more than a node "
         "spacing apart.",
     )
+    fold_angle_deg: float | None = Field(
+        default=None,
+        gt=0,
+        le=180,
+        description="An edge across which the surface turns back by more than this [deg] "
+        f"(between its two triangles' normals) is a fold, and the tool is refused (default "
+        f"{FOLD_ANGLE_DEG:g}: a triangle turned over; docs/tools.md). Raise it only for a real "
+        "edge sharper than that (a wedge thinner than 180° minus it); the edges it lets "
+        "through are said as a warning.",
+    )
     tessellation_tolerance_mm: float | None = Field(
         default=None,
         ge=0.001,
@@ -366,9 +376,15 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
             vertices, faces = stl_triangles(path, scale, max_bytes=max_bytes)
         source = ToolSource(str(p.file), kind, unit, unit_from)
     try:
-        repaired = repair(vertices, faces, weld, max_edge_m=max_edge)
+        repaired = repair(
+            vertices,
+            faces,
+            weld,
+            max_edge_m=max_edge,
+            fold_angle_deg=FOLD_ANGLE_DEG if p.fold_angle_deg is None else p.fold_angle_deg,
+        )
     except MeshRefused as error:
-        raise MeshRefused(f"{path}: {error}") from None
+        raise MeshRefused(f"{path}: {error}", error.where_m) from None
     return ToolMesh(repaired, labels, names, source, feature_angle_deg=p.feature_angle_deg)
 
 

@@ -298,6 +298,67 @@ def test_a_folded_tool_fails_its_case_saying_where(tmp_path: Path):
     assert "3 fold edge(s)" in result.output
 
 
+def test_a_tool_file_refused_for_a_fold_keeps_the_place(tmp_path: Path):
+    """Read from a file, the refusal names the file and still carries the place [m]."""
+    from preform.plugins.surfaces.tools import MeshTool, build_mesh
+
+    vertices, faces = flat_grid()
+    pushed, turned = push_through(vertices, faces, PUSHED, FAN)
+    write_stl(tmp_path / "folded.stl", TriangleMesh(pushed, faces), binary=False)
+    tool = MeshTool(surface="mesh", file="folded.stl")
+    with pytest.raises(MeshRefused, match=r"folded\.stl: 3 fold edge") as caught:
+        build_mesh(tool, str(tmp_path))
+    assert caught.value.where_m is not None
+    # the file holds millimetres (write_stl's default unit): the place comes back in metres
+    near = np.linalg.norm(edge_midpoints(pushed, faces[turned]) - caught.value.where_m, axis=1)
+    assert near.min() < 1e-6
+
+
+@pytest.mark.parametrize("turn_deg", [165.0, 175.0])
+def test_a_raised_fold_angle_lets_a_sharp_crease_through_and_says_so(turn_deg):
+    """A real edge sharper than the default (a thin wedge) passes when the caller raises the
+    fold angle past it, and the report counts every crease edge it let through and says where
+    the sharpest is; a crease the default allows is never counted."""
+    vertices, faces = creased_grid(turn_deg)
+    fixed = repair(vertices, faces, fold_angle_deg=176.0)
+    report = fixed.report
+    # the crease line x = 0 holds N - 1 grid edges, each between two triangles turning by
+    # exactly turn_deg (the diagonals do not cross it)
+    assert report.folds_allowed == N - 1
+    assert report.sharpest_fold_deg == pytest.approx(turn_deg, abs=1e-9)
+    assert report.sharpest_fold_at_m is not None and abs(report.sharpest_fold_at_m[0]) < 1e-12
+    (caution,) = report.cautions()
+    assert f"{N - 1} edge(s)" in caution and "fold angle of 176°" in caution
+    summary = report.summary()
+    assert summary["mesh_fold_angle_deg"] == 176.0 and summary["mesh_folds_allowed"] == N - 1
+    gentle = repair(*creased_grid(150.0), fold_angle_deg=176.0).report
+    assert gentle.folds_allowed == 0 and gentle.cautions() == []
+
+
+def test_a_scene_can_raise_the_fold_angle_and_the_case_warns(tmp_path: Path):
+    """tool.fold_angle_deg lets a folded tool through the pipeline; the case then carries the
+    caution in its warnings (console and summary) and the fold angle in its summary."""
+    vertices, faces = creased_grid(170.0)
+    write_stl(tmp_path / "wedge.stl", TriangleMesh(vertices, faces), binary=False)
+    scene = {
+        "name": "wedge-tool",
+        "tool": {"surface": "mesh", "file": "wedge.stl", "fold_angle_deg": 175},
+        "ply": {"node_spacing_mm": 10.0, "size_mm": [60, 60]},
+        "start": {"point_mm": [-40, 1.7], "generator_angle_deg": 80},
+        "outputs": ["cells_csv"],
+    }
+    (tmp_path / "scene.yaml").write_text(yaml.safe_dump(scene))
+    out = tmp_path / "out"
+    args = ["pipeline", "run", "--scene", str(tmp_path / "scene.yaml"), "--materials"]
+    result = CliRunner().invoke(cli, [*args, "E-BX-318", "--engine", "serial", "--out", str(out)])
+    summary = json.loads(next(out.glob("*/*/summary.json")).read_text())
+    assert summary["mesh_fold_angle_deg"] == 175.0
+    assert summary["mesh_folds_allowed"] == N - 1
+    said = [w for w in summary["warnings"] if "turns back by more than 160°" in w]
+    assert len(said) == 1 and "fold angle of 175°" in said[0]
+    assert "turns back by more than 160°" in result.output
+
+
 @pytest.mark.parametrize("angle", [0.0, -10.0, 180.5, float("nan")])
 def test_a_fold_angle_outside_0_to_180_degrees_is_refused(angle):
     vertices, faces = flat_grid()
