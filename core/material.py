@@ -98,10 +98,7 @@ class ParamsModel(BaseModel):
     entry is refused where it stands.
     """
 
-    # defer_build: a model's validator is built when it first validates, not when its class is
-    # created. A listing then builds only what the library uses (a fabric model builds the
-    # schemas of the models nested in it), not every law and part a plugin defines.
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, defer_build=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     @model_validator(mode="before")
     @classmethod
