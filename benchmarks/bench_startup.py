@@ -16,13 +16,21 @@ set to a temporary directory, filled by one untimed run of each command first), 
 preform's alike. ``--from-source`` keeps the environment as it is instead (the figures of
 before 2026-12-01 late, issue 15c, were measured that way).
 
-    python benchmarks/bench_startup.py [--repeat 5] [--from-source]
+``--instructions`` counts instead the instructions each command executes (valgrind's
+callgrind, user space, one run each after the untimed one): the same count to ~0.2 % from run
+to run whatever else the machine does, so a change's effect shows on a shared machine where
+the clock cannot (issue 15l). Instructions are not time (numpy's import starts BLAS threads
+and maps many libraries, which the count weighs differently); use the ratios for the goal.
+
+    python benchmarks/bench_startup.py [--repeat 5] [--from-source] [--instructions]
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -59,6 +67,22 @@ def run(argv: list[str], env: dict[str, str] | None) -> tuple[float, float]:
     return wall, usage.ru_utime + usage.ru_stime
 
 
+def instructions(argv: list[str], env: dict[str, str] | None) -> float:
+    """Instructions [millions] one run of ``argv`` executes (callgrind's ``Collected``)."""
+    with tempfile.TemporaryDirectory(prefix="preform-callgrind-") as out:
+        done = subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}/cg.out", *argv],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=True,
+        )
+    found = re.search(r"Collected : (\d+)", done.stderr)
+    if found is None:
+        raise RuntimeError(f"no instruction count in valgrind's output:\n{done.stderr}")
+    return int(found.group(1)) / 1e6
+
+
 def best_of_each(repeat: int, env: dict[str, str] | None) -> dict[str, tuple[float, float]]:
     """Best wall-clock and best processor time of each command over ``repeat`` rounds, every
     round running each command once in turn: a burst of load on the shared machine then falls
@@ -80,6 +104,11 @@ def main() -> None:
         help="Keep the environment's bytecode setting (PYTHONDONTWRITEBYTECODE=1: every "
         "module of an editable install compiled at every start).",
     )
+    parser.add_argument(
+        "--instructions",
+        action="store_true",
+        help="Count each command's instructions with valgrind (callgrind) instead of timing it.",
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="preform-pycache-") as cache:
         env: dict[str, str] | None = None
@@ -88,6 +117,15 @@ def main() -> None:
             env["PYTHONPYCACHEPREFIX"] = cache
             for argv in COMMANDS.values():  # untimed: fills the bytecode cache
                 run(argv, env)
+        if args.instructions:
+            if shutil.which("valgrind") is None:
+                parser.error("--instructions needs valgrind on the PATH")
+            count = {name: instructions(argv, env) for name, argv in COMMANDS.items()}
+            print(f"{'command':<38}{'x import numpy':>16}{'M instr':>10}")
+            for name, value in count.items():
+                print(f"{name:<38}{value / count['import numpy']:>16.2f}{value:>10.1f}")
+            print("instructions executed (callgrind, user space); not the goal's wall clock")
+            return
         times = best_of_each(args.repeat, env)
     base = times["import numpy"][0]
     print(f"{'command':<38}{'x import numpy':>16}{'ms':>8}{'cpu ms':>8}")

@@ -11,13 +11,12 @@ Every problem of every file is collected and reported at once as
 
 from __future__ import annotations
 
-import difflib
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from pydantic import BaseModel, ValidationError
 
@@ -37,9 +36,9 @@ class LibraryError(Exception):
         super().__init__("\n".join(str(e) for e in self.errors))
 
 
-@dataclass(frozen=True)
-class Origin:
-    """Where an entry was defined."""
+class Origin(NamedTuple):
+    """Where an entry was defined. A named tuple, not a frozen dataclass: as immutable and
+    compared by value, without execing generated methods at every start-up (issue 15l)."""
 
     file: str
     line: int
@@ -106,6 +105,8 @@ class Library:
         try:
             return self.fabrics[name]
         except KeyError:
+            import difflib  # for the message only: off the path of a good listing
+
             close = difflib.get_close_matches(name, self.fabrics, n=3)
             hint = f"; did you mean {', '.join(close)}?" if close else ""
             raise KeyError(f"no fabric named {name!r} in the library{hint}") from None
@@ -162,6 +163,8 @@ def validate_entry(
             [],
         )
     if tag not in known:
+        import difflib
+
         close = difflib.get_close_matches(str(tag), known, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         return (
@@ -241,6 +244,8 @@ def _range_problems(fabric: FabricBase, err: Any) -> tuple[list[SourceError], li
         where = ("accept_out_of_range", i)
         matching = [c for c, p in zip(checks, paths, strict=True) if covered(p, override)]
         if not matching:
+            import difflib
+
             close = difflib.get_close_matches(override, paths, n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
             errors.append(
@@ -287,6 +292,8 @@ def _validate_law(
     known = registry.names("shear_laws")
     law = raw.get("law")
     if law not in known:
+        import difflib
+
         close = difflib.get_close_matches(str(law), known, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
         line, column = doc.locate(where + (("law",) if "law" in raw else ()))

@@ -26,14 +26,13 @@ Three kinds of value check, from hard to soft:
 
 from __future__ import annotations
 
-import difflib
 import functools
 import math
 import os
 import typing
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
@@ -184,6 +183,8 @@ def size_limit_value(name: str) -> int:
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or key not in SIZE_LIMITS:
+            import difflib  # for the message only: off the path of a good listing
+
             close = difflib.get_close_matches(key, SIZE_LIMITS, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ValueError(
@@ -311,9 +312,11 @@ class Plausible:
         return schema
 
 
-@dataclass(frozen=True)
-class PlausibilityCheck:
-    """One range-checked value of a validated model: where, what was found, and its range."""
+class PlausibilityCheck(NamedTuple):
+    """One range-checked value of a validated model: where, what was found, and its range.
+
+    A named tuple, not a frozen dataclass: as immutable and compared by value, without execing
+    generated methods at every start-up (issue 15l)."""
 
     path: Location
     field: str

@@ -22,17 +22,16 @@ import importlib
 import inspect
 import typing
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
-
-from preform.step import Step
+from typing import TYPE_CHECKING, Any, Generic, NamedTuple, TypeVar
 
 if TYPE_CHECKING:
     # imported where a check needs them: the plugin host starts (``preform --help``) without
-    # pydantic or the fabric models
+    # pydantic or the fabric models, and ``materials list`` without the step contract (it
+    # registers steps by import path and never loads one)
     from pydantic import BaseModel
 
     from preform.material import FabricBase
+    from preform.step import Step
 
 
 class RegistrationError(ValueError):
@@ -57,8 +56,12 @@ class NameConflict(RegistrationError):
         self.owner = owner
 
 
-@dataclass(frozen=True)
-class Entry:
+# The registry's records are named tuples, not frozen dataclasses: as immutable and compared by
+# value, but a dataclass execs its generated methods when its class is created, which every
+# command pays at start-up (some 3.5 M instructions per class on Python 3.11, issue 15l).
+
+
+class Entry(NamedTuple):
     """One registered thing, with the plugin that provided it."""
 
     kind: str
@@ -68,22 +71,23 @@ class Entry:
     version: str
 
 
-@dataclass(frozen=True)
-class ShearLawType:
+class ShearLawType(NamedTuple):
+    """A registered shear law: its params model (the YAML block) and its builder."""
+
     name: str
     params: type[BaseModel]
     build: Callable[..., Any]
 
 
-@dataclass(frozen=True)
-class SurfaceType:
+class SurfaceType(NamedTuple):
+    """A registered tool surface: its params model (the scene's tool block) and its builder."""
+
     name: str
     params: type[BaseModel]
     build: Callable[..., Any]
 
 
-@dataclass(frozen=True)
-class LazyStep:
+class LazyStep(NamedTuple):
     """A step (or exporter) registered by import path, before its module is imported.
 
     ``target`` is ``"package.module:ATTRIBUTE"``; the attribute is the ``Step`` itself or a
@@ -98,8 +102,7 @@ class LazyStep:
     writes_files: bool = False
 
 
-@dataclass(frozen=True)
-class LazyArchitecture:
+class LazyArchitecture(NamedTuple):
     """An architecture registered by the import path of its fabric model (``"package.module:
     ATTRIBUTE"``), imported when a library first has a fabric of its tag."""
 
@@ -107,8 +110,7 @@ class LazyArchitecture:
     model: str
 
 
-@dataclass(frozen=True)
-class LazyTagged:
+class LazyTagged(NamedTuple):
     """A shear law or surface registered by import paths (``"package.module:ATTRIBUTE"``) of its
     params model and its builder, imported when the law or surface is first asked for."""
 
@@ -415,6 +417,8 @@ def _error_text(exc: BaseException) -> str:
 
 def _pick_step(value: Any, name: str, target: str) -> Any:
     """The step named ``name`` at an import path: the object itself, or one of a sequence."""
+    from preform.step import Step
+
     if isinstance(value, list | tuple):
         found = [s for s in value if getattr(s, "name", None) == name]
         if len(found) != 1:
@@ -429,6 +433,8 @@ def _pick_step(value: Any, name: str, target: str) -> Any:
 
 def _check_step(step: Any, kind: str) -> None:
     """What every step must be, whether added directly or loaded from an import path."""
+    from preform.step import Step
+
     if not isinstance(step, Step):
         raise RegistrationError(f"{step!r} is not a preform.Step")
     if not step.provides:
@@ -498,7 +504,7 @@ class SurfaceRegistrar(_TaggedRegistrar):
         self._put(name, SurfaceType(name, params, build))
 
 
-class StepRegistrar(Registrar[Step | LazyStep]):
+class StepRegistrar(Registrar["Step | LazyStep"]):
     kind = "steps"
 
     def add(self, step: Step) -> None:

@@ -5,7 +5,6 @@ Shared by the materials library and scenes, so both report problems the same way
 
 from __future__ import annotations
 
-import difflib
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -66,6 +65,8 @@ def _message(err: Any, model: type[BaseModel] | None) -> str:
     if kind == "extra_forbidden":
         field = err["loc"][-1] if err.get("loc") else "?"
         allowed = sorted(model.model_fields) if model is not None else []
+        import difflib  # for the message only: off the path of a good listing
+
         hint = difflib.get_close_matches(str(field), allowed, n=1)
         msg = f"unknown field {field!r}"
         if hint:

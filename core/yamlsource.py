@@ -150,21 +150,30 @@ def format_path(path: YamlPath) -> str:
 Position = tuple[int, int]
 
 
-@dataclass(frozen=True, slots=True)
+# The three records below are private to reading a file and never compared or shown: plain
+# slotted classes, not dataclasses, because creating a dataclass execs its generated methods,
+# which costs start-up (`materials list` reads the library) and buys nothing here.
+
+
 class _Entry:
     """One key of a mapping or item of a list, as written."""
 
-    key: Position  # the key (for a list item: the item itself)
-    value: Position  # the value as written here (an alias's own position, not its anchor's)
-    where: _Where  # the value's own positions (for an alias: those of the anchored node)
+    __slots__ = ("key", "value", "where")
+
+    def __init__(self, key: Position, value: Position, where: _Where) -> None:
+        self.key = key  # the key (for a list item: the item itself)
+        self.value = value  # the value as written here (an alias's own, not its anchor's)
+        self.where = where  # the value's own positions (for an alias: the anchored node's)
 
 
-@dataclass(frozen=True, slots=True)
 class _Where:
     """Positions of one node and its children; a tree parallel to the loaded data."""
 
-    position: Position
-    entries: dict[str | int, _Entry]
+    __slots__ = ("entries", "position")
+
+    def __init__(self, position: Position, entries: dict[str | int, _Entry]) -> None:
+        self.position = position
+        self.entries = entries
 
 
 _NO_ENTRIES: dict[str | int, _Entry] = {}
@@ -382,12 +391,14 @@ class _LimitExceeded(Exception):
     """A hostile-input limit was hit; the error is recorded, reading stops."""
 
 
-@dataclass
 class _Open:
     """A mapping or list still being read."""
 
-    node: MappingNode | SequenceNode
-    key: Node | None = None  # a mapping key waiting for its value
+    __slots__ = ("key", "node")
+
+    def __init__(self, node: MappingNode | SequenceNode) -> None:
+        self.node = node
+        self.key: Node | None = None  # a mapping key waiting for its value
 
 
 class _ParsedEvents(yaml.SafeLoader):

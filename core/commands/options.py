@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any, NoReturn, TypeVar
@@ -59,6 +58,8 @@ def json_option(func: F) -> F:
 
 def echo_json(obj: Any) -> None:
     """``obj`` as JSON on stdout: numpy values and paths made plain, non-finite numbers null."""
+    import json  # here, not at the top: most commands print no JSON
+
     from preform.pipeline.rundir import clean_json
 
     click.echo(json.dumps(clean_json(obj), indent=2, sort_keys=False, default=str))

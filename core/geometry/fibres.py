@@ -12,11 +12,12 @@ carbon 7 µm, aramid 12 µm, polyester stitching yarn 20 µm.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 
-@dataclass(frozen=True)
-class Fibre:
+# A named tuple, not a frozen dataclass: as immutable and compared by value, without execing
+# generated methods at every start-up (issue 15l).
+class Fibre(NamedTuple):
     name: str
     #: Fibre density [g/cm³].
     density_g_cm3: float

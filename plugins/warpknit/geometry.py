@@ -35,17 +35,19 @@ from dataclasses import dataclass
 from functools import cached_property
 from itertools import pairwise
 from math import gcd, lcm
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 from preform.geometry.fibres import fibre, fibre_area_m2
-from preform.geometry.unit_cell import TowPath, UnitCell
 from preform.material import Location
 
 from .lapping import LappingSequence
 
 if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
+    # (nor the generic cell: a listing fits the cell but never draws its paths)
     import numpy as np
     from numpy.typing import NDArray
+
+    from preform.geometry.unit_cell import TowPath, UnitCell
 
     FloatArray = NDArray[np.float64]
 
@@ -153,8 +155,10 @@ class TowLayer:
         return self.tow.linear_density_tex / (self.spacing * 1e3)
 
 
-@dataclass(frozen=True)
-class ThreadLevel:
+# Records without cached properties or dataclasses.replace callers are named tuples: immutable
+# and compared by value as frozen dataclasses are, but creating a dataclass execs its generated
+# methods, which every start-up pays (`materials list` validates the library; issue 15l).
+class ThreadLevel(NamedTuple):
     """One level of stitching threads, knitted by one guide bar (one of the L_thread levels)."""
 
     sequence: LappingSequence
@@ -196,8 +200,7 @@ class ThreadLevel:
         return thread_diameter(self.linear_density_tex, fibre(self.fibre).density_g_cm3)
 
 
-@dataclass(frozen=True)
-class StitchPath:
+class StitchPath(NamedTuple):
     """One thread of a level over one repeat of its sequence, starting at the cell origin."""
 
     #: Loop polylines, one per course, each (5, 3) [m]: top of down-leg, face, loop tip, face,
@@ -223,8 +226,7 @@ class StitchPath:
         return np.asarray(self.underlaps[:, 1, :2] - self.underlaps[:, 0, :2])
 
 
-@dataclass(frozen=True)
-class FittedLayer:
+class FittedLayer(NamedTuple):
     """How one tow layer is drawn on the unit cell (see the module docstring)."""
 
     #: Tow lattice indices: the tow family's phase advances by -k_machine over the cell's
@@ -240,8 +242,7 @@ class FittedLayer:
         return gcd(abs(self.k_machine), abs(self.k_cross))
 
 
-@dataclass(frozen=True)
-class CellFit:
+class CellFit(NamedTuple):
     """The unit cell: stitch-repeat multiples and the fitted tow layers."""
 
     stitch_repeat: tuple[float, float]
@@ -734,6 +735,8 @@ class WarpKnitGeometry:
         """Every tow of the cell as straight pieces wrapped into the cell [m]."""
         import numpy as np
 
+        from preform.geometry.unit_cell import TowPath
+
         fit = self.cell_fit
         size = np.array(fit.size)
         tow_z, _, _ = self._stack
@@ -767,6 +770,8 @@ class WarpKnitGeometry:
         """Every stitching thread of the cell, one polyline per thread and repeat [m]."""
         import numpy as np
 
+        from preform.geometry.unit_cell import TowPath
+
         fit = self.cell_fit
         length, width = fit.size
         paths: list[TowPath] = []
@@ -794,6 +799,8 @@ class WarpKnitGeometry:
         """The repeating cell: tows (kind "tow", levels 1..L_tow) and threads (kind "stitch",
         levels L_tow + 1 ...); x is the stitch direction, the reference for signed shear."""
         import numpy as np
+
+        from preform.geometry.unit_cell import UnitCell
 
         length, width = self.cell_fit.size
         levels: dict[int, str] = {}

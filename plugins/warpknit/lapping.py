@@ -23,8 +23,7 @@ offending character.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 #: Stitch families told apart by where the loops of one repeat sit (see ``classify``).
 StitchClass = Literal["pillar", "tricot", "cord", "satin", "velvet", "atlas", "custom"]
@@ -51,8 +50,10 @@ class LappingSyntaxError(ValueError):
         return f"  {self.text}\n  {' ' * self.position}^"
 
 
-@dataclass(frozen=True)
-class Course:
+# Records without cached properties or dataclasses.replace callers are named tuples: immutable
+# and compared by value as frozen dataclasses are, but creating a dataclass execs its generated
+# methods, which every start-up pays (`materials list` validates the library; issue 15l).
+class Course(NamedTuple):
     """One course of a guide bar's lapping movement (lengths in needle spaces)."""
 
     #: Needle gaps the overlap is made from and to, (a, b).
@@ -74,8 +75,7 @@ class Course:
         return min(self.overlap)
 
 
-@dataclass(frozen=True)
-class LappingSequence:
+class LappingSequence(NamedTuple):
     """A parsed knitting sequence: one repeat of a guide bar's courses."""
 
     text: str

@@ -27,14 +27,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
-from typing import TYPE_CHECKING, Literal, cast
+from typing import TYPE_CHECKING, Literal, NamedTuple, cast
 
 from preform.geometry.fibres import Fibre, fibre_area_m2
-from preform.geometry.unit_cell import TowPath, UnitCell
-from preform.plugins.woven.crossover import CrossoverGeometry
 
 if TYPE_CHECKING:  # numpy is imported where a method computes: a listing needs none
-    from preform.geometry.unit_cell import FloatArray
+    # nor the generic cell or the crossover summary, built only for a run or a law
+    from preform.geometry.unit_cell import FloatArray, UnitCell
+    from preform.plugins.woven.crossover import CrossoverGeometry
 
     #: A tow height [m]: one value, or an array of them over shear angles.
     Height = float | FloatArray
@@ -73,8 +73,10 @@ class TowType:
         return self.fibre_area / self.section_area
 
 
-@dataclass(frozen=True)
-class WeaveDescription:
+# Records without cached properties or dataclasses.replace callers are named tuples: immutable
+# and compared by value as frozen dataclasses are, but creating a dataclass execs its generated
+# methods, which every start-up pays (`materials list` validates the library; issue 15l).
+class WeaveDescription(NamedTuple):
     """Levels and weaving matrix of a woven repeat (paper Fig. 1, 2); no dimensions.
 
     ``matrix[i][j]`` lists the level ids met at crossover column (warp position i, weft
@@ -175,8 +177,7 @@ class WeaveDescription:
         return errors
 
 
-@dataclass(frozen=True)
-class TowKey:
+class TowKey(NamedTuple):
     """Identifies one tow of the repeat: its family, position in the repeat and level id."""
 
     family: Family
@@ -184,8 +185,7 @@ class TowKey:
     level: int
 
 
-@dataclass(frozen=True)
-class Crossover:
+class Crossover(NamedTuple):
     """One warp-wise tow crossing one weft-wise tow at column (warp_position, weft_position)."""
 
     warp_position: int
@@ -578,6 +578,8 @@ class WovenUnitCell:
 
     def to_unit_cell(self) -> UnitCell:
         """The generic :class:`UnitCell` (x along the warp, reference direction +45°)."""
+        from preform.geometry.unit_cell import TowPath, UnitCell
+
         self._require_valid()
         tows = []
         for key in self.tow_keys():
@@ -717,6 +719,8 @@ class WovenUnitCell:
         since each contributes friction; interlacings are summed over all tows of both
         families; mean floats are over the tows of the chosen pair's levels.
         """
+        from preform.plugins.woven.crossover import CrossoverGeometry
+
         self._require_valid()
         weave = self.weave
         contacts = self.contacts()

@@ -40,12 +40,12 @@ from preform.material import (
     size_limit,
 )
 from preform.plugins.woven import weaves
-from preform.plugins.woven.crossover import CrossoverGeometry
 from preform.plugins.woven.geometry import TowType, WeaveDescription, WovenUnitCell
 
 if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
     from preform.geometry.sheared_cell import ShearedCell
     from preform.geometry.unit_cell import FloatArray, UnitCell
+    from preform.plugins.woven.crossover import CrossoverGeometry
 
 TowTypeAssignment = str | tuple[str | tuple[str, ...], ...]
 
@@ -483,10 +483,16 @@ class WovenFabric(FabricBase):
     def errors(self) -> list[tuple[Location, str]]:
         """Cross-field errors: tow type references, matrix size and level ids, missing tows,
         tows that never interlace, unbound 3D levels; each with the field to blame."""
+        return list(self._errors)
+
+    @cached_property
+    def _errors(self) -> tuple[tuple[Location, str], ...]:
+        # Worked out once, like the cell they come from (``check`` and every geometric result
+        # ask again): they depend on the tow types, sets and weave only, never the law.
         errors = self._assignment_errors()
         if errors:
-            return errors
-        return [(self._entry_location(loc), msg) for loc, msg in self.woven_unit_cell.errors()]
+            return tuple(errors)
+        return tuple((self._entry_location(loc), msg) for loc, msg in self.woven_unit_cell.errors())
 
     def check(self) -> list[tuple[Location, str]]:
         """Warnings (tows at least as wide as their spacing), one per tow type and direction."""

@@ -55,7 +55,6 @@ from pydantic import BaseModel, Field
 
 from preform.material import ParamsModel, Plausible
 from preform.plugins.woven.compaction import SQUARE_PACKING, BundleCompaction
-from preform.plugins.woven.crossover import CrossoverGeometry
 from preform.shear.energy import QuadratureBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import SignedShearLaw
@@ -63,6 +62,9 @@ from preform.shear.laws import SignedShearLaw
 if TYPE_CHECKING:  # numpy is imported where a function computes: a listing needs none
     import numpy as np
     from numpy.typing import ArrayLike, NDArray
+
+    # built from a fabric's cell when a law is built, which a listing never does
+    from preform.plugins.woven.crossover import CrossoverGeometry
 
     FloatArray = NDArray[np.float64]
 
@@ -290,6 +292,8 @@ class FrictionCompactionLaw(SignedShearLaw):
         geometries: CrossoverGeometry | Sequence[CrossoverGeometry],
         params: FrictionCompactionParams,
     ) -> None:
+        from preform.plugins.woven.crossover import CrossoverGeometry
+
         self.geometries: tuple[CrossoverGeometry, ...] = (
             (geometries,) if isinstance(geometries, CrossoverGeometry) else tuple(geometries)
         )
@@ -517,6 +521,8 @@ def plain_weave_geometry(
 ) -> CrossoverGeometry:
     """A balanced plain weave's ``CrossoverGeometry`` in SI, from datasheet units (for tests and
     for the Table 1 fabrics without a full unit-cell model; glass defaults)."""
+    from preform.plugins.woven.crossover import CrossoverGeometry
+
     w, s = tow_width_mm * 1e-3, tow_spacing_mm * 1e-3
     fibre_area = linear_density_tex / (1000.0 * fibre_density_g_cm3) * 1e-6
     return CrossoverGeometry(

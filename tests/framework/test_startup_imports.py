@@ -6,6 +6,7 @@ import graph in a fresh interpreter, where nothing imported by the test session 
 
 from __future__ import annotations
 
+import ast
 import json
 import subprocess
 import sys
@@ -143,3 +144,66 @@ def test_a_reader_leaving_the_pipe_is_not_reported_as_a_bug() -> None:
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 1
     assert "bug" not in err and "Traceback" not in err, err
+
+
+#: What ``materials list`` does without since issue 15l, though its modules hold them: the step
+#: contract (steps register by import path), the generic unit cell and the crossover summary
+#: (built for a run or a law, never for a listing), and the modules only a message or
+#: ``--json`` needs.
+LISTING_KEPT_OUT = (
+    "preform.step",
+    "preform.geometry.unit_cell",
+    "preform.plugins.woven.crossover",
+    "difflib",
+    "json",
+    "traceback",
+)
+
+AFTER_LISTING = """
+import contextlib, io, sys
+names = {names!r}
+from preform.cli import main
+sys.argv = ["preform", "materials", "list", *{extra!r}]
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    with contextlib.suppress(SystemExit):
+        main()
+{then}
+print(sorted(n for n in names if n in sys.modules))
+"""
+
+
+def _after_listing(extra: list[str], then: str = "") -> list[str]:
+    """Which of ``LISTING_KEPT_OUT`` are imported after ``materials list EXTRA`` (and the code
+    ``then``) in a fresh interpreter; printed as a Python list so the probe imports no json."""
+    code = AFTER_LISTING.format(names=LISTING_KEPT_OUT, extra=extra, then=then)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    loaded: list[str] = ast.literal_eval(done.stdout.strip().splitlines()[-1])
+    return loaded
+
+
+def test_materials_list_imports_only_what_a_listing_uses() -> None:
+    assert _after_listing([]) == []
+
+
+def test_the_listing_probe_sees_each_module_where_it_is_used(tmp_path) -> None:
+    """Each module kept out is imported by the work that needs it, so the probe can fail."""
+    cell_and_law = """
+from preform.library import load_library
+lib = load_library()
+lib.fabric("plain-weave-600").unit_cell()
+lib.shear_law("plain-weave-600")
+lib.registry.step("drape")
+"""
+    assert _after_listing([], cell_and_law) == [
+        "preform.geometry.unit_cell",
+        "preform.plugins.woven.crossover",
+        "preform.step",
+    ]
+    assert _after_listing(["--json"]) == ["json"]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\narchitecture: wovn\nsource: s\nnote: n\n", encoding="utf-8")
+    assert _after_listing(["--library", str(bad)]) == ["difflib"]
+    broken = "import preform.plugin_manager as pm; pm._short_error(ValueError('x'))"
+    assert _after_listing([], broken) == ["traceback"]
