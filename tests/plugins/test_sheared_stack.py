@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from preform.api import load_library
@@ -233,6 +233,7 @@ def bisected_jamming_fraction(v0: float, modulus: float, settings: TowCompaction
     modulus_GPa=st.floats(3.0, 500.0),
     pressure=st.floats(1e2, 1e8),
 )
+@example(v0=0.12968676960320746, modulus_GPa=38.91752928599386, pressure=6098275.462180635)
 def test_jamming_fraction_is_resolved_to_neighbouring_floats_as_a_bisection_finds_it(
     v0: float, modulus_GPa: float, pressure: float
 ) -> None:
@@ -240,9 +241,13 @@ def test_jamming_fraction_is_resolved_to_neighbouring_floats_as_a_bisection_find
     vj = jamming_fraction(v0, modulus_GPa * 1e9, compaction)
     bundle = BundleCompaction(modulus_GPa * 1e9, 30.0, v0, v0, SQUARE_PACKING, packing_margin=1e-2)
     if vj < bundle.cap_fraction:
-        # the root is bracketed by vj and the next float above it
-        assert float(bundle.stress(np.asarray(vj))) < pressure
+        # the root is bracketed by vj and the next float above it, up to the rounding of σ_b
+        # itself: the search evaluates σ_b on arrays, and numpy's vectorised path of the law
+        # differs from its one-element path by an ulp in ~5 % of cases (hypothesis found
+        # σ_b(next float) = p − 1 ulp on one path and ≥ p on the other)
+        rounding = 4 * np.finfo(float).eps * pressure
+        assert float(bundle.stress(np.asarray(vj))) < pressure + rounding
         above = np.nextafter(vj, 1.0)
-        assert float(bundle.stress(np.asarray(above))) >= pressure
+        assert float(bundle.stress(np.asarray(above))) >= pressure - rounding
     expected = bisected_jamming_fraction(v0, modulus_GPa * 1e9, compaction)
     assert vj == pytest.approx(expected, rel=1e-15, abs=0.0)
