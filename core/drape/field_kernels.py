@@ -15,7 +15,13 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.drape.kernel_cache import drop_stale
 from preform.drape.result import CellStatus, NodeStatus
+
+#: The preform modules compiled into these kernels (inlined functions, frozen constants):
+#: a cached kernel older than one of them is compiled again (``preform.drape.kernel_cache``).
+COMPILED_IN = ("preform.drape.result",)
+drop_stale(__name__)
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
