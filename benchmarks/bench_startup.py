@@ -1,8 +1,8 @@
 """Start-up of the ``preform`` command against ``python -c "import numpy"``, as ratios.
 
 Each command runs in a fresh interpreter (the installed ``preform`` entry point, i.e.
-``preform.cli:main``, with this interpreter), best of ``--repeat`` wall-clock runs, the commands
-taking turns within each round so the ratios hold on a shared machine. Goal (issue 15): every
+``preform.__main__:main``, with this interpreter), best of ``--repeat`` wall-clock runs, the
+commands taking turns within each round so the ratios hold on a shared machine. Goal (issue 15): every
 ratio ≤ 2. The ``cpu ms`` column is the processor time each process used (user + system, all
 its threads; best of the rounds): load from other work stretches the wall clock far more than
 it, so on a busy machine it tells whether a change did less work (numpy's includes its BLAS
@@ -36,7 +36,9 @@ import sys
 import tempfile
 import time
 
-MAIN = "import sys; from preform.cli import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+MAIN = (
+    "import sys; from preform.__main__ import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+)
 
 COMMANDS: dict[str, list[str]] = {
     "import numpy": [sys.executable, "-c", "import numpy"],

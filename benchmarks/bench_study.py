@@ -48,7 +48,12 @@ from pathlib import Path
 
 from preform.pipeline.scene import default_scene_path
 
-MAIN = "import sys; from preform.cli import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+#: The ``preform`` command as its console script runs it (``preform.__main__:main``).
+MAIN = (
+    "import sys; from preform.__main__ import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+)
+#: The same for the code before issue 15, whose entry point was ``preform.cli:main``.
+BEFORE_MAIN = MAIN.replace("preform.__main__", "preform.cli")
 REPO = Path(__file__).resolve().parents[1]
 #: The merge base of the issue-15 branch: the code the study goal is measured against.
 BEFORE_COMMIT = "e649036"
@@ -59,7 +64,8 @@ def command(
 ) -> list[str]:
     """``preform pipeline run`` of ``scenes`` (none: the default scene) into ``out``;
     ``engine`` None: the command's own default engine and workers, as a user runs it."""
-    argv = [python, "-c", MAIN, "pipeline", "run", "--out", str(out), "--force"]
+    main = MAIN if engine is not None else BEFORE_MAIN
+    argv = [python, "-c", main, "pipeline", "run", "--out", str(out), "--force"]
     for scene in scenes:
         argv += ["--scene", scene]
     if engine is not None:

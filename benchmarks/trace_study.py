@@ -41,7 +41,7 @@ def main() -> None:
         out, log = Path(tmp) / "out", Path(tmp) / "strace.txt"
         env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
         env["PYTHONPYCACHEPREFIX"] = str(Path(tmp) / "pycache")
-        main = "import sys; from preform.cli import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
+        main = "import sys; from preform.__main__ import main; sys.argv = ['preform', *sys.argv[1:]]; main()"
         run = [sys.executable, "-c", main, "pipeline", "run", "--out", str(out)]
         run += ["--engine", args.engine, "--workers", str(args.workers)]
         subprocess.run(run, check=True, capture_output=True, env=env)  # fills the bytecode cache

@@ -14,6 +14,7 @@ from typing import Any, Literal
 import click
 
 from preform import __version__
+from preform.collector import end_startup, startup_phase
 from preform.commands.options import (
     EXIT_INTERNAL,
     LIBRARY_HELP,
@@ -128,6 +129,16 @@ class PreformGroup(click.Group):
         if self.plugin_commands_pending:
             self.plugin_commands_pending = False
             _host().register_commands(self)
+
+    def resolve_command(
+        self, ctx: click.Context, args: list[str]
+    ) -> tuple[str | None, click.Command | None, list[str]]:
+        """As click's; the command (a lazy one imported, or a plugin's) is known, so the
+        command's start-up is over: the garbage collector the entry point paused
+        (``preform.__main__``) runs again before the command's body, whatever it computes."""
+        resolved = super().resolve_command(ctx, args)
+        end_startup()
+        return resolved
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
         command = self.commands.get(cmd_name)
@@ -560,84 +571,88 @@ def pipeline_run(
     case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
     summary (every case with its status, reasons, warnings and error) and nothing else.
     """
-    if (engine == "process" or (engine == "dask" and not scheduler)) and not explain:
-        from preform.pipeline.preload import start_workers_early
+    # starting the workers, importing the pipeline's modules, reading the library and the
+    # scenes and planning the cases is start-up: no garbage collection meanwhile
+    # (preform.collector)
+    with startup_phase():
+        if (engine == "process" or (engine == "dask" and not scheduler)) and not explain:
+            from preform.pipeline.preload import start_workers_early
 
-        # first: the workers' imports (the longest wait before the first case) overlap
-        # this process importing its own modules and reading the library and scenes (dask:
-        # the LocalCluster opens meanwhile too)
-        start_workers_early(engine, workers)
-    from preform.pipeline.overrides import load_scene_changed, with_fidelity
-    from preform.pipeline.planner import explain as explain_plan
-    from preform.pipeline.runner import (
-        DEFAULT_CASE_TIMEOUT_S,
-        CaseSetError,
-        RunDirectoryError,
-        input_files_record,
-        make_cases,
-        run_cases,
-    )
-    from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
-    from preform.pipeline.summary import run_summary
+            # first: the workers' imports (the longest wait before the first case) overlap
+            # this process importing its own modules and reading the library and scenes (dask:
+            # the LocalCluster opens meanwhile too)
+            start_workers_early(engine, workers)
+        from preform.pipeline.overrides import load_scene_changed, with_fidelity
+        from preform.pipeline.planner import explain as explain_plan
+        from preform.pipeline.runner import (
+            DEFAULT_CASE_TIMEOUT_S,
+            CaseSetError,
+            RunDirectoryError,
+            input_files_record,
+            make_cases,
+            run_cases,
+        )
+        from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
+        from preform.pipeline.summary import run_summary
 
-    host = _host()
-    lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
-    for warning in lib.warnings:
-        click.echo(f"warning: {warning}", err=True)
-    scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
-    loaded = []
-    problems: list[Any] = []
-    for path in scene_paths:
-        try:
-            loaded.append(load_scene_changed(path, host.registry, with_fidelity(fidelity)))
-        except SceneError as exc:
-            problems += exc.errors
-    if problems:
-        _fail([*problems, f"{len(problems)} error(s) in scene(s); nothing was run."])
-    if explain:
-        plans = [
-            {
-                "scene": scene.name,
-                "outputs": list(scene.outputs),
-                "plan": explain_plan(scene, host.registry),
-            }
-            for scene, _ in loaded
-        ]
-        if as_json:
-            _echo_json(plans)
+        host = _host()
+        lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
+        for warning in lib.warnings:
+            click.echo(f"warning: {warning}", err=True)
+        scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
+        loaded = []
+        problems: list[Any] = []
+        for path in scene_paths:
+            try:
+                loaded.append(load_scene_changed(path, host.registry, with_fidelity(fidelity)))
+            except SceneError as exc:
+                problems += exc.errors
+        if problems:
+            _fail([*problems, f"{len(problems)} error(s) in scene(s); nothing was run."])
+        if explain:
+            plans = [
+                {
+                    "scene": scene.name,
+                    "outputs": list(scene.outputs),
+                    "plan": explain_plan(scene, host.registry),
+                }
+                for scene, _ in loaded
+            ]
+            if as_json:
+                _echo_json(plans)
+                return
+            for entry in plans:
+                click.echo(f"scene {entry['scene']}: outputs {', '.join(entry['outputs'])}")
+                for line in entry["plan"]:
+                    click.echo(f"  {line}")
             return
-        for entry in plans:
-            click.echo(f"scene {entry['scene']}: outputs {', '.join(entry['outputs'])}")
-            for line in entry["plan"]:
-                click.echo(f"  {line}")
-        return
-    out = Path(out_dir)
-    try:
-        cases = make_cases(
-            lib,
-            loaded,
-            out,
-            host,
-            materials_glob,
-            timeout_s=case_timeout_s or DEFAULT_CASE_TIMEOUT_S,
-        )
-    except CaseSetError as exc:
-        _fail([f"error: {exc}; nothing was run."])
-    if not cases:
-        _fail(
-            [
-                "no (material, scene) case matches; check --materials and the scenes' "
-                "materials globs"
-            ],
-            code=1,
-        )
-    inputs: dict[str, Any] = {
-        "libraries": input_files_record(lib.files),
-        "scenes": input_files_record(scene_paths),
-        "bundled_library": not no_bundled,
-    }
-    if fidelity is not None:
-        inputs["fidelity_override"] = fidelity
+        out = Path(out_dir)
+        try:
+            cases = make_cases(
+                lib,
+                loaded,
+                out,
+                host,
+                materials_glob,
+                timeout_s=case_timeout_s or DEFAULT_CASE_TIMEOUT_S,
+            )
+        except CaseSetError as exc:
+            _fail([f"error: {exc}; nothing was run."])
+        if not cases:
+            _fail(
+                [
+                    "no (material, scene) case matches; check --materials and the scenes' "
+                    "materials globs"
+                ],
+                code=1,
+            )
+        inputs: dict[str, Any] = {
+            "libraries": input_files_record(lib.files),
+            "scenes": input_files_record(scene_paths),
+            "bundled_library": not no_bundled,
+        }
+        if fidelity is not None:
+            inputs["fidelity_override"] = fidelity
     from rich.progress import Progress
 
     try:

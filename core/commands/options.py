@@ -74,14 +74,18 @@ def fail(lines: Sequence[Any], code: int = EXIT_USAGE) -> NoReturn:
 
 def load_library_or_exit(paths: Sequence[str], *, bundled: bool = True) -> Any:
     """The library (bundled unless ``bundled`` is False, PREFORM_LIBRARY, then ``paths``);
-    every located error and exit 2 when it does not validate."""
-    from preform.library import LibraryError, load_library
-    from preform.plugin_manager import default_host
+    every located error and exit 2 when it does not validate. Importing the library's modules
+    and reading it is start-up: no garbage collection meanwhile (``preform.collector``)."""
+    from preform.collector import startup_phase
 
-    try:
-        return load_library(list(paths), bundled=bundled, registry=default_host().registry)
-    except LibraryError as exc:
-        fail([*exc.errors, f"{len(exc.errors)} error(s); nothing was run."])
+    with startup_phase():
+        from preform.library import LibraryError, load_library
+        from preform.plugin_manager import default_host
+
+        try:
+            return load_library(list(paths), bundled=bundled, registry=default_host().registry)
+        except LibraryError as exc:
+            fail([*exc.errors, f"{len(exc.errors)} error(s); nothing was run."])
 
 
 def fabric_or_exit(library: Any, name: str) -> Any:

@@ -202,6 +202,12 @@ def take_parent_state(parent_pid: int, environ: dict[str, str], sys_path: list[s
     importlib.invalidate_caches()
 
 
+#: Imported first and last by the fork server: they pause and resume the garbage collector
+#: around its imports (``preform.collector``).
+PRELOAD_BEGIN = "preform.pipeline.preload_begin"
+PRELOAD_END = "preform.pipeline.preload_end"
+
+
 def pool_context(preload: tuple[str, ...] = ()) -> Any:
     """The multiprocessing context of the process pool: ``forkserver`` importing ``preload``
     once (only the first pool of a process sets it: the server then lives as long as the
@@ -211,8 +217,11 @@ def pool_context(preload: tuple[str, ...] = ()) -> Any:
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
     context = multiprocessing.get_context("forkserver")
-    # not '__main__': the main module may be a test runner or a script without a guard
-    context.set_forkserver_preload(sorted(set(preload)))
+    # not '__main__': the main module may be a test runner or a script without a guard. The
+    # server imports them in this order: the garbage collector is paused for its imports and
+    # resumed before the first fork (preform.collector).
+    modules = sorted(set(preload) - {PRELOAD_BEGIN, PRELOAD_END})
+    context.set_forkserver_preload([PRELOAD_BEGIN, *modules, PRELOAD_END])
     return context
 
 

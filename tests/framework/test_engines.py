@@ -25,7 +25,7 @@ from preform.pipeline.preload import WORKER_PRELOAD, worker_preload
 # Test modules are imported by path (--import-mode=importlib): what workers run lives in a
 # module written to a folder that only this test puts on sys.path.
 PROBE = """
-import os, sys
+import gc, os, sys
 
 WARMED = []
 
@@ -44,6 +44,8 @@ def worker_view(_):
         "warmed": list(WARMED),
         "tag": os.environ.get("PREFORM_TEST_WARMED"),
         "runner_loaded": "preform.pipeline.runner" in sys.modules,
+        "gc_enabled": gc.isenabled(),
+        "gc_frozen": gc.get_freeze_count(),
     }
 """
 
@@ -91,6 +93,34 @@ def test_the_warm_up_runs_once_per_worker_before_its_first_case(probe):
         assert view["tag"] == "w"
         assert view["runner_loaded"]
     assert 1 <= len({v["pid"] for v in views}) <= 2
+
+
+@pytest.mark.skipif(
+    "forkserver" not in multiprocessing.get_all_start_methods(),
+    reason="no fork server on this platform",
+)
+def test_workers_compute_with_the_collector_on_and_the_servers_imports_frozen(probe):
+    """The fork server pauses the garbage collector for its imports and freezes what they made
+    before it forks (preform.collector): a worker computes with the collector on (its cases'
+    cyclic garbage is freed), and its collections skip the objects it shares with the server."""
+    module, _ = probe
+    for view in run_on_pool(module, 4):
+        assert view["gc_enabled"]
+        # the server's imports (preform's runner, numpy, pydantic...) are frozen: far more
+        # objects than the few a worker's own start makes before the preload ends
+        assert view["gc_frozen"] > 10_000
+
+
+def test_the_fork_server_pauses_the_collector_first_and_resumes_it_last():
+    """The order the server imports in: a module between the two markers is imported with the
+    collector off, in any order the caller gives them."""
+    context = engines.pool_context(("b.module", engines.PRELOAD_END, "a.module"))
+    if context.get_start_method() != "forkserver":
+        pytest.skip("no fork server on this platform")
+    from multiprocessing import forkserver
+
+    preload = forkserver._forkserver._preload_modules  # what set_forkserver_preload was given
+    assert preload == [engines.PRELOAD_BEGIN, "a.module", "b.module", engines.PRELOAD_END]
 
 
 def test_the_runner_asks_for_its_own_modules_and_the_lazy_libraries():
@@ -229,6 +259,8 @@ def test_dask_workers_take_the_parents_state_set_after_the_fork_server_started(p
         # prepared once, in this very worker process, before its first task
         assert view["warmed"] == [view["pid"]] and view["tag"] == "dask"
         assert view["runner_loaded"]
+        # forked from the fork server after its imports: collector on, their objects frozen
+        assert view["gc_enabled"] and view["gc_frozen"] > 10_000
     assert os.getpid() not in {v["pid"] for v in views}
 
 
