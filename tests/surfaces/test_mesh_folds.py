@@ -275,7 +275,9 @@ def test_a_folded_tool_fails_its_case_saying_where(tmp_path: Path):
     summary and on the console; no drape is reported."""
     vertices, faces = flat_grid()
     pushed, turned = push_through(vertices, faces, PUSHED, FAN)
-    write_stl(tmp_path / "folded.stl", TriangleMesh(pushed, faces), binary=False)
+    write_stl(
+        tmp_path / "folded.stl", TriangleMesh(pushed, faces, fold_angle_deg=180.0), binary=False
+    )
     scene = {
         "name": "folded-tool",
         "tool": {"surface": "mesh", "file": "folded.stl"},
@@ -304,7 +306,9 @@ def test_a_tool_file_refused_for_a_fold_keeps_the_place(tmp_path: Path):
 
     vertices, faces = flat_grid()
     pushed, turned = push_through(vertices, faces, PUSHED, FAN)
-    write_stl(tmp_path / "folded.stl", TriangleMesh(pushed, faces), binary=False)
+    write_stl(
+        tmp_path / "folded.stl", TriangleMesh(pushed, faces, fold_angle_deg=180.0), binary=False
+    )
     tool = MeshTool(surface="mesh", file="folded.stl")
     with pytest.raises(MeshRefused, match=r"folded\.stl: 3 fold edge") as caught:
         build_mesh(tool, str(tmp_path))
@@ -339,7 +343,9 @@ def test_a_scene_can_raise_the_fold_angle_and_the_case_warns(tmp_path: Path):
     """tool.fold_angle_deg lets a folded tool through the pipeline; the case then carries the
     caution in its warnings (console and summary) and the fold angle in its summary."""
     vertices, faces = creased_grid(170.0)
-    write_stl(tmp_path / "wedge.stl", TriangleMesh(vertices, faces), binary=False)
+    write_stl(
+        tmp_path / "wedge.stl", TriangleMesh(vertices, faces, fold_angle_deg=180.0), binary=False
+    )
     scene = {
         "name": "wedge-tool",
         "tool": {"surface": "mesh", "file": "wedge.stl", "fold_angle_deg": 175},
