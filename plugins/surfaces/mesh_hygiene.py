@@ -362,9 +362,11 @@ def check_surface(
             midpoint,
         )
     report.open_edges = int(np.count_nonzero(count == 1))
-    faces = _orient(vertices, faces, edges, edge_of_face, count, origin, report, turn_pieces)
+    # the two faces of every manifold edge, found once for winding and folds
+    pairs = _edge_pairs(edge_of_face, count)
+    faces = _orient(vertices, faces, edge_of_face, count, pairs, origin, report, turn_pieces)
     report.fold_angle_deg = float(fold_angle_deg)
-    _refuse_folds(vertices, faces, edges, edge_of_face, count, origin, fold_angle_deg, report)
+    _refuse_folds(vertices, faces, edges, pairs, origin, fold_angle_deg, report)
     return faces
 
 
@@ -511,9 +513,9 @@ def _split_t_junctions(
 def _orient(
     vertices: FloatArray,
     faces: IntArray,
-    edges: IntArray,
     edge_of_face: IntArray,
     count: IntArray,
+    pairs: tuple[IntArray, IntArray, IntArray, IntArray, IntArray],
     origin: IntArray,
     report: HygieneReport,
     turn_pieces: bool = True,
@@ -522,7 +524,7 @@ def _orient(
     each out or up; returns the re-wound faces."""
     n_faces = faces.shape[0]
     # The two faces of every manifold edge, and whether each runs the edge low → high.
-    _, pair_a, pair_b, slot_a, slot_b = _edge_pairs(edge_of_face, count)
+    _, pair_a, pair_b, slot_a, slot_b = pairs
 
     def runs_up(f: IntArray, s: IntArray) -> NDArray[np.bool_]:
         return np.asarray(faces[f, s] < faces[f, (s + 1) % 3])
@@ -588,8 +590,7 @@ def _refuse_folds(
     vertices: FloatArray,
     faces: IntArray,
     edges: IntArray,
-    edge_of_face: IntArray,
-    count: IntArray,
+    pairs: tuple[IntArray, IntArray, IntArray, IntArray, IntArray],
     origin: IntArray,
     fold_angle_deg: float,
     report: HygieneReport,
@@ -597,9 +598,9 @@ def _refuse_folds(
     """Refuse edges across which the consistently wound surface turns by more than
     ``fold_angle_deg`` [deg] (module docstring, 7), naming the sharpest; with a fold angle
     raised past ``FOLD_ANGLE_DEG``, count in ``report`` the edges it let through.
-    ``edge_of_face`` may predate the re-winding of ``faces``: re-winding a face keeps its
-    edges."""
-    shared, pair_a, pair_b, _, _ = _edge_pairs(edge_of_face, count)
+    ``pairs`` (:func:`_edge_pairs`) may predate the re-winding of ``faces``: re-winding a face
+    keeps its edges."""
+    shared, pair_a, pair_b, _, _ = pairs
     corners = vertices[faces]
     doubled = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     normal = doubled / np.linalg.norm(doubled, axis=1, keepdims=True)

@@ -338,12 +338,15 @@ def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
     }
     kind = cad_format(path)
     if kind is None:
-        unit = p.units or "mm"
-        unit_from = "scene tool.units" if p.units else "default (scene gives no tool.units)"
-        kind = "OBJ" if path.suffix.lower() == ".obj" else "STL"
-        source = ToolSource(str(p.file), kind, unit, unit_from)
+        units = p.units or "mm"
+        source = ToolSource(
+            str(p.file),
+            "OBJ" if path.suffix.lower() == ".obj" else "STL",
+            units,
+            "scene tool.units" if p.units else "default (scene gives no tool.units)",
+        )
         return read_tool_file(
-            path, source, _UNITS_TO_M[unit], max_bytes=max_bytes, max_edge_m=max_edge, **options
+            path, source, _UNITS_TO_M[units], max_bytes=max_bytes, max_edge_m=max_edge, **options
         )
     tolerance = p.tessellation_tolerance_in_force_mm() or DEFAULT_TESSELLATION_TOLERANCE_MM
     angle = p.tessellation_angle_deg or DEFAULT_TESSELLATION_ANGLE_DEG
