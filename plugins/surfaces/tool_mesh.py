@@ -6,7 +6,9 @@ repaired mesh (``preform.plugins.surfaces.mesh_hygiene``) with, per triangle, th
 belongs to: a CAD face (numbered from 1, named when the file names it) or an OBJ group
 (``g``/``o`` name). :meth:`ToolMesh.summary` gives the case summary's ``tool_*`` and
 ``mesh_*`` entries (file format, the unit the file is in and where that unit came from, the
-tessellation tolerance of a CAD tool, the repairs).
+tessellation tolerance of a CAD tool, the repairs). Every file reaches it through
+:func:`repaired_tool` (one implementation): a scene's tool (``tools.build_mesh``), and
+``read_stl``/``read_obj`` in Python, which also say the repairs as a warning.
 
 The part of selected faces [D]
 ------------------------------
