@@ -19,9 +19,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, HygieneReport, check_surface
+
 if TYPE_CHECKING:
     from preform.drape.net import FacePlacement
     from preform.plugins.surfaces.mesh_walk import MeshWalker
+    from preform.plugins.surfaces.tool_mesh import ToolMesh
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -109,6 +112,17 @@ class TriangleMesh:
     merged (STL stores every corner separately) and zero-area triangles are dropped with a
     warning; ``dropped_triangles`` counts them. ``size`` is the bounding-box diagonal [m].
 
+    Then the surface is checked as a scene's tool is (``mesh_hygiene.check_surface``, one
+    implementation): an edge shared by three or more triangles (a fin), a one-sided surface
+    and a fold (two neighbours' normals turning by more than ``fold_angle_deg`` [°], default
+    ``FOLD_ANGLE_DEG`` = 160°: a triangle turned over) raise ``MeshRefused`` saying where.
+    Triangles wound against their piece are re-wound, with a warning, to the winding of the
+    larger area (``rewound_triangles`` counts them); the caller's winding otherwise says which
+    side is out (nothing is turned over whole, unlike a file tool). Edges a raised
+    ``fold_angle_deg`` lets through are said as a warning and in ``cautions``. Cracks and
+    T-junctions are not mended here: :func:`read_stl`, :func:`read_obj` and scenes repair
+    them (``mesh_hygiene.repair``).
+
     Normals are the face normal of the closest triangle by default (exactly consistent with the
     faceted surface ``closest_point`` answers for). With ``smooth_normals=True`` they are the
     barycentric interpolation of area-weighted vertex normals, continuous across edges.
@@ -139,6 +153,7 @@ class TriangleMesh:
         smooth_normals: bool = False,
         initial_candidates: int = 16,
         feature_angle_deg: float = DEFAULT_FEATURE_ANGLE_DEG,
+        fold_angle_deg: float = FOLD_ANGLE_DEG,
     ) -> None:
         vertex_array = np.asarray(vertices, dtype=np.float64)
         face_array = np.asarray(faces)
@@ -175,7 +190,9 @@ class TriangleMesh:
         vertex_array, face_array = _merge_vertices(
             vertex_array, face_array, merge_tolerance_rel * diagonal
         )
-        face_array, self.dropped_triangles = _drop_degenerate(vertex_array, face_array)
+        kept = _non_degenerate(vertex_array, face_array)
+        face_array = face_array[kept]
+        self.dropped_triangles = int(kept.size - np.count_nonzero(kept))
         if self.dropped_triangles:
             warnings.warn(
                 f"TriangleMesh: dropped {self.dropped_triangles} degenerate (zero-area) triangles",
@@ -184,6 +201,14 @@ class TriangleMesh:
         if face_array.shape[0] == 0:
             raise ValueError("the mesh has no triangle of non-zero area")
         vertex_array, face_array = _drop_unused_vertices(vertex_array, face_array)
+        #: Triangles re-wound to agree with their piece, and what a raised fold angle let
+        #: through, in words (class docstring).
+        self.rewound_triangles = 0
+        self.cautions: list[str] = []
+        if not self._surface_checked:
+            face_array = self._check_surface(
+                vertex_array, face_array, np.flatnonzero(kept), fold_angle_deg
+            )
 
         self.vertices: FloatArray = vertex_array
         self.faces: IntArray = face_array
@@ -215,6 +240,40 @@ class TriangleMesh:
         self._centroid_tree = cKDTree(centroids)
         self._bounding_radius = float(np.max(np.linalg.norm(corners - centroids[:, None], axis=2)))
         self._build_plan_grid()
+
+    #: Whether the arrays come already checked (a ``ToolMesh``'s come from ``repair``, which
+    #: ran the same checks), so construction does not pay for them twice.
+    _surface_checked = False
+
+    def _check_surface(
+        self, vertices: FloatArray, faces: IntArray, origin: IntArray, fold_angle_deg: float
+    ) -> IntArray:
+        """The class docstring's checks; returns the consistently wound faces."""
+        report = HygieneReport(
+            triangles_read=int(faces.shape[0]),
+            vertices_read=int(vertices.shape[0]),
+            weld_tolerance_m=0.0,
+        )
+        faces = check_surface(
+            vertices,
+            faces,
+            report,
+            origin=origin,
+            fold_angle_deg=fold_angle_deg,
+            turn_pieces=False,
+        )
+        self.rewound_triangles = report.flipped_triangles
+        self.cautions = report.cautions()
+        if self.rewound_triangles:
+            warnings.warn(
+                f"TriangleMesh: re-wound {self.rewound_triangles} triangles whose normals "
+                "disagreed with their neighbours' (each piece keeps the winding of its larger "
+                "area)",
+                stacklevel=3,
+            )
+        for caution in self.cautions:
+            warnings.warn(f"TriangleMesh: {caution}", stacklevel=3)
+        return faces
 
     @property
     def n_triangles(self) -> int:
@@ -479,7 +538,8 @@ def _merge_vertices(
     return vertices[representative], label[faces].astype(np.int64)
 
 
-def _drop_degenerate(vertices: FloatArray, faces: IntArray) -> tuple[IntArray, int]:
+def _non_degenerate(vertices: FloatArray, faces: IntArray) -> BoolArray:
+    """Which triangles have area (not a repeated corner, not collinear corners)."""
     corners = vertices[faces]
     edges = np.roll(corners, -1, axis=1) - corners
     longest_sq = np.max(np.sum(edges * edges, axis=2), axis=1)
@@ -487,8 +547,7 @@ def _drop_degenerate(vertices: FloatArray, faces: IntArray) -> tuple[IntArray, i
     repeated = (
         (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
     )
-    degenerate = repeated | (doubled_area <= _DEGENERATE_ASPECT * longest_sq)
-    return faces[~degenerate], int(np.count_nonzero(degenerate))
+    return np.asarray(~(repeated | (doubled_area <= _DEGENERATE_ASPECT * longest_sq)))
 
 
 def _drop_unused_vertices(vertices: FloatArray, faces: IntArray) -> tuple[FloatArray, IntArray]:
@@ -626,18 +685,80 @@ def read_stl(
     units_to_m: float = 1e-3,
     *,
     max_bytes: int | None = None,
-    **mesh_options: object,
-) -> TriangleMesh:
+    weld_tolerance_m: float | None = None,
+    max_edge_m: float | None = None,
+    fold_angle_deg: float = FOLD_ANGLE_DEG,
+    feature_angle_deg: float = DEFAULT_FEATURE_ANGLE_DEG,
+    smooth_normals: bool = False,
+) -> ToolMesh:
     """Read an ASCII or binary STL file whose coordinates are in units of ``units_to_m`` metres
-    (1e-3: millimetres). Binary vs ASCII is decided by content, not by the leading "solid"
-    (binary headers often start with it too): a file that starts with "solid" and contains no NUL
-    byte is ASCII; otherwise it is binary if its size is 84 + 50·N for the N triangles its header
-    declares. Malformed files raise ``ValueError`` naming the file (and line, for ASCII).
+    (1e-3: millimetres) and repair it as a scene's tool is. Binary vs ASCII is decided by
+    content, not by the leading "solid" (binary headers often start with it too): a file that
+    starts with "solid" and contains no NUL byte is ASCII; otherwise it is binary if its size is
+    84 + 50·N for the N triangles its header declares. Malformed files raise ``ValueError``
+    naming the file (and line, for ASCII).
 
     Only regular files are read, and none larger than ``max_bytes`` (:func:`check_mesh_file`);
-    ``MeshFileError`` (a ``ValueError``) says which limit refused it."""
-    vertices, faces = stl_triangles(path, units_to_m, max_bytes=max_bytes)
-    return _mesh_of_file(Path(path), vertices, faces, mesh_options)
+    ``MeshFileError`` (a ``ValueError``) says which limit refused it.
+
+    The triangles go through ``mesh_hygiene.repair`` with a scene's defaults and knobs, in SI:
+    ``weld_tolerance_m`` [m] (default 1e-6 × the bounding-box diagonal), ``max_edge_m`` [m]
+    (default none), ``fold_angle_deg`` [°] (default 160); ``feature_angle_deg`` [°] (the
+    drape's crease rule) and ``smooth_normals`` are :class:`TriangleMesh`'s. What cannot be repaired (a fin, a one-sided
+    surface, a fold) raises ``MeshRefused`` naming the file, with the place in ``where_m``
+    [m]. The result is a ``ToolMesh`` whose ``hygiene`` report counts what was repaired; the
+    repairs, and folds a raised ``fold_angle_deg`` let through, are also said as a warning."""
+    return _read_tool(
+        path,
+        "STL",
+        units_to_m,
+        max_bytes,
+        weld_tolerance_m,
+        max_edge_m,
+        fold_angle_deg,
+        feature_angle_deg,
+        smooth_normals,
+    )
+
+
+def _read_tool(
+    path: str | Path,
+    kind: str,
+    units_to_m: float,
+    max_bytes: int | None,
+    weld_tolerance_m: float | None,
+    max_edge_m: float | None,
+    fold_angle_deg: float,
+    feature_angle_deg: float,
+    smooth_normals: bool,
+) -> ToolMesh:
+    """A file read by :func:`read_stl` or :func:`read_obj`: the scene's reader (one
+    implementation), and its repairs and cautions said as a warning."""
+    # tool_mesh builds on this module: imported when a file is read, not when this module is.
+    from preform.plugins.surfaces.tool_mesh import ToolSource, read_tool_file
+
+    scale = _scale(units_to_m)
+    unit = _UNIT_NAMES.get(scale, f"{scale:g} m")
+    source = ToolSource(str(path), kind, unit, f"units_to_m = {scale:g}")
+    mesh = read_tool_file(
+        Path(path),
+        source,
+        scale,
+        max_bytes=max_bytes,
+        weld_tolerance_m=weld_tolerance_m,
+        max_edge_m=max_edge_m,
+        fold_angle_deg=fold_angle_deg,
+        feature_angle_deg=feature_angle_deg,
+        smooth_normals=smooth_normals,
+    )
+    said = [*mesh.hygiene.repairs(), *mesh.hygiene.cautions()]
+    if said:
+        warnings.warn(f"{path}: " + "; ".join(said), stacklevel=3)
+    return mesh
+
+
+#: Names of the length units a reader's ``units_to_m`` commonly is, for the tool's source.
+_UNIT_NAMES = {1e-3: "mm", 1.0: "m", 0.0254: "in"}
 
 
 def stl_triangles(
@@ -677,16 +798,6 @@ def _scale(units_to_m: float) -> float:
     if not np.isfinite(scale) or scale <= 0.0:
         raise ValueError(f"units_to_m must be a positive factor, got {units_to_m!r}")
     return scale
-
-
-def _mesh_of_file(
-    file: Path, vertices: FloatArray, faces: IntArray, mesh_options: dict[str, object]
-) -> TriangleMesh:
-    """A TriangleMesh whose refusals (no area, no extent) name the file they came from."""
-    try:
-        return TriangleMesh(vertices, faces, **mesh_options)  # type: ignore[arg-type]
-    except ValueError as error:
-        raise ValueError(f"{file}: {error}") from None
 
 
 def _parse_floats(file: Path, line_no: int, tokens: list[str], what: str) -> list[float]:
@@ -811,8 +922,12 @@ def read_obj(
     units_to_m: float = 1e-3,
     *,
     max_bytes: int | None = None,
-    **mesh_options: object,
-) -> TriangleMesh:
+    weld_tolerance_m: float | None = None,
+    max_edge_m: float | None = None,
+    fold_angle_deg: float = FOLD_ANGLE_DEG,
+    feature_angle_deg: float = DEFAULT_FEATURE_ANGLE_DEG,
+    smooth_normals: bool = False,
+) -> ToolMesh:
     """Read the polygon faces of a Wavefront OBJ file whose coordinates are in units of
     ``units_to_m`` metres (1e-3: millimetres).
 
@@ -821,9 +936,21 @@ def read_obj(
     so far. Polygons are fan-triangulated from their first corner (fine for the convex polygons
     CAD writes). Texture, normal, grouping and material statements are ignored. Malformed lines
     raise ``ValueError`` with file:line and what is wrong. Only regular files no larger than
-    ``max_bytes`` are read (:func:`check_mesh_file`)."""
-    vertices, faces, _ = obj_triangles(path, units_to_m, max_bytes=max_bytes)
-    return _mesh_of_file(Path(path), vertices, faces, mesh_options)
+    ``max_bytes`` are read (:func:`check_mesh_file`).
+
+    Repaired as :func:`read_stl` says (same knobs); each ``g``/``o`` group is a face of the
+    returned ``ToolMesh``, as in a scene."""
+    return _read_tool(
+        path,
+        "OBJ",
+        units_to_m,
+        max_bytes,
+        weld_tolerance_m,
+        max_edge_m,
+        fold_angle_deg,
+        feature_angle_deg,
+        smooth_normals,
+    )
 
 
 def obj_triangles(

@@ -285,8 +285,7 @@ def repair(
         raise ValueError(f"weld tolerance must be ≥ 0 m, got {weld_tolerance_m!r}")
     if max_edge_m is not None and not (np.isfinite(max_edge_m) and max_edge_m > 0.0):
         raise ValueError(f"largest edge must be a positive length [m], got {max_edge_m!r}")
-    if not 0.0 < fold_angle_deg <= 180.0:
-        raise ValueError(f"fold angle must be in (0, 180] degrees, got {fold_angle_deg!r}")
+    _check_fold_angle(fold_angle_deg)
     report = HygieneReport(
         triangles_read=int(faces.shape[0]),
         vertices_read=int(vertices.shape[0]),
@@ -309,7 +308,45 @@ def repair(
     report.duplicate_triangles_dropped = int(faces.shape[0] - first.size)
     faces, origin = faces[first], origin[first]
     faces, origin = _split_t_junctions(vertices, faces, origin, weld_tolerance_m, report)
+    faces = check_surface(vertices, faces, report, origin=origin, fold_angle_deg=fold_angle_deg)
+    if max_edge_m is not None:
+        before = faces.shape[0]
+        vertices, faces, origin = _split_long_edges(vertices, faces, origin, max_edge_m)
+        report.refined_triangles = int(faces.shape[0] - before)
+    _slivers(vertices, faces, report)
+    vertices, faces = _drop_unused(vertices, faces)
+    report.triangles, report.vertices = int(faces.shape[0]), int(vertices.shape[0])
+    return RepairedMesh(vertices, faces, origin, report)
 
+
+def _check_fold_angle(fold_angle_deg: float) -> None:
+    if not 0.0 < fold_angle_deg <= 180.0:
+        raise ValueError(f"fold angle must be in (0, 180] degrees, got {fold_angle_deg!r}")
+
+
+def check_surface(
+    vertices: FloatArray,
+    faces: IntArray,
+    report: HygieneReport,
+    *,
+    origin: IntArray | None = None,
+    fold_angle_deg: float = FOLD_ANGLE_DEG,
+    turn_pieces: bool = True,
+) -> IntArray:
+    """Steps 5-7 of :func:`repair` on a welded mesh without degenerate triangles: refuse
+    non-manifold edges, wind every piece consistently (refusing a one-sided surface), turn
+    pieces out or up (only with ``turn_pieces``), refuse folds past ``fold_angle_deg`` [deg].
+    Returns the re-wound faces; counts go in ``report`` (``open_edges``, ``pieces``,
+    ``flipped_triangles``, ``pieces_turned``, the fold entries). ``origin`` numbers each face
+    as the caller's input did (default: its row), for the refusals' "input triangle N".
+
+    A ``TriangleMesh`` built from arrays runs this without ``turn_pieces``: the caller's
+    winding says which side is out, and only triangles disagreeing with their piece are
+    re-wound; ``repair`` runs it whole."""
+    _check_fold_angle(fold_angle_deg)
+    faces = np.asarray(faces, dtype=np.int64)
+    if origin is None:
+        origin = np.arange(faces.shape[0], dtype=np.int64)
     edges, edge_of_face = _edges(faces)
     count = np.bincount(edge_of_face.ravel(), minlength=edges.shape[0])
     crowded = np.flatnonzero(count > 2)
@@ -325,17 +362,12 @@ def repair(
             midpoint,
         )
     report.open_edges = int(np.count_nonzero(count == 1))
-    faces = _orient(vertices, faces, edges, edge_of_face, count, origin, report)
+    # the two faces of every manifold edge, found once for winding and folds
+    pairs = _edge_pairs(edge_of_face, count)
+    faces = _orient(vertices, faces, edge_of_face, count, pairs, origin, report, turn_pieces)
     report.fold_angle_deg = float(fold_angle_deg)
-    _refuse_folds(vertices, faces, edges, edge_of_face, count, origin, fold_angle_deg, report)
-    if max_edge_m is not None:
-        before = faces.shape[0]
-        vertices, faces, origin = _split_long_edges(vertices, faces, origin, max_edge_m)
-        report.refined_triangles = int(faces.shape[0] - before)
-    _slivers(vertices, faces, report)
-    vertices, faces = _drop_unused(vertices, faces)
-    report.triangles, report.vertices = int(faces.shape[0]), int(vertices.shape[0])
-    return RepairedMesh(vertices, faces, origin, report)
+    _refuse_folds(vertices, faces, edges, pairs, origin, fold_angle_deg, report)
+    return faces
 
 
 def _weld(
@@ -481,16 +513,18 @@ def _split_t_junctions(
 def _orient(
     vertices: FloatArray,
     faces: IntArray,
-    edges: IntArray,
     edge_of_face: IntArray,
     count: IntArray,
+    pairs: tuple[IntArray, IntArray, IntArray, IntArray, IntArray],
     origin: IntArray,
     report: HygieneReport,
+    turn_pieces: bool = True,
 ) -> IntArray:
-    """Wind every piece consistently (module docstring, 6); returns the re-wound faces."""
+    """Wind every piece consistently (module docstring, 6), and with ``turn_pieces`` turn
+    each out or up; returns the re-wound faces."""
     n_faces = faces.shape[0]
     # The two faces of every manifold edge, and whether each runs the edge low → high.
-    _, pair_a, pair_b, slot_a, slot_b = _edge_pairs(edge_of_face, count)
+    _, pair_a, pair_b, slot_a, slot_b = pairs
 
     def runs_up(f: IntArray, s: IntArray) -> NDArray[np.bool_]:
         return np.asarray(faces[f, s] < faces[f, (s + 1) % 3])
@@ -544,7 +578,7 @@ def _orient(
         minlength=n_pieces,
     )
     lift = np.bincount(piece, weights=sign * doubled[:, 2], minlength=n_pieces)
-    turn = np.where(closed_piece, volume < 0.0, lift < 0.0)
+    turn = np.where(closed_piece, volume < 0.0, lift < 0.0) & turn_pieces
     report.pieces_turned = int(np.count_nonzero(turn))
     final = flip ^ turn[piece]
     out = faces.copy()
@@ -556,8 +590,7 @@ def _refuse_folds(
     vertices: FloatArray,
     faces: IntArray,
     edges: IntArray,
-    edge_of_face: IntArray,
-    count: IntArray,
+    pairs: tuple[IntArray, IntArray, IntArray, IntArray, IntArray],
     origin: IntArray,
     fold_angle_deg: float,
     report: HygieneReport,
@@ -565,9 +598,9 @@ def _refuse_folds(
     """Refuse edges across which the consistently wound surface turns by more than
     ``fold_angle_deg`` [deg] (module docstring, 7), naming the sharpest; with a fold angle
     raised past ``FOLD_ANGLE_DEG``, count in ``report`` the edges it let through.
-    ``edge_of_face`` may predate the re-winding of ``faces``: re-winding a face keeps its
-    edges."""
-    shared, pair_a, pair_b, _, _ = _edge_pairs(edge_of_face, count)
+    ``pairs`` (:func:`_edge_pairs`) may predate the re-winding of ``faces``: re-winding a face
+    keeps its edges."""
+    shared, pair_a, pair_b, _, _ = pairs
     corners = vertices[faces]
     doubled = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     normal = doubled / np.linalg.norm(doubled, axis=1, keepdims=True)
@@ -604,7 +637,8 @@ def _refuse_folds(
         "vertex back or re-tessellate the tool; a real edge this sharp (a wedge thinner than "
         f"{180.0 - fold_angle_deg:g}°) is beyond what a net is known to follow: round it or give "
         "it a thickness in CAD, or, to drape it as it is, set the fold angle (a scene's "
-        f"tool.fold_angle_deg) to at least {turn[k]:.4g}° (180: no fold check)",
+        "tool.fold_angle_deg, or fold_angle_deg in Python) to at least "
+        f"{turn[k]:.4g}° (180: no fold check)",
         midpoint,
     )
 
@@ -689,5 +723,6 @@ __all__ = [
     "HygieneReport",
     "MeshRefused",
     "RepairedMesh",
+    "check_surface",
     "repair",
 ]

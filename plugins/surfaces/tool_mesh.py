@@ -6,7 +6,9 @@ repaired mesh (``preform.plugins.surfaces.mesh_hygiene``) with, per triangle, th
 belongs to: a CAD face (numbered from 1, named when the file names it) or an OBJ group
 (``g``/``o`` name). :meth:`ToolMesh.summary` gives the case summary's ``tool_*`` and
 ``mesh_*`` entries (file format, the unit the file is in and where that unit came from, the
-tessellation tolerance of a CAD tool, the repairs).
+tessellation tolerance of a CAD tool, the repairs). Every file reaches it through
+:func:`repaired_tool` (one implementation): a scene's tool (``tools.build_mesh``), and
+``read_stl``/``read_obj`` in Python, which also say the repairs as a warning.
 
 The part of selected faces [D]
 ------------------------------
@@ -23,14 +25,26 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from preform.drape.part import Part
-from preform.plugins.surfaces.mesh import DEFAULT_FEATURE_ANGLE_DEG, TriangleMesh
-from preform.plugins.surfaces.mesh_hygiene import HygieneReport, RepairedMesh
+from preform.plugins.surfaces.mesh import (
+    DEFAULT_FEATURE_ANGLE_DEG,
+    TriangleMesh,
+    obj_triangles,
+    stl_triangles,
+)
+from preform.plugins.surfaces.mesh_hygiene import (
+    FOLD_ANGLE_DEG,
+    HygieneReport,
+    MeshRefused,
+    RepairedMesh,
+    repair,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -63,6 +77,8 @@ class ToolMesh(TriangleMesh):
     face_names: dict[int, str]
     hygiene: HygieneReport
     source: ToolSource
+    # repair ran TriangleMesh's checks (and more) on these arrays: not paid for twice.
+    _surface_checked = True
 
     def __init__(
         self,
@@ -71,6 +87,7 @@ class ToolMesh(TriangleMesh):
         face_names: dict[int, str],
         source: ToolSource,
         feature_angle_deg: float | None = None,
+        smooth_normals: bool = False,
     ) -> None:
         # Hygiene has welded and dropped what TriangleMesh would: nothing is merged again, so
         # the triangles stay in step with their labels.
@@ -78,6 +95,7 @@ class ToolMesh(TriangleMesh):
             repaired.vertices,
             repaired.faces,
             merge_tolerance_rel=0.0,
+            smooth_normals=smooth_normals,
             feature_angle_deg=(
                 DEFAULT_FEATURE_ANGLE_DEG if feature_angle_deg is None else feature_angle_deg
             ),
@@ -153,6 +171,64 @@ class ToolMesh(TriangleMesh):
         return FaceSet(self, self.faces_of(selection), tuple(selection))
 
 
+def repaired_tool(
+    file: Path,
+    vertices: FloatArray,
+    faces: IntArray,
+    face_of_input: IntArray | None,
+    face_names: dict[int, str],
+    source: ToolSource,
+    *,
+    weld_tolerance_m: float | None = None,
+    max_edge_m: float | None = None,
+    fold_angle_deg: float = FOLD_ANGLE_DEG,
+    feature_angle_deg: float | None = None,
+    smooth_normals: bool = False,
+) -> ToolMesh:
+    """The tool mesh of triangles read from ``file``: repaired (``mesh_hygiene.repair``,
+    lengths [m], angles [°]) and labelled. A refusal is a ``MeshRefused`` naming the file and
+    keeping the place [m]. Every path from a file to a tool comes here (scenes, STEP/IGES,
+    ``read_stl``, ``read_obj``)."""
+    try:
+        repaired = repair(
+            vertices, faces, weld_tolerance_m, max_edge_m=max_edge_m, fold_angle_deg=fold_angle_deg
+        )
+    except MeshRefused as error:
+        raise MeshRefused(f"{file}: {error}", error.where_m) from None
+    return ToolMesh(
+        repaired,
+        face_of_input,
+        face_names,
+        source,
+        feature_angle_deg=feature_angle_deg,
+        smooth_normals=smooth_normals,
+    )
+
+
+def read_tool_file(
+    file: Path,
+    source: ToolSource,
+    units_to_m: float,
+    *,
+    max_bytes: int | None = None,
+    **options: Any,
+) -> ToolMesh:
+    """The repaired tool mesh of an STL or OBJ ``file`` (``source.format``) whose coordinates
+    are in units of ``units_to_m`` metres; an OBJ file's ``g``/``o`` groups are its faces,
+    numbered from 1 in name order. ``options`` are :func:`repaired_tool`'s."""
+    labels: IntArray | None = None
+    names: dict[int, str] = {}
+    if source.format == "OBJ":
+        vertices, faces, groups = obj_triangles(file, units_to_m, max_bytes=max_bytes)
+        group_names = sorted(set(groups))
+        numbering = {g: k + 1 for k, g in enumerate(group_names)}
+        labels = np.array([numbering[g] for g in groups], dtype=np.int64)
+        names = {numbering[g]: g for g in group_names if g}
+    else:
+        vertices, faces = stl_triangles(file, units_to_m, max_bytes=max_bytes)
+    return repaired_tool(file, vertices, faces, labels, names, source, **options)
+
+
 class FaceSet(Part):
     """The part made of some faces of a :class:`ToolMesh` (module docstring)."""
 
@@ -210,4 +286,11 @@ class FaceSet(Part):
         return f"faces {shown} of {self.mesh.source.file}"
 
 
-__all__ = ["EDGE_CANDIDATES", "FaceSet", "ToolMesh", "ToolSource"]
+__all__ = [
+    "EDGE_CANDIDATES",
+    "FaceSet",
+    "ToolMesh",
+    "ToolSource",
+    "read_tool_file",
+    "repaired_tool",
+]

@@ -32,15 +32,9 @@ from preform.plugins.surfaces.cad import (
     read_cad,
 )
 from preform.plugins.surfaces.domes import Cone, EllipsoidDome, FlangedHemisphere, ParaboloidDome
-from preform.plugins.surfaces.mesh import (
-    MB,
-    MeshFileError,
-    check_mesh_file,
-    obj_triangles,
-    stl_triangles,
-)
-from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, MeshRefused, repair
-from preform.plugins.surfaces.tool_mesh import ToolMesh, ToolSource
+from preform.plugins.surfaces.mesh import MB, MeshFileError, check_mesh_file
+from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG
+from preform.plugins.surfaces.tool_mesh import ToolMesh, ToolSource, read_tool_file, repaired_tool
 
 MM = 1e-3
 #: Run-off of a bare hemisphere below its rim, as a fraction of its radius [-] [C]. Measured
@@ -329,63 +323,54 @@ def resolve_tool_file(name: str, base_dir: str) -> Path:
 
 
 def build_mesh(p: MeshTool, base_dir: str, limits: Any = None) -> ToolMesh:
-    """Read the tool file and repair it (``preform.plugins.surfaces.mesh_hygiene``);
-    ``limits`` (a scene's ``limits``) caps the file size, which is checked with ``stat``
-    before reading (see ``check_mesh_file``). A STEP or IGES file is tessellated first
+    """Read the tool file and repair it (``preform.plugins.surfaces.mesh_hygiene``, through
+    ``tool_mesh.repaired_tool``, as ``read_stl``/``read_obj`` do); ``limits`` (a scene's
+    ``limits``) caps the file size, which is checked with ``stat`` before reading (see
+    ``check_mesh_file``). A STEP or IGES file is tessellated first
     (``preform.plugins.surfaces.cad``)."""
     path = resolve_tool_file(p.file, base_dir)
     max_bytes = _max_bytes(limits)
-    weld = None if p.weld_tolerance_mm is None else p.weld_tolerance_mm * MM
     max_edge = None if p.max_edge_mm is None else p.max_edge_mm * MM
+    options: dict[str, Any] = {
+        "weld_tolerance_m": None if p.weld_tolerance_mm is None else p.weld_tolerance_mm * MM,
+        "fold_angle_deg": FOLD_ANGLE_DEG if p.fold_angle_deg is None else p.fold_angle_deg,
+        "feature_angle_deg": p.feature_angle_deg,
+    }
     kind = cad_format(path)
-    labels: Any = None
-    names: dict[int, str] = {}
-    if kind is not None:
-        tolerance = p.tessellation_tolerance_in_force_mm() or DEFAULT_TESSELLATION_TOLERANCE_MM
-        angle = p.tessellation_angle_deg or DEFAULT_TESSELLATION_ANGLE_DEG
-        cad = read_cad(path, tolerance * MM, float(np.radians(angle)), max_bytes=max_bytes)
-        vertices, faces, labels, names = (
-            cad.vertices,
-            cad.faces,
-            cad.face_of_triangle,
-            cad.face_names,
+    if kind is None:
+        units = p.units or "mm"
+        source = ToolSource(
+            str(p.file),
+            "OBJ" if path.suffix.lower() == ".obj" else "STL",
+            units,
+            "scene tool.units" if p.units else "default (scene gives no tool.units)",
         )
-        unit, unit_from = (
-            (cad.unit, f"declared in the {kind} file")
-            if cad.unit is not None
-            else ("mm", f"not declared in the {kind} file: OpenCASCADE's default")
+        return read_tool_file(
+            path, source, _UNITS_TO_M[units], max_bytes=max_bytes, max_edge_m=max_edge, **options
         )
-        source = ToolSource(str(p.file), kind, unit, unit_from, tolerance * MM, np.radians(angle))
-        if max_edge is None:
-            extent = vertices[np.unique(faces)]
-            diagonal = float(np.linalg.norm(extent.max(axis=0) - extent.min(axis=0)))
-            max_edge = DEFAULT_MAX_EDGE_REL * diagonal
-    else:
-        unit = p.units or "mm"
-        unit_from = "scene tool.units" if p.units else "default (scene gives no tool.units)"
-        scale = _UNITS_TO_M[unit]
-        if path.suffix.lower() == ".obj":
-            kind = "OBJ"
-            vertices, faces, groups = obj_triangles(path, scale, max_bytes=max_bytes)
-            group_names = sorted(set(groups))
-            numbering = {g: k + 1 for k, g in enumerate(group_names)}
-            labels = np.array([numbering[g] for g in groups], dtype=np.int64)
-            names = {numbering[g]: g for g in group_names if g}
-        else:
-            kind = "STL"
-            vertices, faces = stl_triangles(path, scale, max_bytes=max_bytes)
-        source = ToolSource(str(p.file), kind, unit, unit_from)
-    try:
-        repaired = repair(
-            vertices,
-            faces,
-            weld,
-            max_edge_m=max_edge,
-            fold_angle_deg=FOLD_ANGLE_DEG if p.fold_angle_deg is None else p.fold_angle_deg,
-        )
-    except MeshRefused as error:
-        raise MeshRefused(f"{path}: {error}", error.where_m) from None
-    return ToolMesh(repaired, labels, names, source, feature_angle_deg=p.feature_angle_deg)
+    tolerance = p.tessellation_tolerance_in_force_mm() or DEFAULT_TESSELLATION_TOLERANCE_MM
+    angle = p.tessellation_angle_deg or DEFAULT_TESSELLATION_ANGLE_DEG
+    cad = read_cad(path, tolerance * MM, float(np.radians(angle)), max_bytes=max_bytes)
+    unit, unit_from = (
+        (cad.unit, f"declared in the {kind} file")
+        if cad.unit is not None
+        else ("mm", f"not declared in the {kind} file: OpenCASCADE's default")
+    )
+    source = ToolSource(str(p.file), kind, unit, unit_from, tolerance * MM, np.radians(angle))
+    if max_edge is None:
+        extent = cad.vertices[np.unique(cad.faces)]
+        diagonal = float(np.linalg.norm(extent.max(axis=0) - extent.min(axis=0)))
+        max_edge = DEFAULT_MAX_EDGE_REL * diagonal
+    return repaired_tool(
+        path,
+        cad.vertices,
+        cad.faces,
+        cad.face_of_triangle,
+        cad.face_names,
+        source,
+        max_edge_m=max_edge,
+        **options,
+    )
 
 
 _BUILDERS: dict[type, Any] = {

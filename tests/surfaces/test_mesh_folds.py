@@ -73,6 +73,13 @@ def creased_grid(turn_deg: float) -> tuple[np.ndarray, np.ndarray]:
     return vertices, faces
 
 
+def write_folded_stl(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """An ASCII STL (mm) of a folded mesh: TriangleMesh refuses a fold unless told to let it
+    through, which it then says."""
+    with pytest.warns(UserWarning, match="let through by a fold angle of 180°"):
+        write_stl(path, TriangleMesh(vertices, faces, fold_angle_deg=180.0), binary=False)
+
+
 def refusal(vertices: np.ndarray, faces: np.ndarray, **options: float) -> MeshRefused:
     with pytest.raises(MeshRefused) as caught:
         repair(vertices, faces, **options)
@@ -275,7 +282,7 @@ def test_a_folded_tool_fails_its_case_saying_where(tmp_path: Path):
     summary and on the console; no drape is reported."""
     vertices, faces = flat_grid()
     pushed, turned = push_through(vertices, faces, PUSHED, FAN)
-    write_stl(tmp_path / "folded.stl", TriangleMesh(pushed, faces), binary=False)
+    write_folded_stl(tmp_path / "folded.stl", pushed, faces)
     scene = {
         "name": "folded-tool",
         "tool": {"surface": "mesh", "file": "folded.stl"},
@@ -304,7 +311,7 @@ def test_a_tool_file_refused_for_a_fold_keeps_the_place(tmp_path: Path):
 
     vertices, faces = flat_grid()
     pushed, turned = push_through(vertices, faces, PUSHED, FAN)
-    write_stl(tmp_path / "folded.stl", TriangleMesh(pushed, faces), binary=False)
+    write_folded_stl(tmp_path / "folded.stl", pushed, faces)
     tool = MeshTool(surface="mesh", file="folded.stl")
     with pytest.raises(MeshRefused, match=r"folded\.stl: 3 fold edge") as caught:
         build_mesh(tool, str(tmp_path))
@@ -339,7 +346,7 @@ def test_a_scene_can_raise_the_fold_angle_and_the_case_warns(tmp_path: Path):
     """tool.fold_angle_deg lets a folded tool through the pipeline; the case then carries the
     caution in its warnings (console and summary) and the fold angle in its summary."""
     vertices, faces = creased_grid(170.0)
-    write_stl(tmp_path / "wedge.stl", TriangleMesh(vertices, faces), binary=False)
+    write_folded_stl(tmp_path / "wedge.stl", vertices, faces)
     scene = {
         "name": "wedge-tool",
         "tool": {"surface": "mesh", "file": "wedge.stl", "fold_angle_deg": 175},

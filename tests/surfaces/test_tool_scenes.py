@@ -48,8 +48,13 @@ def _broken_dome_stl(path: Path) -> None:
     dome = tessellate_hemisphere(0.1, 12)
     faces = dome.faces.copy()
     faces[::5] = faces[::5, ::-1]
-    # TriangleMesh would not re-wind: the file keeps the wrong windings.
-    write_stl(path, TriangleMesh(dome.vertices, faces), binary=False)
+    # Written triangle by triangle: a TriangleMesh would re-wind them (with a warning).
+    lines = ["solid broken"]
+    for corners in dome.vertices[faces] / 1e-3:
+        lines += ["facet normal 0 0 0", "outer loop"]
+        lines += ["vertex " + " ".join(repr(float(c)) for c in corner) for corner in corners]
+        lines += ["endloop", "endfacet"]
+    path.write_text("\n".join([*lines, "endsolid broken"]) + "\n", encoding="ascii")
 
 
 def test_the_case_says_what_the_tool_is_and_what_was_repaired(tmp_path):
