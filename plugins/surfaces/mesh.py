@@ -704,9 +704,9 @@ def read_stl(
     The triangles go through ``mesh_hygiene.repair`` with a scene's defaults and knobs, in SI:
     ``weld_tolerance_m`` [m] (default 1e-6 × the bounding-box diagonal), ``max_edge_m`` [m]
     (default none), ``fold_angle_deg`` [°] (default 160); ``feature_angle_deg`` [°] (the
-    drape's crease rule) and ``smooth_normals`` are :class:`TriangleMesh`'s. What cannot be repaired (a fin, a one-sided
-    surface, a fold) raises ``MeshRefused`` naming the file, with the place in ``where_m``
-    [m]. The result is a ``ToolMesh`` whose ``hygiene`` report counts what was repaired; the
+    drape's crease rule) and ``smooth_normals`` are :class:`TriangleMesh`'s. What cannot be
+    repaired (a fin, a one-sided surface, a fold) raises ``MeshRefused`` naming the file, with
+    the place in ``where_m`` [m]. The result is a ``ToolMesh`` whose ``hygiene`` report counts what was repaired; the
     repairs, and folds a raised ``fold_angle_deg`` let through, are also said as a warning."""
     return _read_tool(
         path,
