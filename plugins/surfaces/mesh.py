@@ -706,8 +706,9 @@ def read_stl(
     (default none), ``fold_angle_deg`` [°] (default 160); ``feature_angle_deg`` [°] (the
     drape's crease rule) and ``smooth_normals`` are :class:`TriangleMesh`'s. What cannot be
     repaired (a fin, a one-sided surface, a fold) raises ``MeshRefused`` naming the file, with
-    the place in ``where_m`` [m]. The result is a ``ToolMesh`` whose ``hygiene`` report counts what was repaired; the
-    repairs, and folds a raised ``fold_angle_deg`` let through, are also said as a warning."""
+    the place in ``where_m`` [m]. The result is a ``ToolMesh`` whose ``hygiene`` report counts
+    what was repaired; the repairs, and folds a raised ``fold_angle_deg`` let through, are also
+    said as a warning."""
     return _read_tool(
         path,
         "STL",
