@@ -111,15 +111,22 @@ def test_workers_compute_with_the_collector_on_and_the_servers_imports_frozen(pr
         assert view["gc_frozen"] > 10_000
 
 
+@pytest.mark.skipif(
+    "forkserver" not in multiprocessing.get_all_start_methods(),
+    reason="no fork server on this platform",
+)
 def test_the_fork_server_pauses_the_collector_first_and_resumes_it_last():
     """The order the server imports in: a module between the two markers is imported with the
     collector off, in any order the caller gives them."""
-    context = engines.pool_context(("b.module", engines.PRELOAD_END, "a.module"))
-    if context.get_start_method() != "forkserver":
-        pytest.skip("no fork server on this platform")
     from multiprocessing import forkserver
 
-    preload = forkserver._forkserver._preload_modules  # what set_forkserver_preload was given
+    server = forkserver._forkserver
+    before = list(server._preload_modules)  # what set_forkserver_preload was given
+    try:
+        engines.pool_context(("b.module", engines.PRELOAD_END, "a.module"))
+        preload = list(server._preload_modules)
+    finally:  # a server this process starts later imports what the suite asked for
+        server._preload_modules = before
     assert preload == [engines.PRELOAD_BEGIN, "a.module", "b.module", engines.PRELOAD_END]
 
 
