@@ -34,7 +34,7 @@ from preform.geometry.sheared_cell import (
 )
 from preform.geometry.unit_cell import FloatArray, UnitCell
 from preform.plugins.warpknit.geometry import WarpKnitGeometry
-from preform.plugins.woven.tow_jamming import TowCompaction, jamming_fraction
+from preform.plugins.woven.tow_jamming import TowCompaction, compaction_for, jamming_fraction
 
 #: How far [deg] a layer may sit from reference ± 45° and still be one of the net's families.
 FAMILY_TOLERANCE_DEG = 1e-6
@@ -67,7 +67,9 @@ def tow_families(
         area = fibre_area_m2(layer.tow.linear_density_tex, material.density_g_cm3)
         v0 = area / (math.pi / 4.0 * layer.tow.width * layer.tow.height)
         try:
-            v_jam = jamming_fraction(v0, material.modulus_Pa, compaction)
+            # Stitched, not interlaced: every tow is held by the stitch at its own limit V_c.
+            own = compaction or compaction_for(layer.tow.fibre)
+            v_jam = jamming_fraction(v0, material.modulus_Pa, own)
         except ValueError as error:
             raise ValueError(f"tow_layers.{i}: {error}") from None
         families.append(

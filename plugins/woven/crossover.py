@@ -7,6 +7,12 @@ consumes it. Keeping the hand-over in one small dataclass keeps geometry and mec
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
+
+from preform.plugins.woven.tow_jamming import TowCompaction, weave_jamming_fraction
+
+if TYPE_CHECKING:  # built when a law is built, which a listing never does
+    from preform.geometry.sheared_cell import TowFamily
 
 
 @dataclass(frozen=True)
@@ -46,3 +52,50 @@ class CrossoverGeometry:
     warp_wrap_rises: tuple[tuple[float, ...], ...] | None = field(default=None)
     #: The same for the weft-wise tow at each contact.
     weft_wrap_rises: tuple[tuple[float, ...], ...] | None = field(default=None)
+    #: How the warp-wise and weft-wise tows compact (the one tow model of
+    #: ``preform.plugins.woven.tow_jamming``; the cell's tow types carry them).
+    compaction_warp: TowCompaction = field(default_factory=TowCompaction)
+    compaction_weft: TowCompaction = field(default_factory=TowCompaction)
+    #: Fibre moduli [Pa] of each family; None: ``fibre_modulus``.
+    fibre_modulus_warp: float | None = None
+    fibre_modulus_weft: float | None = None
+    #: Share of each family's crossings that are interlaced [-] (``WovenUnitCell.
+    #: interlaced_shares``); None: interlacings / (2 · crossovers), both families alike.
+    interlaced_share_warp: float | None = None
+    interlaced_share_weft: float | None = None
+
+    def interlaced_share(self, family: Literal["warp", "weft"]) -> float:
+        """Share s ∈ [0, 1] of the family's crossings that are interlaced [-]."""
+        given = self.interlaced_share_warp if family == "warp" else self.interlaced_share_weft
+        if given is not None:
+            return given
+        return min(1.0, self.interlacings_per_area / (2.0 * self.crossovers_per_area))
+
+    def tow_family(self, family: Literal["warp", "weft"]) -> TowFamily:
+        """The family's tows as the one tow model sees them (the sheared cell's ``TowFamily``,
+        with the weave's jamming fraction), from this mean crossover's dimensions (SI)."""
+        from preform.geometry.sheared_cell import ELLIPSE, TowFamily
+
+        warp = family == "warp"
+        width = self.tow_width_warp if warp else self.tow_width_weft
+        height = self.tow_height_warp if warp else self.tow_height_weft
+        area = self.fibre_area_warp if warp else self.fibre_area_weft
+        spacing = self.tow_spacing_warp if warp else self.tow_spacing_weft
+        modulus = (self.fibre_modulus_warp if warp else self.fibre_modulus_weft) or (
+            self.fibre_modulus
+        )
+        compaction = self.compaction_warp if warp else self.compaction_weft
+        v0 = area / (ELLIPSE * width * height)
+        try:
+            jam = weave_jamming_fraction(v0, modulus, compaction, self.interlaced_share(family))
+        except ValueError as error:
+            raise ValueError(f"{family}-wise tows: {error}") from None
+        return TowFamily(
+            name=family,
+            spacing=spacing,
+            width=width,
+            height=height,
+            fibre_area=area,
+            jamming_fraction=jam,
+            net_family=0 if warp else 1,
+        )

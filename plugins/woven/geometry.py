@@ -30,6 +30,7 @@ from itertools import pairwise
 from typing import TYPE_CHECKING, Literal, NamedTuple, cast
 
 from preform.geometry.fibres import Fibre, fibre_area_m2
+from preform.plugins.woven.tow_jamming import TowCompaction
 
 if TYPE_CHECKING:  # numpy is imported where a method computes: a listing needs none
     # nor the generic cell or the crossover summary, built only for a run or a law
@@ -56,6 +57,9 @@ class TowType:
     width: float
     #: Cross-section height [m].
     height: float
+    #: How the tow compacts laterally (``preform.plugins.woven.tow_jamming``): one model for
+    #: the sheared cell and the shear law.
+    compaction: TowCompaction = field(default_factory=TowCompaction)
 
     @property
     def fibre_area(self) -> float:
@@ -444,6 +448,21 @@ class WovenUnitCell:
         self._require_valid()
         return {key: self._interlacing_count(along) for key, along in self._sides.items()}
 
+    def interlaced_shares(self) -> dict[tuple[Family, str], float]:
+        """Per (family, tow type name): the share s ∈ [0, 1] of the tows' crossings that are
+        interlaced, Σ interlacings / Σ crossings over the tows of that family and type (1/F, F
+        the mean float length; plain weave 1, 8HS ¼, a straight stuffer 0). The tow-jamming
+        rule reads it (``preform.plugins.woven.tow_jamming``)."""
+        self._require_valid()
+        counts = self.interlacings()
+        crossings: dict[tuple[Family, str], int] = {}
+        changes: dict[tuple[Family, str], int] = {}
+        for key, along in self._sides.items():
+            name = (key.family, self.tow_type(key).name)
+            crossings[name] = crossings.get(name, 0) + len(along)
+            changes[name] = changes.get(name, 0) + counts[key]
+        return {name: min(1.0, changes[name] / crossings[name]) for name in crossings}
+
     def float_lengths(self) -> dict[TowKey, tuple[int, ...]]:
         """Float lengths of each tow [crossovers]: runs of neighbouring crossovers on the same
         side, cyclic over the repeat; a tow that never interlaces floats the whole repeat."""
@@ -730,6 +749,7 @@ class WovenUnitCell:
         weft_types = self.weft_tow_types[weft_level - weave.warp_levels - 1]
         interlacings = sum(self.interlacings().values())
         floats = self.float_lengths()
+        shares = self.interlaced_shares()
 
         def mean(values: list[float]) -> float:
             return sum(values) / len(values)
@@ -758,6 +778,14 @@ class WovenUnitCell:
             mean_float_warp=mean_float("warp", warp_level),
             mean_float_weft=mean_float("weft", weft_level),
             levels=weave.level_count,
+            # The one tow model: the level pair's first tow type's constants (hybrids of one
+            # level share a fibre family in practice), its moduli and interlaced shares.
+            compaction_warp=warp_types[0].compaction,
+            compaction_weft=weft_types[0].compaction,
+            fibre_modulus_warp=mean([t.fibre.modulus_Pa for t in warp_types]),
+            fibre_modulus_weft=mean([t.fibre.modulus_Pa for t in weft_types]),
+            interlaced_share_warp=mean([shares[("warp", t.name)] for t in warp_types]),
+            interlaced_share_weft=mean([shares[("weft", t.name)] for t in weft_types]),
         )
 
 

@@ -36,11 +36,18 @@ from preform.material import (
     FabricBase,
     Location,
     ParamsModel,
+    Plausible,
     check_size,
     size_limit,
 )
 from preform.plugins.woven import weaves
 from preform.plugins.woven.geometry import TowType, WeaveDescription, WovenUnitCell
+from preform.plugins.woven.tow_jamming import (
+    DEFAULT_CONFINING_PRESSURE_PA,
+    FIBRE_COMPACTION_SOURCE,
+    TowCompaction,
+    compaction_for,
+)
 
 if TYPE_CHECKING:  # annotations only: listing a library never builds a cell
     from preform.geometry.sheared_cell import ShearedCell
@@ -55,6 +62,87 @@ TowTypeAssignment = str | tuple[str | tuple[str, ...], ...]
 RepeatCount = Annotated[int, Field(ge=1), size_limit("weave_repeat")]
 #: Layers or levels of a weave.
 LayerCount = Annotated[int, size_limit("weave_levels")]
+
+
+#: Hexagonal packing of round fibres, π/(2√3): no fibre fraction can exceed it.
+HEXAGONAL_PACKING = math.pi / (2.0 * math.sqrt(3.0))
+MAX_FRACTION = Plausible(
+    0.3,
+    HEXAGONAL_PACKING,
+    "",
+    "a maximum attainable fibre fraction",
+    "square packing π/4 ≈ 0.785 to hexagonal π/(2√3) ≈ 0.907 (Gutowski's V_a ≈ 0.75–0.85)",
+)
+WAVE_RATIO = Plausible(
+    1.0,
+    1e4,
+    "",
+    "Gutowski's fibre-wave ratio β",
+    "350 fitted to AS4 carbon beds (Gutowski 1987); A_s goes as β⁻⁴",
+)
+COUPLING = Plausible(
+    0.0,
+    100.0,
+    "1/GPa",
+    "the Cai–Gutowski coupling compliance",
+    "a fibre bed's compliances are ≈ 1/E_f ≈ 0.004–0.1 /GPa",
+)
+CONFINING_PRESSURE = Plausible(
+    0.0,
+    2000.0,
+    "kPa",
+    "a through-thickness pressure on a dry preform",
+    "hand lay-up ≈ 0, vacuum bag ≈ 100 kPa, RTM and press forming up to ≈ 1–2 MPa",
+)
+
+
+class TowCompactionEntry(ParamsModel):
+    """How a tow compacts laterally when sheared fabric squeezes it (``tow_types.*.compaction``).
+
+    One model for the sheared unit cell and the woven shear law (docs/physics.md, "One tow"):
+    the tow compacts at constant height under Gutowski's law until its lateral stress reaches
+    the confining pressure, its floats nest further, and past the weave's jamming fraction it
+    jams (the cell thickens, the law holds its torque: the fabric wrinkles). Every field
+    defaults to the fibre family's value (``preform.plugins.woven.tow_jamming``), with its
+    source.
+    """
+
+    fibre_wave_ratio: Annotated[float | None, WAVE_RATIO] = Field(
+        default=None,
+        gt=0.0,
+        description="Gutowski β [-], span-to-height ratio of fibre waves, A_s = 3πE_f/β⁴; "
+        "default: the fibre family's (350, Gutowski 1987, AS4 carbon; illustrative for glass).",
+    )
+    max_volume_fraction: Annotated[float | None, MAX_FRACTION] = Field(
+        default=None,
+        gt=0.0,
+        lt=1.0,
+        description="Gutowski V_a [-], the maximum attainable fibre fraction; default π/4 "
+        "(square packing).",
+    )
+    coupling_compliance_per_GPa: Annotated[float, COUPLING] = Field(
+        default=0.0,
+        ge=0.0,
+        description="Cai–Gutowski F_bl [1/GPa]; 0 reduces the bundle stress to Gutowski's [C].",
+    )
+    confining_pressure_kPa: Annotated[float, CONFINING_PRESSURE] = Field(
+        default=DEFAULT_CONFINING_PRESSURE_PA * 1e-3,
+        gt=0.0,
+        description="Through-thickness pressure holding the tow flat [kPa]: where the tow's "
+        "lateral stress reaches it, the tow stops compacting at its interlacings. Default "
+        "100 kPa, a vacuum-bagged preform [C].",
+    )
+
+    def settings(self, fibre_name: str) -> TowCompaction:
+        """The SI constants, the fibre family's defaults where a field is not given."""
+        base = compaction_for(fibre_name)
+        return TowCompaction(
+            confining_pressure_Pa=self.confining_pressure_kPa * 1e3,
+            fibre_wave_ratio=self.fibre_wave_ratio or base.fibre_wave_ratio,
+            max_fraction=self.max_volume_fraction or base.max_fraction,
+            packing_margin=base.packing_margin,
+            coupling_compliance=self.coupling_compliance_per_GPa * 1e-9,
+        )
 
 
 class TowTypeEntry(ParamsModel):
@@ -89,6 +177,12 @@ class TowTypeEntry(ParamsModel):
         description="Filament diameter [µm], for the preform's permeability; default: the "
         "fibre's typical value (illustrative).",
     )
+    compaction: TowCompactionEntry = Field(
+        default_factory=TowCompactionEntry,
+        description="How the tow compacts laterally under shear (one model for the sheared "
+        "cell and the shear law); defaults by fibre family, each with its source: "
+        + "; ".join(f"{k}: {v}" for k, v in sorted(FIBRE_COMPACTION_SOURCE.items())),
+    )
 
     @field_validator("fibre")
     @classmethod
@@ -114,6 +208,7 @@ class TowTypeEntry(ParamsModel):
             linear_density_tex=self.linear_density_tex,
             width=self.width_mm * 1e-3,
             height=self.height_mm * 1e-3,
+            compaction=self.compaction.settings(self.fibre),
         )
 
 

@@ -10,13 +10,11 @@ Torque per unit area C(γ) = (crossovers per area)·T. The law is symmetric in �
 Modelling choices [C] (the paper does not pin these down; every one is a parameter):
 
 * One geometry: tow widths, spacings, fibre areas, heights and the tow paths come from the
-  fabric's unit cell (``WovenUnitCell``). The cell's tow height is the nominal (as-woven,
-  compacted) height of one tow. ``fabric_thickness_mm``, when given, is a *free* (uncompressed)
-  fabric thickness, such as the one the paper fitted for its Table 1 fabrics: the relaxed fabric
-  is the cell expanded through its thickness by t_free / t_cell, so the law's path rises and tow
-  heights are the cell's times that ratio, and the tow section is the paper's lenticular one,
-  (2/3)·Tw0·h. Without it the law uses the cell as it is, with the cell's own (elliptical)
-  section: V_f0 = A_f / ((π/4)·Tw0·h).
+  fabric's unit cell (``WovenUnitCell``). ``fabric_thickness_mm``, when given, is a *free*
+  (uncompressed) fabric thickness, such as the one the paper fitted for its Table 1 fabrics:
+  the relaxed fabric's crimp is the cell's expanded through its thickness by t_free / t_cell,
+  so the path rises that wrap the crossovers are the cell's times that ratio. It changes the
+  crimp force only: the tows themselves are the cell's (issue 24, one tow).
 * Pre-tension contact force, from the weave: ``pretension_N`` is the clamping-frame tension
   across a fabric width ``pretension_width_mm``, shared by the tows of each family, so one tow
   carries T = pretension·Ts/width. Between two neighbouring crossovers the tow path rises by r
@@ -27,22 +25,29 @@ Modelling choices [C] (the paper does not pin these down; every one is a paramet
   its tension at the two ends of the wrapping arcs, 2T·sin(Σα/2). The contact force is the mean
   of the two tows' values, averaged over the contacts of the cell. A plain weave's crossovers are
   all wrapped twice with r = h: F_pre = T_wp sin α_wp + T_wt sin α_wt, the paper's model.
-* Compaction: the bundle stress (``preform.plugins.woven.compaction``; V_f = V_f0·Tw0/Tw, onset
-  fraction V_o = V_f0 by default so the force starts at zero at locking) is integrated over the
-  tow contact area the paper names, the crossover parallelogram A = Tw_wp·Tw_wt/cos γ; the mean
-  of the two families' stresses is used. Compaction acts at every contact, wrapped or not.
-* Jamming: the fabric is jammed at the first angle where its tows reach the packing cap
-  V_a(1 − ε) or its picture-frame force F_s/L reaches ``jamming_force_N_per_mm``; a dry fabric
-  that cannot shear further in its plane leaves it (wrinkles). Past that angle the law holds the
-  torque it reached (the energy grows linearly, by C_J per radian) instead of following the
-  compaction pole, whose energies (1e7–1e9 J/m²) are no fabric's; ``packing_angle`` reports the
-  jamming angle and drape results count the cells past it as unphysical.
+* Compaction: one tow model (``preform.plugins.woven.tow_jamming``, the sheared cell's too):
+  past locking a tow narrows to Ts·cos γ and compacts at constant height, V_f = V_f0·Tw0/Tw,
+  V_f0 = A_f/((π/4)·Tw0·h) of the cell's elliptical tow; its lateral stress is the Cai–Gutowski
+  bundle stress with the tow's own constants (``tow_types.*.compaction``), up to the tow's
+  limit V_c (stress = the confining pressure), then constant while the floats nest up to the
+  weave's jamming fraction V_J. The stress presses on the crossing tow over the crossover
+  parallelogram A = Tw_wp·Tw_wt/cos γ (the paper's area), the mean of the two families'
+  stresses, at the interlaced crossings only [C]: a share s of the contacts (mean of the two
+  families' interlaced shares, 1 for a plain weave, ½ for a 2/2 twill, ¼ for an 8HS), since
+  along a float the squeezed tows press on each other side by side, in the plane.
+* Jamming: the fabric is jammed at the first angle where a tow family reaches V_J; a dry
+  fabric that cannot shear further in its plane leaves it (wrinkles). Past that angle the law
+  holds the torque it reached (the energy grows linearly, by C_J per radian) instead of
+  following the compaction pole, whose energies (1e7–1e9 J/m²) are no fabric's;
+  ``packing_angle`` reports the jamming angle and drape results count the cells past it as
+  wrinkled, not as a physical energy.
 * Angles are clamped to |γ| ≤ 90° − 1e-9 rad (the picture frame and the parallelogram are
   singular at 90°).
 
 The same rules serve twill, satin, basket and 3D weaves: their floats leave crossovers unwrapped,
-so the crimp force falls with the share of interlacings; for 3D weaves crossovers_per_area counts
-every tow-on-tow contact of the stack. No weave-specific constant enters.
+so the crimp force and the compaction force fall with the share of interlacings and the jam
+comes later; for 3D weaves crossovers_per_area counts every tow-on-tow contact of the stack. No
+weave-specific constant enters.
 """
 
 from __future__ import annotations
@@ -51,10 +56,16 @@ import math
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, model_validator
 
 from preform.material import ParamsModel, Plausible
-from preform.plugins.woven.compaction import SQUARE_PACKING, BundleCompaction
+from preform.plugins.woven.tow_jamming import (
+    TowCompaction,
+    bundle_law,
+    jamming_angle,
+    jamming_fraction,
+    lateral_stress,
+)
 from preform.shear.energy import QuadratureBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import SignedShearLaw
@@ -64,6 +75,7 @@ if TYPE_CHECKING:  # numpy is imported where a function computes: a listing need
     from numpy.typing import ArrayLike, NDArray
 
     # built from a fabric's cell when a law is built, which a listing never does
+    from preform.plugins.woven.compaction import BundleCompaction
     from preform.plugins.woven.crossover import CrossoverGeometry
 
     FloatArray = NDArray[np.float64]
@@ -134,8 +146,6 @@ def crimp_angle(crossing_height: float, crossing_spacing: float) -> float:
     return 2.0 * math.atan(crossing_height / crossing_spacing)
 
 
-#: Hexagonal packing of round fibres, π/(2√3): no fibre fraction can exceed it.
-HEXAGONAL_PACKING = math.pi / (2.0 * math.sqrt(3.0))
 
 # Plausible ranges of the law's parameters; reasons in docs/ranges.md.
 FRICTION = Plausible(
@@ -159,44 +169,7 @@ FABRIC_THICKNESS = Plausible(
     "a free (uncompressed) fabric thickness",
     "spread-tow fabrics ≈ 0.03 mm thick, thick 3D weaves ≈ 50 mm",
 )
-JAMMING_FORCE = Plausible(
-    0.1,
-    100.0,
-    "N/mm",
-    "a picture-frame force at which a jammed fabric wrinkles",
-    "measured picture-frame curves of dry fabrics end, wrinkling, at ≈ 1–10 N/mm",
-)
 FRAME_WIDTH = Plausible(1.0, 5000.0, "mm", "a frame width", "picture frames are 100–300 mm a side")
-TOW_FRACTION = Plausible(
-    0.05,
-    HEXAGONAL_PACKING,
-    "",
-    "a tow fibre volume fraction",
-    "as-woven tows hold 0.4–0.8 fibre; hexagonal packing π/(2√3) ≈ 0.907 is the ceiling",
-)
-MAX_FRACTION = Plausible(
-    0.3,
-    HEXAGONAL_PACKING,
-    "",
-    "a maximum attainable fibre fraction",
-    "square packing π/4 ≈ 0.785 to hexagonal π/(2√3) ≈ 0.907 (Gutowski's V_a ≈ 0.75–0.85)",
-)
-WAVE_RATIO = Plausible(
-    1.0,
-    1e4,
-    "",
-    "Gutowski's fibre-wave ratio β",
-    "350 quoted for AS4 carbon, 30 the default here; A_s goes as β⁻⁴",
-)
-COUPLING = Plausible(
-    0.0,
-    100.0,
-    "1/GPa",
-    "the Cai–Gutowski coupling compliance",
-    "a fibre bed's compliances are ≈ 1/E_f ≈ 0.004–0.1 /GPa",
-)
-
-
 class FrictionCompactionParams(ParamsModel):
     """Parameters of the woven ``friction_compaction`` law (YAML ``shear_law`` block)."""
 
@@ -217,9 +190,9 @@ class FrictionCompactionParams(ParamsModel):
         gt=0.0,
         description=(
             "Free (uncompressed) fabric thickness [mm], e.g. the paper's fitted Table 1 value; "
-            "the law then expands the unit cell's tow heights and path rises by thickness / "
-            "(cell thickness) [C]. Default: none, the unit cell's own tow heights (the "
-            "nominal height of one tow, tow_types.*.height_mm)."
+            "the law then expands the unit cell's crimp (the path rises that wrap the "
+            "crossovers) by thickness / (cell thickness) [C]. The tows stay the cell's. "
+            "Default: none, the unit cell's own crimp."
         ),
     )
     pretension_width_mm: Annotated[float, FRAME_WIDTH] = Field(
@@ -227,55 +200,39 @@ class FrictionCompactionParams(ParamsModel):
         gt=0.0,
         description="Fabric width [mm] sharing pretension_N (the frame side) [C].",
     )
-    tow_volume_fraction: Annotated[float | None, TOW_FRACTION] = Field(
-        default=None,
-        gt=0.0,
-        lt=1.0,
-        description=(
-            "As-woven fibre fraction V_f0 in a tow [-]; default A_f / ((2/3)·Tw0·h), a "
-            "lenticular section of height h [C]."
-        ),
-    )
-    onset_volume_fraction: Annotated[float | None, TOW_FRACTION] = Field(
-        default=None,
-        gt=0.0,
-        lt=1.0,
-        description="Gutowski V_o [-], the fraction where the fibres start to carry load; default V_f0 [C].",
-    )
-    max_volume_fraction: Annotated[float, MAX_FRACTION] = Field(
-        default=SQUARE_PACKING,
-        gt=0.0,
-        lt=1.0,
-        description="Gutowski V_a [-], maximum attainable fraction; default π/4 (square packing).",
-    )
-    fibre_wave_ratio: Annotated[float, WAVE_RATIO] = Field(
-        default=30.0,
-        gt=0.0,
-        description=(
-            "Gutowski β [-], span-to-height ratio of fibre waves, A_s = 3πE_f/β⁴. Default 30 [C]: "
-            "makes compaction stiffen the Table 1 fabrics within ~10° past locking, as the "
-            "paper's curves do; the carbon value 350 leaves it negligible at V_f0 ≈ 0.23."
-        ),
-    )
-    coupling_compliance_per_GPa: Annotated[float, COUPLING] = Field(
-        default=0.0,
-        ge=0.0,
-        description="Cai–Gutowski F_bl [1/GPa]; 0 reduces the bundle stress to Gutowski's [C].",
-    )
-    packing_margin: float = Field(
-        default=1e-2,
-        gt=0.0,
-        lt=0.5,
-        description="ε: V_f is followed exactly up to V_a(1−ε), linearly beyond (pole guard) [-].",
-    )
-    jamming_force_N_per_mm: Annotated[float, JAMMING_FORCE] = Field(
-        default=10.0,
-        gt=0.0,
-        description=(
-            "Picture-frame force F_s/L [N/mm] at which the jammed fabric leaves its plane; past "
-            "the angle where it (or the packing cap) is reached the torque is held [C]."
-        ),
-    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _moved_fields(cls, data: Any) -> Any:
+        # Issue 24: one compaction model per tow. Say where a removed field went, instead of
+        # pydantic's "extra inputs are not permitted".
+        if isinstance(data, dict):
+            for name, where in MOVED_FIELDS.items():
+                if name in data:
+                    raise ValueError(f"shear_law.{name} is no longer a law parameter: {where}")
+        return data
+
+
+#: Law fields removed by issue 24 and where their physics lives now.
+MOVED_FIELDS: dict[str, str] = {
+    "fibre_wave_ratio": "give it per tow, as tow_types.<name>.compaction.fibre_wave_ratio",
+    "max_volume_fraction": "give it per tow, as tow_types.<name>.compaction.max_volume_fraction",
+    "coupling_compliance_per_GPa": (
+        "give it per tow, as tow_types.<name>.compaction.coupling_compliance_per_GPa"
+    ),
+    "onset_volume_fraction": (
+        "the compaction starts at the tow's as-built fraction (from its width and height)"
+    ),
+    "tow_volume_fraction": (
+        "the tow's fraction is its unit cell's, fibre area over (π/4)·width_mm·height_mm: "
+        "change the tow's height_mm"
+    ),
+    "packing_margin": "the pole guard is fixed at 1 % below the maximum fraction",
+    "jamming_force_N_per_mm": (
+        "the fabric jams where its tows reach the weave's jamming fraction "
+        "(tow_types.<name>.compaction; docs/physics.md, 'One tow')"
+    ),
+}
 
 
 class FrictionCompactionLaw(SignedShearLaw):
@@ -302,17 +259,15 @@ class FrictionCompactionLaw(SignedShearLaw):
         self.params = params
         self._parts = [_CrossoverPart(g, params) for g in self.geometries]
         locks = [a for part in self._parts for a in part.locking_angles]
-        packs = [a for part in self._parts for a in part.packing_angles]
-        packing = min(packs)
-        #: Angle [rad] where the tows reach the guarded packing cap (before any jamming force).
-        self.tows_packed_angle: float = packing
-        jam = self._force_jamming_angle(params.jamming_force_N_per_mm * 1000.0, packing)
-        #: Jamming angle [rad]: packing cap or jamming force, whichever comes first.
-        first = min(packing, jam)
+        jams = [a for part in self._parts for a in part.jamming_angles]
+        first = min(jams)
+        #: Jamming angle [rad]: the first tow family of any level pair reaches its V_J.
         self.packing_angle: float | None = None if first >= MAX_SHEAR - 1e-12 else first
         self._jam = MAX_SHEAR if self.packing_angle is None else self.packing_angle
-        # Kinks: the locking angles before the jam, and the jam itself (the torque is held).
-        breaks = [a for a in locks if a < self._jam]
+        # Kinks: the locking angles and the tows' own limits before the jam, and the jam
+        # itself (the torque is held).
+        limits = [a for part in self._parts for a in part.own_limit_angles]
+        breaks = sorted({a for a in (*locks, *limits) if 0.0 < a < self._jam})
         if self.packing_angle is not None:
             breaks.append(self.packing_angle)
         branch = QuadratureBranch(self.torque_magnitude, breakpoints=breaks)
@@ -326,30 +281,20 @@ class FrictionCompactionLaw(SignedShearLaw):
             total = total + part.torque_per_area(u)
         return total
 
-    def _force_jamming_angle(self, force_N_per_m: float, stop: float) -> float:
-        """First angle [rad] in [0, stop] where C/cos γ reaches ``force_N_per_m``; MAX_SHEAR if
-        none. A grid finds the first crossing (the force rises monotonically past locking);
-        four finer grids inside the bracket refine it to ~1e-12 rad, one vector call each."""
-        import numpy as np
-
-        lo, hi = 0.0, stop
-        for level in range(5):
-            grid = np.linspace(lo, hi, 257)
-            force = self._free_torque(grid) / np.cos(grid)
-            above = np.nonzero(force >= force_N_per_m)[0]
-            if above.size == 0:
-                return MAX_SHEAR if level == 0 else hi
-            k = int(above[0])
-            if k == 0:
-                return float(grid[0])
-            lo, hi = float(grid[k - 1]), float(grid[k])
-        return hi
-
     def torque_magnitude(self, u: FloatArray) -> FloatArray:
         """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]; held past jamming."""
         import numpy as np
 
         return self._free_torque(np.minimum(np.asarray(u, dtype=float), self._jam))
+
+    def tow_volume_fractions(self, gamma: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Fibre fraction inside the warp-wise and weft-wise tows [-] of the first geometry at
+        γ [rad]: the one tow model's (the sheared cell's), up to the weave's jamming fraction."""
+        import numpy as np
+
+        g = np.asarray(gamma, dtype=float)
+        warp, weft = self._parts[0].families
+        return warp.state(g).fraction, weft.state(g).fraction
 
     def contact_force(self, gamma: ArrayLike) -> FloatArray:
         """Mean contact force per crossover F_c [N] of the first geometry."""
@@ -384,13 +329,11 @@ class _CrossoverPart:
         self.mu = params.friction_coefficient
         heights = (g.tow_height_warp, g.tow_height_weft)
         if params.fabric_thickness_mm is not None:
-            # Free thickness: the relaxed cell, expanded through its thickness (module doc).
+            # Free thickness: the relaxed cell's crimp, expanded through its thickness.
             cell_thickness = g.thickness if g.thickness is not None else g.levels * max(heights)
             expand = params.fabric_thickness_mm * 1e-3 / cell_thickness
-            section = 2.0 / 3.0  # the paper's lenticular tow section
         else:
             expand = 1.0
-            section = math.pi / 4.0  # the unit cell's elliptical tow section
         width = params.pretension_width_mm * 1e-3
         tension_wp = params.pretension_N * g.tow_spacing_warp / width
         tension_wt = params.pretension_N * g.tow_spacing_weft / width
@@ -420,55 +363,24 @@ class _CrossoverPart:
             locking_angle(g.tow_width_warp, g.tow_spacing_warp),
             locking_angle(g.tow_width_weft, g.tow_spacing_weft),
         )
+        # The one tow model: the same families the sheared cell builds.
+        self.families = (g.tow_family("warp"), g.tow_family("weft"))
+        self.compactions = (g.compaction_warp, g.compaction_weft)
         self.bundles = tuple(
-            self._bundle(params, fibre_area, w0, h * expand, section, g.fibre_modulus)
-            for fibre_area, w0, h in (
-                (g.fibre_area_warp, g.tow_width_warp, g.tow_height_warp),
-                (g.fibre_area_weft, g.tow_width_weft, g.tow_height_weft),
-            )
+            _bundle(f.initial_fraction, g.fibre_modulus, c, f.name)
+            for f, c in zip(self.families, self.compactions, strict=True)
         )
-        self.packing_angles = tuple(
-            self._packing_angle(b, w0, ts)
-            for b, w0, ts in (
-                (self.bundles[0], g.tow_width_warp, g.tow_spacing_warp),
-                (self.bundles[1], g.tow_width_weft, g.tow_spacing_weft),
-            )
+        self.own_limits = tuple(
+            jamming_fraction(f.initial_fraction, g.fibre_modulus, c)
+            for f, c in zip(self.families, self.compactions, strict=True)
         )
-
-    @staticmethod
-    def _bundle(
-        params: FrictionCompactionParams,
-        fibre_area: float,
-        initial_width: float,
-        height: float,
-        section: float,
-        modulus: float,
-    ) -> BundleCompaction:
-        v0 = params.tow_volume_fraction or fibre_area / (section * initial_width * height)
-        cap = params.max_volume_fraction * (1.0 - params.packing_margin)
-        if not v0 < cap:
-            shape = "lenticular" if section < 0.7 else "elliptical"
-            raise ValueError(
-                f"as-woven tow fibre fraction {v0:.3f} (fibre area over a {shape} section of "
-                f"width {initial_width * 1e3:.3g} mm, height {height * 1e3:.3g} mm) is not "
-                f"below the packing cap {cap:.3f}: raise the tow height (or the free "
-                "fabric_thickness_mm) or give tow_volume_fraction"
-            )
-        return BundleCompaction(
-            fibre_modulus=modulus,
-            span_to_height=params.fibre_wave_ratio,
-            initial_fraction=v0,
-            onset_fraction=params.onset_volume_fraction or v0,
-            max_fraction=params.max_volume_fraction,
-            coupling_compliance=params.coupling_compliance_per_GPa * 1e-9,
-            packing_margin=params.packing_margin,
+        self.jamming_angles = tuple(f.jamming_angle for f in self.families)
+        self.own_limit_angles = tuple(
+            jamming_angle(f.initial_fraction, f.width, f.spacing, v)
+            for f, v in zip(self.families, self.own_limits, strict=True)
         )
-
-    @staticmethod
-    def _packing_angle(bundle: BundleCompaction, initial_width: float, spacing: float) -> float:
-        # V_f = V_f0·Tw0/(Ts cos γ) reaches the cap when cos γ = V_f0·Tw0/(V_c·Ts).
-        ratio = bundle.initial_fraction * initial_width / (bundle.cap_fraction * spacing)
-        return math.acos(min(1.0, ratio))
+        #: Share of the contacts where the compaction presses on the crossing tow [-].
+        self.compaction_share = 0.5 * (g.interlaced_share("warp") + g.interlaced_share("weft"))
 
     def widths(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         g = self.geometry
@@ -484,20 +396,29 @@ class _CrossoverPart:
     def contact_force(self, u: FloatArray) -> FloatArray:
         import numpy as np
 
-        g = self.geometry
+        g = np.clip(np.abs(u), 0.0, MAX_SHEAR)
         w_wp, w_wt = self.widths(u)
-        stress = 0.5 * (
-            self.bundles[0].stress(self.bundles[0].initial_fraction * g.tow_width_warp / w_wp)
-            + self.bundles[1].stress(self.bundles[1].initial_fraction * g.tow_width_weft / w_wt)
+        stress = 0.5 * sum(
+            lateral_stress(bundle, limit, family.state(g).fraction)
+            for bundle, limit, family in zip(self.bundles, self.own_limits, self.families, strict=True)
         )
-        cos_g = np.cos(np.clip(np.abs(u), 0.0, MAX_SHEAR))
-        return np.asarray(self.pretension_force + stress * w_wp * w_wt / cos_g, dtype=float)
+        area = w_wp * w_wt / np.cos(g)
+        return np.asarray(
+            self.pretension_force + self.compaction_share * stress * area, dtype=float
+        )
 
     def torque_per_area(self, u: FloatArray) -> FloatArray:
         import numpy as np
 
         crossover_torque = self.mu * self.contact_force(u) * self.effective_radius(u)
         return np.asarray(self.geometry.crossovers_per_area * crossover_torque, dtype=float)
+
+
+def _bundle(v0: float, modulus: float, compaction: TowCompaction, name: str) -> BundleCompaction:
+    try:
+        return bundle_law(v0, modulus, compaction)
+    except ValueError as error:
+        raise ValueError(f"{name} tows: {error}") from None
 
 
 def build_friction_compaction(params: FrictionCompactionParams, fabric: Any) -> SignedShearLaw:

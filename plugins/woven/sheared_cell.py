@@ -1,7 +1,9 @@
 """The woven unit cell at a shear angle γ (issue 14; ``preform.geometry.sheared_cell``).
 
 Each (family, tow type) pair is one tow family: its tows narrow past locking and compact up to
-the jamming fraction, then thicken (``preform.plugins.woven.tow_jamming``). The cell at γ is the
+the weave's jamming fraction V_J (its own compaction constants and the share of its crossings
+that are interlaced, ``WovenUnitCell.interlaced_shares``), then thicken
+(``preform.plugins.woven.tow_jamming``: the one tow model the shear law uses too). The cell at γ is the
 woven cell rebuilt with every tow's width and height at γ (so the crimp and the stack follow the
 new heights; the thickness is the stack's envelope, ``WovenUnitCell.stack_thickness``), then
 mapped in-plane by the pin-jointed stretch about the +45° bisector of warp and weft. SI units.
@@ -30,7 +32,7 @@ from preform.geometry.sheared_cell import (
 )
 from preform.geometry.unit_cell import FloatArray, UnitCell
 from preform.plugins.woven.geometry import Family, TowType, WovenUnitCell
-from preform.plugins.woven.tow_jamming import TowCompaction, jamming_fraction
+from preform.plugins.woven.tow_jamming import TowCompaction, weave_jamming_fraction
 
 #: Reference bisector of a woven cell [rad from the warp]: the cell's x axis is the warp.
 REFERENCE = math.pi / 4.0
@@ -39,8 +41,10 @@ REFERENCE = math.pi / 4.0
 def tow_families(
     cell: WovenUnitCell, compaction: TowCompaction | None = None
 ) -> dict[tuple[Family, str], TowFamily]:
-    """The cell's tow families, one per (family, tow type name), as built."""
+    """The cell's tow families, one per (family, tow type name), as built. ``compaction``
+    replaces every tow's own compaction constants (``TowType.compaction``) when given."""
     found: dict[tuple[Family, str], TowFamily] = {}
+    shares = cell.interlaced_shares()
     for key in cell.tow_keys():
         tow = cell.tow_type(key)
         name = (key.family, tow.name)
@@ -49,7 +53,9 @@ def tow_families(
         spacing = cell.tow_spacing_warp if key.family == "warp" else cell.tow_spacing_weft
         v0 = tow.volume_fraction
         try:
-            v_jam = jamming_fraction(v0, tow.fibre.modulus_Pa, compaction)
+            v_jam = weave_jamming_fraction(
+                v0, tow.fibre.modulus_Pa, compaction or tow.compaction, shares[name]
+            )
         except ValueError as error:
             raise ValueError(f"tow_types.{tow.name} ({key.family}-wise): {error}") from None
         found[name] = TowFamily(
