@@ -112,12 +112,25 @@ class TabulatedSurrogate:
             )
             if a is not None and 0 < a < _DOMAIN_END
         ]
+        # A law's further kinks (``kink_angles`` [rad]: e.g. where a woven law's tows reach
+        # their own compaction limit and the lateral stress stops rising) are nodes too.
+        kinks = [
+            float(a)
+            for a in getattr(law, "kink_angles", ())
+            if a is not None and 0 < a < _DOMAIN_END
+        ]
+        special.extend(kinks)
         jam = getattr(law, "packing_angle", None)
-        if jam is not None and 0 < jam < _DOMAIN_END:
-            # Compaction stiffens W steeply just before the jam: 8× finer over the 3° before
-            # it (measured, tests/shear/test_surrogate.py).
-            count = math.ceil(_JAM_REFINED / (step_rad / 8.0))
-            fine = jam - step_rad / 8.0 * np.arange(1, count + 1)
+        steep = kinks + ([jam] if jam is not None and 0 < jam < _DOMAIN_END else [])
+        for end in steep:
+            # Compaction stiffens W steeply just before the jam (or a kink where the stress
+            # stops rising): 8× finer over the 3° before it, or from the locking angle where
+            # compaction starts when that is earlier (measured, tests/shear/test_surrogate.py).
+            width = _JAM_REFINED
+            if law.locking_angle is not None and 0 < law.locking_angle < end:
+                width = max(width, end - law.locking_angle)
+            count = math.ceil(width / (step_rad / 8.0))
+            fine = end - step_rad / 8.0 * np.arange(1, count + 1)
             special.extend(float(a) for a in fine if a > 0)
         nodes = np.unique(np.concatenate([grid, special]))
         # a special angle right next to a grid node would make a needle-thin interval

@@ -120,28 +120,32 @@ class TowCompactionEntry(ParamsModel):
         description="Gutowski V_a [-], the maximum attainable fibre fraction; default π/4 "
         "(square packing).",
     )
-    coupling_compliance_per_GPa: Annotated[float, COUPLING] = Field(
-        default=0.0,
+    coupling_compliance_per_GPa: Annotated[float | None, COUPLING] = Field(
+        default=None,
         ge=0.0,
         description="Cai–Gutowski F_bl [1/GPa]; 0 reduces the bundle stress to Gutowski's [C].",
     )
-    confining_pressure_kPa: Annotated[float, CONFINING_PRESSURE] = Field(
-        default=DEFAULT_CONFINING_PRESSURE_PA * 1e-3,
+    confining_pressure_kPa: Annotated[float | None, CONFINING_PRESSURE] = Field(
+        default=None,
         gt=0.0,
         description="Through-thickness pressure holding the tow flat [kPa]: where the tow's "
         "lateral stress reaches it, the tow stops compacting at its interlacings. Default "
-        "100 kPa, a vacuum-bagged preform [C].",
+        f"{DEFAULT_CONFINING_PRESSURE_PA * 1e-3:g} kPa, a vacuum-bagged preform [C].",
     )
 
     def settings(self, fibre_name: str) -> TowCompaction:
         """The SI constants, the fibre family's defaults where a field is not given."""
         base = compaction_for(fibre_name)
+        pressure = self.confining_pressure_kPa
+        coupling = self.coupling_compliance_per_GPa
         return TowCompaction(
-            confining_pressure_Pa=self.confining_pressure_kPa * 1e3,
+            confining_pressure_Pa=base.confining_pressure_Pa
+            if pressure is None
+            else pressure * 1e3,
             fibre_wave_ratio=self.fibre_wave_ratio or base.fibre_wave_ratio,
             max_fraction=self.max_volume_fraction or base.max_fraction,
             packing_margin=base.packing_margin,
-            coupling_compliance=self.coupling_compliance_per_GPa * 1e-9,
+            coupling_compliance=base.coupling_compliance if coupling is None else coupling * 1e-9,
         )
 
 
@@ -177,8 +181,8 @@ class TowTypeEntry(ParamsModel):
         description="Filament diameter [µm], for the preform's permeability; default: the "
         "fibre's typical value (illustrative).",
     )
-    compaction: TowCompactionEntry = Field(
-        default_factory=TowCompactionEntry,
+    compaction: TowCompactionEntry | None = Field(
+        default=None,
         description="How the tow compacts laterally under shear (one model for the sheared "
         "cell and the shear law); defaults by fibre family, each with its source: "
         + "; ".join(f"{k}: {v}" for k, v in sorted(FIBRE_COMPACTION_SOURCE.items())),
@@ -208,7 +212,7 @@ class TowTypeEntry(ParamsModel):
             linear_density_tex=self.linear_density_tex,
             width=self.width_mm * 1e-3,
             height=self.height_mm * 1e-3,
-            compaction=self.compaction.settings(self.fibre),
+            compaction=(self.compaction or TowCompactionEntry()).settings(self.fibre),
         )
 
 

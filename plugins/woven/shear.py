@@ -146,7 +146,6 @@ def crimp_angle(crossing_height: float, crossing_spacing: float) -> float:
     return 2.0 * math.atan(crossing_height / crossing_spacing)
 
 
-
 # Plausible ranges of the law's parameters; reasons in docs/ranges.md.
 FRICTION = Plausible(
     0.0,
@@ -170,6 +169,8 @@ FABRIC_THICKNESS = Plausible(
     "spread-tow fabrics ≈ 0.03 mm thick, thick 3D weaves ≈ 50 mm",
 )
 FRAME_WIDTH = Plausible(1.0, 5000.0, "mm", "a frame width", "picture frames are 100–300 mm a side")
+
+
 class FrictionCompactionParams(ParamsModel):
     """Parameters of the woven ``friction_compaction`` law (YAML ``shear_law`` block)."""
 
@@ -267,6 +268,11 @@ class FrictionCompactionLaw(SignedShearLaw):
         # Kinks: the locking angles and the tows' own limits before the jam, and the jam
         # itself (the torque is held).
         limits = [a for part in self._parts for a in part.own_limit_angles]
+        #: Angles [rad] before the jam where the torque's slope jumps: a tow family reaches its
+        #: own compaction limit and its lateral stress stops rising (a table must hold them).
+        self.kink_angles: tuple[float, ...] = tuple(
+            sorted({a for a in limits if 0.0 < a < self._jam})
+        )
         breaks = sorted({a for a in (*locks, *limits) if 0.0 < a < self._jam})
         if self.packing_angle is not None:
             breaks.append(self.packing_angle)
@@ -400,7 +406,9 @@ class _CrossoverPart:
         w_wp, w_wt = self.widths(u)
         stress = 0.5 * sum(
             lateral_stress(bundle, limit, family.state(g).fraction)
-            for bundle, limit, family in zip(self.bundles, self.own_limits, self.families, strict=True)
+            for bundle, limit, family in zip(
+                self.bundles, self.own_limits, self.families, strict=True
+            )
         )
         area = w_wp * w_wt / np.cos(g)
         return np.asarray(

@@ -10,6 +10,7 @@ and so the generator-angle optimum, without any error being raised.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from preform.plugins.woven.shear import (
     FrictionCompactionParams,
     plain_weave_geometry,
 )
+from preform.plugins.woven.tow_jamming import TowCompaction
 from preform.shear.law import ShearLaw
 from preform.shear.laws import (
     PolynomialParams,
@@ -82,12 +84,18 @@ def fc_law(
     width_mm: float = 3.1,
     spacing_mm: float = 4.0,
     tex: float = 1190.0,
+    tows: TowCompaction | None = None,
+    tow_height_mm: float = 0.5,
     **params: float | None,
 ) -> FrictionCompactionLaw:
+    """A plain weave's law; ``tows`` the tows' compaction constants (issue 24: per tow)."""
     base: dict[str, float | None] = {"pretension_N": 100.0, "fabric_thickness_mm": 2.0}
     base.update(params)
+    geometry = plain_weave_geometry(width_mm, spacing_mm, tex, tow_height_mm=tow_height_mm)
+    if tows is not None:
+        geometry = replace(geometry, compaction_warp=tows, compaction_weft=tows)
     return FrictionCompactionLaw(
-        plain_weave_geometry(width_mm, spacing_mm, tex),
+        geometry,
         FrictionCompactionParams.model_validate({"law": "friction_compaction", **base}),
     )
 
@@ -140,12 +148,17 @@ def test_friction_compaction_at_the_gutowski_pole() -> None:
     """V_f0 just under the cap, a margin at float resolution, and a margin the cap cannot
     resolve (must be a ValueError, not an inf torque past the cap)."""
     cap = math.pi / 4 * (1 - 1e-2)
-    assert_sound(fc_law(tow_volume_fraction=cap * (1 - 1e-12)))
-    assert_sound(fc_law(packing_margin=1e-15))
+    fibre_area = 1190 / 2.55e3  # mm²
+
+    def height_for(fraction: float) -> float:
+        return fibre_area / (math.pi / 4 * 3.1 * fraction)
+
+    assert_sound(fc_law(tow_height_mm=height_for(cap * (1 - 1e-12))))
+    assert_sound(fc_law(tows=TowCompaction(packing_margin=1e-15)))
     with pytest.raises(ValueError, match="packing_margin"):
-        fc_law(packing_margin=1e-300)
+        fc_law(tows=TowCompaction(packing_margin=1e-300))
     with pytest.raises(ValueError, match="packing cap"):
-        fc_law(tow_volume_fraction=cap)
+        fc_law(tow_height_mm=height_for(cap * (1 + 1e-9)))
     with pytest.raises(ValueError, match="V_o < V_a"):
         BundleCompaction(72e9, 30.0, 0.3, onset_fraction=0.9, max_fraction=0.785)
 
@@ -180,8 +193,7 @@ def test_friction_compaction_huge_and_tiny_parameters(
             fabric_thickness_mm=thickness,
             pretension_N=pretension,
             friction_coefficient=mu,
-            fibre_wave_ratio=beta,
-            coupling_compliance_per_GPa=coupling,
+            tows=TowCompaction(fibre_wave_ratio=beta, coupling_compliance=coupling * 1e-9),
         )
     except ValueError as exc:
         assert str(exc)

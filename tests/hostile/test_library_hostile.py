@@ -60,6 +60,12 @@ WOVEN: dict[str, Any] = {
             "fibre_density_g_cm3": 2.55,
             "fibre_modulus_GPa": 72.0,
             "filament_diameter_um": 17.0,
+            "compaction": {
+                "fibre_wave_ratio": 350.0,
+                "max_volume_fraction": 0.785,
+                "coupling_compliance_per_GPa": 0.01,
+                "confining_pressure_kPa": 100.0,
+            },
         }
     },
     "warp": {"tow_spacing_mm": 4.0, "tow_type": "glass"},
@@ -71,13 +77,6 @@ WOVEN: dict[str, Any] = {
         "pretension_N": 100.0,
         "fabric_thickness_mm": 2.0,
         "pretension_width_mm": 150.0,
-        "tow_volume_fraction": 0.5,
-        "onset_volume_fraction": 0.5,
-        "max_volume_fraction": 0.785,
-        "fibre_wave_ratio": 30.0,
-        "coupling_compliance_per_GPa": 0.01,
-        "packing_margin": 0.01,
-        "jamming_force_N_per_mm": 10.0,
     },
 }
 

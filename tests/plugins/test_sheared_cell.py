@@ -176,7 +176,9 @@ def test_jamming_fraction_balances_the_bundle_stress_against_the_pressure() -> N
     for pressure in (1e3, 1e5, 1e7):
         settings_ = TowCompaction(confining_pressure_Pa=pressure)
         vj = jamming_fraction(v0, modulus, settings_)
-        bundle = BundleCompaction(modulus, 30.0, v0, v0, SQUARE_PACKING, packing_margin=1e-2)
+        bundle = BundleCompaction(
+            modulus, settings_.fibre_wave_ratio, v0, v0, SQUARE_PACKING, packing_margin=1e-2
+        )
         assert float(bundle.stress(np.asarray(vj))) == pytest.approx(pressure, rel=1e-6)
     assert jamming_fraction(v0, modulus, TowCompaction(confining_pressure_Pa=0.0)) == v0
     huge = jamming_fraction(v0, modulus, TowCompaction(confining_pressure_Pa=1e30))

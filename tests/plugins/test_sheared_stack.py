@@ -239,7 +239,9 @@ def test_jamming_fraction_is_resolved_to_neighbouring_floats_as_a_bisection_find
 ) -> None:
     compaction = TowCompaction(confining_pressure_Pa=pressure)
     vj = jamming_fraction(v0, modulus_GPa * 1e9, compaction)
-    bundle = BundleCompaction(modulus_GPa * 1e9, 30.0, v0, v0, SQUARE_PACKING, packing_margin=1e-2)
+    bundle = BundleCompaction(
+        modulus_GPa * 1e9, compaction.fibre_wave_ratio, v0, v0, SQUARE_PACKING, packing_margin=1e-2
+    )
     if vj < bundle.cap_fraction:
         # the root is bracketed by vj and the next float above it, up to the rounding of σ_b
         # itself: the search evaluates σ_b on arrays, and numpy's vectorised path of the law

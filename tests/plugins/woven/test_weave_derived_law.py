@@ -64,19 +64,42 @@ FAMILY = [
 ]
 
 
+def gutowski_increase(v: float, v0: float, beta: float, modulus: float, va: float) -> float:
+    """Second implementation of Gutowski's stress rise over the as-built fraction [Pa]."""
+    a_s = 3 * math.pi * modulus / beta**4
+
+    def sigma(x: float) -> float:
+        return a_s * (math.sqrt(x / v0) - 1) / (math.sqrt(va / x) - 1) ** 4
+
+    return sigma(v) - sigma(v0)
+
+
 def test_plain_weave_is_todays_law() -> None:
     """Built from the plain-weave unit cell with the paper's free thickness (2 mm), the law is
-    the paper's: F_pre = T_wp sin θ + T_wt sin θ, θ = 2 atan(h/Ts), h = thickness/2; and its
-    torque is the one the law gave before it was derived from the weave (values recorded from
-    the previous release for plain-weave-600)."""
+    the paper's: F_pre = T_wp sin θ + T_wt sin θ, θ = 2 atan(h/Ts), h = thickness/2, and its
+    torque before locking is the one the law gave before it was derived from the weave (values
+    recorded from that release for plain-weave-600). Past locking the compaction force is the
+    cell's tow under Gutowski's law (issue 24), recomputed here from the closed form."""
     law = law_of(PLAIN, fabric_thickness_mm=2.0)
     tension = 100.0 * 4.0 / 150.0  # N per tow: pre-tension × Ts / frame width
     theta = 2.0 * math.atan(1.0 / 4.0)
-    assert law.pretension_force() == pytest.approx(2 * tension * math.sin(theta), rel=1e-12)
-    before = {10: 56.5446, 30: 63.1377, 45: 101.5213, 55: 318.5875, 60: 775.3007}
+    f_pre = 2 * tension * math.sin(theta)
+    assert law.pretension_force() == pytest.approx(f_pre, rel=1e-12)
+    before = {10: 56.5446, 30: 63.1377}
     for deg, torque in before.items():
         assert float(law.torque(deg * RAD)) == pytest.approx(torque, rel=1e-5)
-    assert law.locking_angle == pytest.approx(math.acos(3.1 / 4.0), rel=1e-12)
+    lock = math.acos(3.1 / 4.0)
+    assert law.locking_angle == pytest.approx(lock, rel=1e-12)
+    v0 = (1190 / 2.55e3) / (math.pi / 4 * 3.1 * 0.32)  # the cell's elliptical tow, mm² / mm²
+    own_limit = min(law.kink_angles or (law.packing_angle or 0.0,))
+    for gamma in np.linspace(lock + 0.2 * RAD, own_limit - 0.01 * RAD, 5):
+        width = 4.0e-3 * math.cos(gamma)
+        v = v0 * 3.1e-3 / width
+        stress = gutowski_increase(v, v0, 350.0, 72e9, math.pi / 4)
+        force = f_pre + stress * width * width / math.cos(gamma)
+        radius = float(law.effective_radius(gamma))
+        expected = 0.3 * force * radius / (4.0e-3 * 4.0e-3)
+        assert float(law.torque(gamma)) == pytest.approx(expected, rel=1e-9)
 
 
 def test_wrapping_arcs_follow_the_weave() -> None:
@@ -129,17 +152,15 @@ def test_tows_that_cannot_compact_lock_and_jam_at_acos_w_over_s(
     width: float, weave: dict[str, Any]
 ) -> None:
     """Locking is first lateral contact, acos(w/s); a tow already at the packing cap cannot
-    compact laterally, so the fabric jams there too."""
+    compact laterally, so the fabric jams there too, whatever the weave."""
     cap = math.pi / 4 * (1 - 1e-2)
+    fibre_area = 1190 / 2.55e3  # mm²
+    height = fibre_area / (math.pi / 4 * width * cap * (1 - 1e-9))
     law = build_friction_compaction(
         FrictionCompactionParams.model_validate(
-            {
-                "law": "friction_compaction",
-                "pretension_N": 100.0,
-                "tow_volume_fraction": cap * (1 - 1e-9),
-            }
+            {"law": "friction_compaction", "pretension_N": 100.0}
         ),
-        fabric(weave, width=width),
+        fabric(weave, width=width, height=height),
     )
     expected = math.acos(width / 4.0)
     assert law.locking_angle == pytest.approx(expected, rel=1e-12)
@@ -150,9 +171,15 @@ def test_jamming_holds_the_torque_and_bounds_the_energy() -> None:
     law = law_of(PLAIN, fabric_thickness_mm=2.0)
     jam = law.packing_angle
     assert jam is not None and law.locking_angle is not None
-    assert law.locking_angle < jam < law.tows_packed_angle
-    # Jammed where the picture-frame force reaches the jamming force (10 N/mm by default).
-    assert float(law.torque(jam)) / math.cos(jam) / 1000.0 == pytest.approx(10.0, rel=1e-9)
+    assert law.locking_angle < jam
+    # Jammed where the tows reach the weave's jamming fraction: a plain weave's tows at their
+    # own limit, where the bundle stress equals the confining pressure (100 kPa).
+    warp, weft = law.tow_volume_fractions(jam)
+    family = law._parts[0].families[0]
+    assert float(warp) == pytest.approx(family.jamming_fraction, rel=1e-12)
+    assert float(weft) == pytest.approx(family.jamming_fraction, rel=1e-12)
+    bundle = law._parts[0].bundles[0]
+    assert float(bundle.stress(np.asarray(family.jamming_fraction))) == pytest.approx(1e5, rel=1e-6)
     c_jam, w_jam = float(law.torque(jam)), float(law.energy(jam))
     past = np.radians([70.0, 80.0, 89.0, 89.999])
     assert np.all(law.torque(past) == c_jam)
@@ -161,18 +188,54 @@ def test_jamming_holds_the_torque_and_bounds_the_energy() -> None:
 
 
 def test_one_geometry_default_uses_the_cells_tows() -> None:
-    """Without a free thickness the law's as-woven tow fraction is the unit cell's own."""
+    """The law's as-woven tow fraction is the unit cell's own, with or without a free
+    thickness (which expands only the crimp that wraps the crossovers)."""
     cell = fabric(PLAIN).woven_unit_cell
-    law = law_of(PLAIN)
-    bundle = law._parts[0].bundles[0]
-    assert bundle.initial_fraction == pytest.approx(cell.tow_volume_fraction("warp"), rel=1e-12)
+    for law in (law_of(PLAIN), law_of(PLAIN, fabric_thickness_mm=2.0)):
+        bundle = law._parts[0].bundles[0]
+        assert bundle.initial_fraction == pytest.approx(cell.tow_volume_fraction("warp"), rel=1e-12)
     geometry = crossover_geometry_with_crimp(cell)
     assert geometry.thickness == pytest.approx(cell.thickness())
-    # With a free thickness the cell is expanded: tow height = thickness / 2 for a 2D weave.
-    free = law_of(PLAIN, fabric_thickness_mm=2.0)._parts[0].bundles[0]
-    assert free.initial_fraction == pytest.approx(
-        cell.tow_type(cell.tow_keys()[0]).fibre_area / (2 / 3 * 3.1e-3 * 1.0e-3), rel=1e-12
-    )
+
+
+WEAVES_BY_FLOAT = [
+    PLAIN,
+    {"pattern": "twill", "over": 2, "under": 1},
+    {"pattern": "twill", "over": 2, "under": 2},
+    {"pattern": "crowfoot"},
+    {"pattern": "satin", "harness": 5, "move": 2},
+    {"pattern": "satin", "harness": 8, "move": 3},
+]
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    width=st.floats(1.5, 3.8),
+    v0=st.floats(0.3, 0.75),
+    pressure_kPa=st.floats(1.0, 1000.0),
+)
+def test_longer_floats_never_jam_earlier(width: float, v0: float, pressure_kPa: float) -> None:
+    """With the same tows, the jamming angle does not decrease as the mean float length grows
+    (plain, 2/1 twill, 2/2 twill = crowfoot, 5HS, 8HS); the cell and the law agree on it."""
+    height = (1190 / 2.55e3) / (math.pi / 4 * width * v0)
+    angles = []
+    for weave in WEAVES_BY_FLOAT:
+        entry = fabric(weave, width=width, height=height)
+        data = entry.model_dump(mode="json", exclude_none=True)
+        data["tow_types"]["t"]["compaction"] = {"confining_pressure_kPa": pressure_kPa}
+        entry = WovenFabric.model_validate(data)
+        law = build_friction_compaction(
+            FrictionCompactionParams.model_validate(
+                {"law": "friction_compaction", "pretension_N": 100.0}
+            ),
+            entry,
+        )
+        cell = entry.sheared_cell(0.0)
+        jam = law.packing_angle if law.packing_angle is not None else math.pi / 2
+        assert cell.jamming_angle == pytest.approx(jam, abs=1e-12)
+        angles.append(jam)
+    assert all(b >= a - 1e-12 for a, b in zip(angles, angles[1:], strict=False))
+    assert angles[2] == pytest.approx(angles[3], abs=1e-12)  # 2/2 twill and crowfoot
 
 
 def test_straight_stuffers_press_nothing_binders_do() -> None:
