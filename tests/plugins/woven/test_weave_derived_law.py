@@ -3,6 +3,7 @@ tow paths, one geometry for law and cell, and the jamming limit."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any
 
@@ -234,7 +235,7 @@ def test_longer_floats_never_jam_earlier(width: float, v0: float, pressure_kPa: 
         jam = law.packing_angle if law.packing_angle is not None else math.pi / 2
         assert cell.jamming_angle == pytest.approx(jam, abs=1e-12)
         angles.append(jam)
-    assert all(b >= a - 1e-12 for a, b in zip(angles, angles[1:], strict=False))
+    assert all(b >= a - 1e-12 for a, b in itertools.pairwise(angles))
     assert angles[2] == pytest.approx(angles[3], abs=1e-12)  # 2/2 twill and crowfoot
 
 
