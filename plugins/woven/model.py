@@ -640,7 +640,7 @@ class WovenFabric(FabricBase):
         cell = self._require_valid()
         lock_warp = math.degrees(cell.locking_angle("warp"))
         lock_weft = math.degrees(cell.locking_angle("weft"))
-        return {
+        return self._jamming_derived(cell) | {
             "areal_density_g_m2": cell.areal_density(),
             "areal_density_warp_g_m2": cell.areal_density("warp"),
             "areal_density_weft_g_m2": cell.areal_density("weft"),
@@ -659,6 +659,26 @@ class WovenFabric(FabricBase):
             "repeat_warp_tows": cell.weave.repeat_warp,
             "repeat_weft_tows": cell.weave.repeat_weft,
         }
+
+    @staticmethod
+    def _jamming_derived(cell: WovenUnitCell) -> dict[str, Any]:
+        """The one tow model's jamming per family (first tow type of each; docs/physics.md,
+        "Compaction and jamming: one tow"); nothing when a tow cannot exist (said elsewhere)."""
+        from preform.plugins.woven.sheared_cell import tow_families
+
+        try:
+            families = tow_families(cell)
+        except ValueError:
+            return {}
+        shares = cell.interlaced_shares()
+        out: dict[str, Any] = {}
+        for family in ("warp", "weft"):
+            name, tows = next((k, f) for k, f in families.items() if k[0] == family)
+            out[f"jamming_angle_{family}_deg"] = math.degrees(tows.jamming_angle)
+            out[f"jamming_fraction_{family}"] = tows.jamming_fraction
+            out[f"interlaced_share_{family}"] = shares[name]
+        out["jamming_angle_deg"] = min(out["jamming_angle_warp_deg"], out["jamming_angle_weft_deg"])
+        return out
 
     def reference_direction_deg(self) -> float:
         """+45° [deg from the warp]: the bisector of warp and weft."""

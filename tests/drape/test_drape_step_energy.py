@@ -88,7 +88,11 @@ def test_the_law_is_not_evaluated_per_cell_with_the_table(tmp_path):
     ctx.products["shear_law"] = counting
     ply = run_drape(ctx)["drape"]
     counted = int((ply.result.valid & ply.result.in_part).sum())
-    # the table's grid, the law's special angles and the 8× finer 3° before its jamming angle
-    nodes = math.ceil(90 / 0.25) + 3 + math.ceil(3 / (0.25 / 8))
+    # the table's grid, the law's special angles and kinks, and the 8× finer stretch before its
+    # jamming angle (3°, or from the locking angle where compaction starts, if longer)
+    jam, lock = exact.packing_angle, exact.locking_angle
+    fine_deg = max(3.0, math.degrees(jam - lock)) if jam is not None and lock is not None else 3.0
+    kinks = len(getattr(exact, "kink_angles", ()))
+    nodes = math.ceil(90 / 0.25) + 3 + kinks + (1 + kinks) * math.ceil(fine_deg / (0.25 / 8))
     assert counting.sizes and all(size <= nodes for size in counting.sizes)
     assert counted > nodes
