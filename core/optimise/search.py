@@ -67,6 +67,9 @@ from numpy.typing import NDArray
 from preform.drape.net import DrapeError, drape
 from preform.drape.result import DrapeResult
 from preform.drape.surface import Surface
+from preform.drape.verdict import law_range
+from preform.drape.wrinkling import WrinkleLimit, makeable, past_any
+from preform.drape.wrinkling import wrinkle_limits as limits_of
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
@@ -111,6 +114,22 @@ class DrapeEvaluation:
     draped: bool = True
     #: The net itself, when the caller asked to keep it.
     result: DrapeResult | None = field(default=None, repr=False, compare=False)
+    #: Of those, the cells past a limit where the fabric wrinkles (``preform.drape.wrinkling``:
+    #: jamming, stitch failure): their energy Σ W·s·d² [J] and draped area Σ s·area [m²].
+    wrinkle_energy_J: float = 0.0
+    wrinkle_area_m2: float = 0.0
+
+    @property
+    def wrinkle_energy_share(self) -> float:
+        """Share of the drape energy from cells past a wrinkle limit [-] (0 for no energy)."""
+        energy = self.drape_energy_J
+        return self.wrinkle_energy_J / energy if math.isfinite(energy) and energy > 0 else 0.0
+
+    @property
+    def wrinkle_area_share(self) -> float:
+        """Share of the covered part area past a wrinkle limit [-] (0 when nothing covered)."""
+        area = self.covered_area_m2
+        return self.wrinkle_area_m2 / area if area > 0 else 0.0
 
 
 class DrapeObjective:
@@ -122,7 +141,9 @@ class DrapeObjective:
     angle and, optionally, the orientation, the start point and the generators.
     ``region`` (a predicate on cell centroids (n, 3) [m]) restricts the part further.
     ``uncovered_shear_rad`` [rad]: price uncovered part area at W_miss = max W(±γ_m) [J/m²]
-    (module docstring; default None: no charge).
+    (module docstring; default None: no charge). ``wrinkle_limits``: where the fabric wrinkles
+    (``preform.drape.wrinkling``; default: the law's, through ``law_range``); each evaluation
+    carries the energy and area of its cells past them.
     """
 
     def __init__(
@@ -133,6 +154,7 @@ class DrapeObjective:
         region: CentroidPredicate | None = None,
         uncovered_shear_rad: float | None = None,
         energy_table_step_rad: float | None = DEFAULT_ENERGY_TABLE_STEP_RAD,
+        wrinkle_limits: Sequence[WrinkleLimit] | None = None,
         **drape_kwargs: Any,
     ) -> None:
         if "node_spacing_m" not in drape_kwargs or "ply" not in drape_kwargs:
@@ -155,6 +177,10 @@ class DrapeObjective:
         trim = drape_kwargs.get("trim")
         #: The part's own area [m²] when it knows it (a bare hemisphere: 2πR²), else None.
         self.part_area_m2: float | None = getattr(trim, "area_m2", None)
+        #: Where the fabric wrinkles instead of shearing (``preform.drape.wrinkling``).
+        self.wrinkle_limits: tuple[WrinkleLimit, ...] = (
+            limits_of(law_range(law)) if wrinkle_limits is None else tuple(wrinkle_limits)
+        )
         #: Number of drapes run so far.
         self.drapes = 0
         self._table = (
@@ -220,7 +246,8 @@ class DrapeObjective:
         start_xy_m: tuple[float, float] = (math.nan, math.nan),
         keep_result: bool = False,
     ) -> DrapeEvaluation:
-        """Energy [J], covered area [m²] and counted cells of a finished drape.
+        """Energy [J], covered area [m²] and counted cells of a finished drape, and the
+        energy and area of those past a wrinkle limit.
 
         Equal to :func:`preform.drape.fields.energy_field`'s total over the same cells, up to
         the energy table's interpolation (relative error ~1e-6 at the default step; pass
@@ -232,15 +259,19 @@ class DrapeObjective:
         share = result.part_weight[mask]
         density = self.energy_density(gamma)
         energy = float((density * share).sum() * result.node_spacing**2)
+        covered = result.area[mask] * share
+        past = past_any(self.wrinkle_limits, gamma)
         return DrapeEvaluation(
             generator_angle_rad=float(result.generator_angle),
             orientation_rad=float(result.orientation),
             start_xy_m=start_xy_m,
             drape_energy_J=energy,
-            covered_area_m2=float((result.area[mask] * share).sum()),
+            covered_area_m2=float(covered.sum()),
             cells_counted=int(np.count_nonzero(mask)),
             max_abs_shear_rad=float(np.abs(gamma).max()) if gamma.size else 0.0,
             result=result if keep_result else None,
+            wrinkle_energy_J=float((density * share)[past].sum() * result.node_spacing**2),
+            wrinkle_area_m2=float(covered[past].sum()),
         )
 
     def charged(self, evaluation: DrapeEvaluation, reference_area_m2: float) -> float:
@@ -270,6 +301,12 @@ class SearchPoint:
     #: Largest |γ| over the counted cells of this drape [rad] (to say where E(α) leaves the
     #: law's trustworthy range).
     max_abs_shear_rad: float = 0.0
+    #: Share of the covered part area, and of the drape energy, past a wrinkle limit [-], and
+    #: whether the drape can be made by that (``preform.drape.wrinkling.makeable``): an angle
+    #: that cannot is not feasible.
+    wrinkle_area_share: float = 0.0
+    wrinkle_energy_share: float = 0.0
+    makeable: bool = True
 
     @property
     def generator_angle_deg(self) -> float:
