@@ -31,6 +31,22 @@ W_miss = max(W(+γ_m), W(−γ_m)) per unit area, the same rule for every archit
 pipeline then reports the case ``partial``). ``min_coverage`` > 0 marks an α whose coverage
 falls below it infeasible instead: never chosen as the optimum (its energy is still reported).
 
+What can be made [D]
+--------------------
+Least energy is compared among drapes that can be made. A drape needing cells past jamming or
+stitch failure wrinkles there (``preform.drape.wrinkling``), and the law's energy for those
+cells is its continuation, not a physical energy; 4–7 % of a part sheared past jamming can
+carry 95 % of a satin's energy, so E(α) alone would compare continuations. The rule, the same
+for every architecture (it reads only the law's limits): an angle is **makeable** when its
+drape would be ``ok`` by the status rule, at most half its drape energy from cells past a
+wrinkle limit, and, when the scene sets ``search.max_wrinkle_area_share``, at most that share
+of its covered part area past one. An angle that is not makeable is infeasible, as one below
+``min_coverage`` is: sampled and reported (``SearchPoint.makeable``, its wrinkle shares), never
+chosen. When no scanned angle is makeable the search returns the scanned angle of least
+wrinkle (least energy share past the limits, then least area share, then least energy),
+unrefined, with ``AngleSearchResult.makeable`` False; the pipeline then makes the case
+``partial`` and says that no angle drapes without wrinkling.
+
 Refinement and symmetry
 -----------------------
 The scan grid is laid symmetrically about 90° (90° ± k·step, plus the range ends), so a
@@ -502,6 +518,7 @@ def search_generator_angle(
     max_drapes: int = DEFAULT_MAX_DRAPES,
     min_coverage: float = 0.0,
     part_area_m2: float | None = None,
+    max_wrinkle_area_share: float | None = None,
 ) -> AngleSearchResult:
     """The generator angle α [rad] of least comparable energy over ``angle_range_rad`` [rad].
 
@@ -509,7 +526,11 @@ def search_generator_angle(
     refinement around the best scan point with steps δ = step/2, step/4, ... down to
     ``tolerance_rad`` [rad] (module docstring), at most ``max_drapes`` drapes in all; finally a
     drape at the optimum itself. ``part_area_m2`` [m²] fixes the reference area (default: the
-    part's own area when it knows it, else the largest area covered in the scan); ``min_coverage`` [-] marks angles below it infeasible.
+    part's own area when it knows it, else the largest area covered in the scan);
+    ``min_coverage`` [-] marks angles below it infeasible, and so does an angle that cannot be
+    made (module docstring, "What can be made"): more than half its energy from cells past a
+    wrinkle limit or, when given, more than ``max_wrinkle_area_share`` [-] of its covered area
+    there.
     """
     lo, hi = (float(a) for a in angle_range_rad)
     if not (0.0 < lo < hi < math.pi):
@@ -544,6 +565,7 @@ def search_generator_angle(
         ev, stage = evaluated[alpha]
         energy = objective.charged(ev, reference)
         coverage = min(1.0, ev.covered_area_m2 / reference)
+        can = makeable(ev.wrinkle_energy_share, ev.wrinkle_area_share, max_wrinkle_area_share)
         return SearchPoint(
             alpha,
             energy,
@@ -551,9 +573,12 @@ def search_generator_angle(
             energy - ev.drape_energy_J,
             ev.covered_area_m2,
             coverage,
-            ev.draped and coverage >= min_coverage,
+            ev.draped and coverage >= min_coverage and can,
             stage,
             ev.max_abs_shear_rad,
+            ev.wrinkle_area_share,
+            ev.wrinkle_energy_share,
+            can,
         )
 
     def feasible_samples() -> tuple[FloatArray, FloatArray]:
