@@ -360,6 +360,9 @@ class AngleSearchResult:
     residual_rms_rel: float | None = None
     #: The knobs the search ran with (degrees, for the record).
     settings: dict[str, Any] = field(default_factory=dict)
+    #: False when no scanned angle can be made (module docstring, "What can be made"): the
+    #: optimum is then the scan's angle of least wrinkle, not of least energy.
+    makeable: bool = True
 
     @property
     def optimum_angle_deg(self) -> float:
@@ -393,6 +396,7 @@ class AngleSearchResult:
             "reference_area_m2": self.reference_area_m2,
             "uncovered_energy_density_J_per_m2": self.uncovered_energy_density_J_per_m2,
             "min_coverage": min((p.coverage for p in self.points), default=1.0),
+            "makeable": self.makeable,
             **self.settings,
         }
 
@@ -548,6 +552,19 @@ def search_generator_angle(
             f"the scan alone needs {needed:,} drapes, more than max_drapes = "
             f"{max_drapes}; widen the step or raise the budget"
         )
+    settings: dict[str, Any] = {
+        "range_deg": [math.degrees(lo), math.degrees(hi)],
+        "scan_step_deg": math.degrees(scan_step_rad),
+        "tolerance_deg": math.degrees(tolerance_rad),
+        "max_drapes": max_drapes,
+        "min_coverage_required": min_coverage,
+        "uncovered_shear_deg": (
+            None
+            if objective.uncovered_shear_rad is None
+            else math.degrees(objective.uncovered_shear_rad)
+        ),
+        "max_wrinkle_area_share": max_wrinkle_area_share,
+    }
     grid = scan_angles(lo, hi, scan_step_rad)
     evaluated: dict[float, tuple[DrapeEvaluation, str]] = {}
     for alpha in grid:
@@ -588,7 +605,9 @@ def search_generator_angle(
 
     xs, ys = feasible_samples()
     if xs.size == 0:
-        raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+        # No angle can be made: the one that wrinkles least, said so (module docstring).
+        scanned = [point(a) for a in sorted(evaluated)]
+        return _least_wrinkle(objective, scanned, first, reference, settings, min_coverage)
     best = int(np.argmin(ys))
     # Ties (a symmetric set-up) go to the angle nearest the middle of the range.
     ties = np.flatnonzero(ys <= ys[best] * (1 + 1e-12) + 1e-300)
@@ -639,7 +658,11 @@ def search_generator_angle(
         evaluated[estimate] = (objective.evaluate(estimate), "optimum")
         final = point(estimate)
     if not final.feasible:
-        raise SearchError("the refined optimum is not feasible; raise min_coverage's margin")
+        # The refined angle left the feasible (covered, makeable) angles, between a feasible
+        # sample and an infeasible one: the best feasible sample is the answer.
+        xs, ys = feasible_samples()
+        estimate = float(xs[int(np.argmin(ys))])
+        final = point(estimate)
     points = tuple(point(a) for a in sorted(evaluated))
     ok = [p for p in points if p.feasible and math.isfinite(p.energy_J)]
     uncertainty, roughness = optimum_uncertainty(
@@ -661,18 +684,51 @@ def search_generator_angle(
         uncovered_energy_density_J_per_m2=objective.uncovered_energy_density,
         uncertainty_rad=uncertainty,
         residual_rms_rel=roughness,
-        settings={
-            "range_deg": [math.degrees(lo), math.degrees(hi)],
-            "scan_step_deg": math.degrees(scan_step_rad),
-            "tolerance_deg": math.degrees(tolerance_rad),
-            "max_drapes": max_drapes,
-            "min_coverage_required": min_coverage,
-            "uncovered_shear_deg": (
-                None
-                if objective.uncovered_shear_rad is None
-                else math.degrees(objective.uncovered_shear_rad)
-            ),
-        },
+        settings=settings,
+    )
+
+
+def _least_wrinkle(
+    objective: DrapeObjective,
+    scanned: list[SearchPoint],
+    first: int,
+    reference: float,
+    settings: dict[str, Any],
+    min_coverage: float,
+) -> AngleSearchResult:
+    """The scan's angle of least wrinkle when none can be made (module docstring): least
+    energy share past the wrinkle limits, then least area share, then least energy, among the
+    angles that drape and reach ``min_coverage``; ties to the middle of the range. Not
+    refined: the wrinkle shares are no smooth objective, and the angle is a sampled one."""
+    candidates = [p for p in scanned if p.coverage >= min_coverage and math.isfinite(p.energy_J)]
+    if not candidates:
+        raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+    lo, hi = (math.radians(a) for a in settings["range_deg"])
+    best = min(
+        candidates,
+        # rounded, so that mirror angles of a symmetric set-up tie to the last bits
+        key=lambda p: (
+            round(p.wrinkle_energy_share, 12),
+            round(p.wrinkle_area_share, 12),
+            p.energy_J,
+            abs(p.generator_angle_rad - 0.5 * (lo + hi)),
+        ),
+    )
+    step = math.radians(settings["scan_step_deg"])
+    alpha = best.generator_angle_rad
+    return AngleSearchResult(
+        optimum_angle_rad=alpha,
+        optimum_energy_J=best.energy_J,
+        points=tuple(scanned),
+        drapes=objective.drapes - first,
+        bracket_rad=(max(lo, alpha - step), min(hi, alpha + step)),
+        vertex_std_rad=None,
+        at_boundary=min(alpha - lo, hi - alpha) < 0.5 * step,
+        noise_limited=False,
+        reference_area_m2=reference,
+        uncovered_energy_density_J_per_m2=objective.uncovered_energy_density,
+        settings=settings,
+        makeable=False,
     )
 
 
