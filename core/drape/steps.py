@@ -278,17 +278,19 @@ def judge_drape(
     ctx.summary.update(counts)
     for message in messages:
         ctx.warn(message)
-    judge_wrinkling(ctx, wrinkling(result, energy.energy_density, wrinkle_limits(limits)))
+    wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
+    judge_wrinkling(ctx, wrinkles, cover.covered_fraction)
 
 
-def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling) -> None:
+def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: float) -> None:
     """Record a drape's wrinkling (the ``wrinkling`` block and its table columns) and make the
     case partial when its energy comes mostly from cells past a wrinkle limit (the status
-    rule, ``preform.drape.wrinkling``)."""
+    rule, ``preform.drape.wrinkling``); ``covered_fraction`` [-] is the drape's coverage, which
+    a partial case records."""
     ctx.summary["wrinkling"] = wrinkles.summary()
     ctx.summary.update(wrinkles.columns())
     if wrinkles.mostly_wrinkle:
-        ctx.partial(wrinkles.reason(), ctx.summary.get("covered_fraction", 1.0))
+        ctx.partial(wrinkles.reason(), covered_fraction)
 
 
 def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:
