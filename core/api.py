@@ -415,7 +415,11 @@ class LeastEnergy(CaseRun):
                 }
                 for a in sorted(curve)
             ]
-        return pd.DataFrame(rows)
+            return pd.DataFrame(rows)
+        from preform.optimise.search_steps import TRADE_COLUMNS
+
+        # summary.json sorts each row's keys: the table's own column order
+        return pd.DataFrame(rows, columns=list(TRADE_COLUMNS))
 
     def to_pandas(self) -> pd.DataFrame:
         """:attr:`energy_vs_angle`; the cells of the optimum drape are ``.drape.to_pandas()``."""
