@@ -170,11 +170,7 @@ class WrinkleZone:
 
     def summary(self) -> dict[str, Any]:
         return {
-            "cells": self.cells,
-            "area_mm2": self.area_mm2,
-            "area_share": self.area_share,
-            "energy_J": self.energy_J,
-            "energy_share": self.energy_share,
+            **_amounts(self),
             "limit_positive_deg": _deg(self.limit.positive_rad),
             "limit_negative_deg": _deg(self.limit.negative_rad),
             "bbox_mm": None if self.bbox_mm is None else list(self.bbox_mm),
@@ -212,6 +208,12 @@ class WrinkleZone:
             + f"; up to {self.max_excess_deg:.3g}° past the limit (|γ| ≤ "
             f"{self.max_abs_shear_deg:.3g}°)"
         )
+
+
+def _amounts(found: WrinkleZone | Wrinkling) -> dict[str, Any]:
+    """How much: cells, area [mm²] and share, energy [J] and share."""
+    names = ("cells", "area_mm2", "area_share", "energy_J", "energy_share")
+    return {name: getattr(found, name) for name in names}
 
 
 def _deg(value: float | None) -> float | None:
@@ -252,9 +254,6 @@ class Wrinkling:
         """:func:`makeable` of this drape."""
         return makeable(self.energy_share, self.area_share, max_area_share)
 
-    def zone(self, cause: str) -> WrinkleZone | None:
-        return next((z for z in self.zones if z.limit.cause == cause), None)
-
     def reason(self) -> str:
         """Why the drape is not ``ok``, in words (empty when it is)."""
         if not self.mostly_wrinkle:
@@ -276,11 +275,7 @@ class Wrinkling:
     def summary(self) -> dict[str, Any]:
         """The ``wrinkling`` block of summary.json (mm², mm, degrees, J, shares 0..1)."""
         return {
-            "cells": self.cells,
-            "area_mm2": self.area_mm2,
-            "area_share": self.area_share,
-            "energy_J": self.energy_J,
-            "energy_share": self.energy_share,
+            **_amounts(self),
             "energy_share_max": WRINKLE_ENERGY_SHARE_MAX,
             "mostly_wrinkle": self.mostly_wrinkle,
             "total_energy_J": self.total_energy_J,
