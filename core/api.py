@@ -365,9 +365,12 @@ class Drape(CaseRun):
     def _headline(self) -> str:
         if "total_energy_J" not in self.summary:
             return super()._headline()
+        share = float(self.summary.get("wrinkle_energy_share") or 0.0)
+        # the energy says how much of it is the law's continuation where the fabric wrinkles
+        past = f" ({100 * share:.3g} % of it past jamming or stitch failure)" if share else ""
         return (
             f", generator angle {self.generator_angle_deg:.1f}°, energy "
-            f"{self.total_energy_J:.4g} J, max |shear| {self.max_abs_shear_deg:.1f}°"
+            f"{self.total_energy_J:.4g} J{past}, max |shear| {self.max_abs_shear_deg:.1f}°"
         )
 
 

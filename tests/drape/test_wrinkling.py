@@ -245,6 +245,7 @@ def test_the_api_drape_is_partial_past_half_and_ok_below(jam_library: Any) -> No
     assert f"{100 * share:.1f} % of its total energy" in reason
     assert f"{100 * block['area_share']:.1f} % of the part's draped area" in reason
     assert made.summary["wrinkle_energy_share"] == block["energy_share"]
+    assert f"({100 * block['energy_share']:.3g} % of it past jamming" in repr(made)
     # the cells table flags the same cells the block counts
     table = made.to_pandas()
     assert int(table["past_jamming"].sum()) == int(table["wrinkling"].sum()) == block["cells"]
