@@ -215,7 +215,8 @@ class CaseRun:
 
     @property
     def ok(self) -> bool:
-        """True when the result is complete and finite (status ``ok``)."""
+        """True when the result is complete, finite and physical (status ``ok``: not mostly
+        energy from cells past jamming or stitch failure)."""
         return self.case.status == "ok"
 
     @property
@@ -229,6 +230,14 @@ class CaseRun:
     @property
     def error(self) -> str | None:
         return self.case.error
+
+    @property
+    def wrinkling(self) -> dict[str, Any] | None:
+        """Where the drape would wrinkle (summary.json's ``wrinkling`` block: per cause the
+        cells, area [mm²] and share, energy share, patches [mm], excess [deg]); None when the
+        case has no drape."""
+        block = self.summary.get("wrinkling")
+        return dict(block) if isinstance(block, Mapping) else None
 
     def raise_for_status(self) -> None:
         """Raise ``preform.CaseFailure`` with the case's error when it has no result."""
@@ -356,9 +365,12 @@ class Drape(CaseRun):
     def _headline(self) -> str:
         if "total_energy_J" not in self.summary:
             return super()._headline()
+        share = float(self.summary.get("wrinkle_energy_share") or 0.0)
+        # the energy says how much of it is the law's continuation where the fabric wrinkles
+        past = f" ({100 * share:.3g} % of it past jamming or stitch failure)" if share else ""
         return (
             f", generator angle {self.generator_angle_deg:.1f}°, energy "
-            f"{self.total_energy_J:.4g} J, max |shear| {self.max_abs_shear_deg:.1f}°"
+            f"{self.total_energy_J:.4g} J{past}, max |shear| {self.max_abs_shear_deg:.1f}°"
         )
 
 
@@ -375,24 +387,42 @@ class LeastEnergy(CaseRun):
         return float(self.summary["optimum_energy_J"])
 
     @property
+    def makeable(self) -> bool:
+        """Whether some searched angle can be made (not mostly energy past jamming or stitch
+        failure; ``preform.optimise.search``, "What can be made"). When not, the optimum is
+        the angle of least wrinkle and the case is ``partial``."""
+        return bool(self.summary.get("search_makeable", True))
+
+    @property
     def energy_vs_angle(self) -> pd.DataFrame:
-        """Every drape of the search: ``generator_angle_deg``, ``energy_J``, ``coverage`` (share
-        of the part covered, 0..1) and ``feasible``, by angle."""
+        """The energy/wrinkle trade table, every drape of the search by angle:
+        ``generator_angle_deg``, ``energy_J`` (the comparable energy), ``drape_energy_J``,
+        ``coverage`` (share of the part covered, 0..1), ``wrinkle_area_share`` and
+        ``wrinkle_energy_share`` (shares of its covered area and of its energy past jamming or
+        stitch failure, 0..1), ``makeable``, ``feasible``, ``max_abs_shear_deg`` and
+        ``stage``."""
         import pandas as pd
 
         self._product("energy_vs_angle")
-        curve = dict((float(a), float(e)) for a, e in self.summary["energy_vs_angle"])
-        cover = dict(self.summary.get("energy_vs_angle_coverage") or [])
-        feasible = dict(self.summary.get("energy_vs_angle_feasible") or [])
-        angles = sorted(curve)
-        return pd.DataFrame(
-            {
-                "generator_angle_deg": angles,
-                "energy_J": [curve[a] for a in angles],
-                "coverage": [cover.get(a) for a in angles],
-                "feasible": [feasible.get(a) for a in angles],
-            }
-        )
+        rows = self.summary.get("energy_vs_angle_table")
+        if rows is None:  # a summary written before the trade table
+            curve = dict((float(a), float(e)) for a, e in self.summary["energy_vs_angle"])
+            cover = dict(self.summary.get("energy_vs_angle_coverage") or [])
+            feasible = dict(self.summary.get("energy_vs_angle_feasible") or [])
+            rows = [
+                {
+                    "generator_angle_deg": a,
+                    "energy_J": curve[a],
+                    "coverage": cover.get(a),
+                    "feasible": feasible.get(a),
+                }
+                for a in sorted(curve)
+            ]
+            return pd.DataFrame(rows)
+        from preform.optimise.search_steps import TRADE_COLUMNS
+
+        # summary.json sorts each row's keys: the table's own column order
+        return pd.DataFrame(rows, columns=list(TRADE_COLUMNS))
 
     def to_pandas(self) -> pd.DataFrame:
         """:attr:`energy_vs_angle`; the cells of the optimum drape are ``.drape.to_pandas()``."""

@@ -38,6 +38,7 @@ EXPORTERS: tuple[tuple[str, str], ...] = (
     ("fibre_pattern_png", "preform.drape.steps:EXPORTERS"),
     ("flat_pattern", "preform.drape.steps:EXPORTERS"),
     ("energy_plot_png", "preform.optimise.search_steps:EXPORTERS"),
+    ("energy_vs_angle_csv", "preform.optimise.search_steps:EXPORTERS"),
     ("library_energy_png", "preform.optimise.search_steps:EXPORTERS"),
     ("element_table", "preform.export.export_steps:EXPORTERS"),
     ("element_vtu", "preform.export.export_steps:EXPORTERS"),

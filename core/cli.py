@@ -565,8 +565,9 @@ def pipeline_run(
     LIBRARY paths, like --library, add to the bundled library and PREFORM_LIBRARY;
     --no-bundled uses only yours.
 
-    Each case ends with a status: ok (complete and finite), partial (finite, but covers less
-    than the scene asked: see covered_fraction and reasons), failed, timed_out, interrupted;
+    Each case ends with a status: ok (complete, finite and physical), partial (finite, but
+    covers less than the scene asked, or its energy comes mostly from cells past jamming or
+    stitch failure: see covered_fraction and reasons), failed, timed_out, interrupted;
     skipped counts cases kept from an earlier run with identical inputs. Exit code 0 when no
     case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
     summary (every case with its status, reasons, warnings and error) and nothing else.

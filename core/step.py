@@ -35,7 +35,8 @@ class CaseContext:
     summary: dict[str, Any] = field(default_factory=dict)
     #: Files written by the case, relative to case_dir.
     files: list[str] = field(default_factory=list)
-    #: Why the result covers less than the scene asked, in words; any makes the case
+    #: Why the result covers less than the scene asked (or is mostly no physical energy:
+    #: ``preform.drape.wrinkling``), in words; any makes the case
     #: ``partial`` (see ``preform.pipeline.status``). Set through :meth:`partial`.
     partial_reasons: list[str] = field(default_factory=list)
     #: What the user must know about a result that is still complete (cells past locking,
@@ -43,7 +44,8 @@ class CaseContext:
     warnings: list[str] = field(default_factory=list)
 
     def partial(self, reason: str, covered_fraction: float | None = None) -> None:
-        """Mark the result partial: it is finite but does not cover what the scene asked.
+        """Mark the result partial: it is finite but does not cover what the scene asked (or
+        its energy is mostly from where the fabric would wrinkle).
 
         ``covered_fraction`` (0..1) is the share of what was asked that the result covers
         (e.g. of the part's area); the smallest one given is recorded as ``covered_fraction``.

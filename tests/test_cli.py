@@ -123,7 +123,12 @@ def test_pipeline_run_without_arguments_is_the_papers_study(tmp_path, monkeypatc
     run("pipeline", "run")
     out = tmp_path / "preform-results"
     table = pd.read_csv(out / "results.csv")
-    assert (table["status"] == "ok").all()
+    # ok, or partial only by the status rule: mostly energy past jamming or stitch failure
+    # (issue 24), then saying so; "ok" never with more than half its energy there
+    mostly = table["wrinkle_energy_share"] > 0.5
+    assert (table.loc[~mostly, "status"] == "ok").all()
+    assert (table.loc[mostly, "status"] == "partial").all()
+    assert table.loc[mostly, "reasons"].str.contains("the drape would wrinkle").all()
     assert len(table) >= 10
     by_name = table.set_index("material")
     # symmetric woven laws: exactly 90 degrees; warp-knits: below 90, chain stitch furthest

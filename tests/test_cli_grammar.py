@@ -251,7 +251,7 @@ def test_pipeline_run_json_lists_each_case_with_its_status_in_words(workdir):
         workdir,
     )  # fmt: skip
     assert doc["exit_code"] == 0 and doc["counts"] == {"ok": 2}  # type: ignore[index]
-    assert doc["status_meaning"]["ok"] == "complete and finite"  # type: ignore[index]
+    assert doc["status_meaning"]["ok"] == "complete, finite and physical"  # type: ignore[index]
     for case in doc["cases"]:  # type: ignore[index]
         assert {"status", "reasons", "warnings", "error", "covered_fraction"} <= set(case)
 

@@ -107,7 +107,8 @@ def energy_field(
 
     W(γ) [J/m²] per cell from the signed shear (so an asymmetric law takes the branch the
     convention in ``preform.drape.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
-    locking angle (|γ| > locking) and past stitch failure (γ > failure, the parallel sense),
+    locking angle (|γ| > locking), past stitch failure (γ > failure, the parallel sense), past
+    jamming and past any wrinkle limit (``preform.drape.wrinkling``),
     and the total Σ W·s·d² [J] over the counted cells (d² the undeformed cell, s its share
     inside the part, ``result.part_weight``: 1 for a cell wholly inside).
 
@@ -160,12 +161,26 @@ def energy_field(
         past_failure,
     )
     total = float(weighted * result.node_spacing**2)
+    # Where the fabric would wrinkle instead (preform.drape.wrinkling): the same limits the
+    # verdicts read, so the cell flags and the wrinkling block count the same cells.
+    from preform.drape.verdict import law_range
+    from preform.drape.wrinkling import PAST_JAMMING, wrinkle_limits
+
+    wrinkling = np.zeros(counted.shape, dtype=bool)
+    past_jamming = np.zeros(counted.shape, dtype=bool)
+    for limit in wrinkle_limits(law_range(law)):
+        past = counted & limit.past(shear)
+        wrinkling |= past
+        if limit.cause == PAST_JAMMING:
+            past_jamming |= past
     return EnergyField(
         energy_density=density,
         thickness_ratio=thickness_ratio,
         past_locking=np.asarray(past_locking, dtype=bool),
         past_failure=np.asarray(past_failure, dtype=bool),
         total_energy=total,
+        past_jamming=past_jamming,
+        wrinkling=wrinkling,
     )
 
 

@@ -147,6 +147,11 @@ class EnergyField:
     #: Cells past the locking angle, and past the stitch-failure angle (ni−1, nj−1).
     past_locking: BoolArray
     past_failure: BoolArray
+    #: Cells past the law's jamming angle, and past any limit where the fabric wrinkles
+    #: (jamming, stitch failure, the law's own: ``preform.drape.wrinkling``) (ni−1, nj−1);
+    #: None when not computed.
+    past_jamming: BoolArray | None = field(default=None, kw_only=True)
+    wrinkling: BoolArray | None = field(default=None, kw_only=True)
     #: Total strain energy Σ W·A0 over the valid cells in the part [J] (A0 = d², undeformed).
     total_energy: float
     #: The model the thickness ratio comes from, in words, recorded with every export: this

@@ -7,7 +7,8 @@ The steps say what their result is worth (``preform.drape.verdict``, ``docs/resu
 non-finite energy or a net without a cell raises ``CaseFailure``; a net that does not cover the
 ply where it lies over the tool marks the case partial with the covered fraction and why; cells
 past the law's locking, stitch-failure or packing angle, or outside its data range, are counted
-and said in words. A ply too large for ``limits.max_nodes`` is refused before any array exists.
+and said in words; a drape whose energy comes mostly from cells past jamming or stitch failure
+(where the fabric would wrinkle) is partial too (``preform.drape.wrinkling``). A ply too large for ``limits.max_nodes`` is refused before any array exists.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from preform.drape.verdict import (
     law_range,
     shear_limit_warnings,
 )
+from preform.drape.wrinkling import Wrinkling, wrinkle_limits, wrinkling
 from preform.pipeline import fidelity
 from preform.pipeline.status import CaseFailure
 from preform.shear.surrogate import surrogate
@@ -244,8 +246,9 @@ def judge_drape(
     start_xy_m: tuple[float, float],
 ) -> None:
     """Say what a finished drape is worth through the case context (module docstring):
-    ``CaseFailure`` for no cell or a non-finite energy, ``partial`` for missing coverage,
-    warnings for cells past the law's limits."""
+    ``CaseFailure`` for no cell or a non-finite energy, ``partial`` for missing coverage or
+    for energy mostly from cells where the fabric would wrinkle, warnings for cells past the
+    law's limits."""
     if not result.valid.any():
         d_mm = result.node_spacing / MM
         raise CaseFailure(
@@ -270,10 +273,24 @@ def judge_drape(
     block = getattr(ctx.fabric, "shear_law", None)
     if block is None and hasattr(ctx.fabric, "default_shear_law"):
         block = ctx.fabric.default_shear_law()
-    messages, counts = shear_limit_warnings(result, energy, law_range(law, block))
+    limits = law_range(law, block)
+    messages, counts = shear_limit_warnings(result, energy, limits)
     ctx.summary.update(counts)
     for message in messages:
         ctx.warn(message)
+    wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
+    judge_wrinkling(ctx, wrinkles, cover.covered_fraction)
+
+
+def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: float) -> None:
+    """Record a drape's wrinkling (the ``wrinkling`` block and its table columns) and make the
+    case partial when its energy comes mostly from cells past a wrinkle limit (the status
+    rule, ``preform.drape.wrinkling``); ``covered_fraction`` [-] is the drape's coverage, which
+    a partial case records."""
+    ctx.summary["wrinkling"] = wrinkles.summary()
+    ctx.summary.update(wrinkles.columns())
+    if wrinkles.mostly_wrinkle:
+        ctx.partial(wrinkles.reason(), covered_fraction)
 
 
 def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:

@@ -60,6 +60,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from preform.drape.result import DrapeResult, EnergyField, NodeStatus
+from preform.drape.wrinkling import (
+    PAST_JAMMING,
+    PAST_STITCH_FAILURE,
+    WrinkleLimit,
+    wrinkle_limits,
+    wrinkling,
+)
 from preform.shear.law import ShearLaw
 
 BoolArray = NDArray[np.bool_]
@@ -497,6 +504,9 @@ class LawRange:
     data_positive: float | None = None
     data_negative: float | None = None
     beyond: str | None = None
+    #: Further limits past which the law's fabric wrinkles, as the law states them
+    #: (``wrinkle_limits``, ``preform.drape.wrinkling``).
+    further: tuple[WrinkleLimit, ...] = ()
 
 
 def _deg_or_none(value: Any) -> float | None:
@@ -509,7 +519,7 @@ def _deg_or_none(value: Any) -> float | None:
 
 def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
     """The limits of ``law``. Read from the law when it offers them (``packing_angle`` [rad],
-    ``data_range`` = (negative end, positive end) [rad]); else the data range is read from the
+    ``data_range`` = (negative end, positive end) [rad], ``wrinkle_limits``); else the data range is read from the
     fabric's shear-law block (``law_block``): the generic fields ``max_angle_deg`` (positive
     sense), ``max_angle_negative_deg`` / ``max_angle_perpendicular_deg`` (negative sense) of
     fitted laws, the last ``angle_deg`` / ``angle_negative_deg`` of tabulated ones, and
@@ -555,7 +565,20 @@ def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
         data_positive=positive,
         data_negative=negative,
         beyond=beyond,
+        further=_further_limits(law),
     )
+
+
+def _further_limits(law: ShearLaw) -> tuple[WrinkleLimit, ...]:
+    """The law's own ``wrinkle_limits`` (``preform.drape.wrinkling``), checked."""
+    stated = tuple(getattr(law, "wrinkle_limits", None) or ())
+    for limit in stated:
+        if not isinstance(limit, WrinkleLimit):
+            raise TypeError(
+                f"{type(law).__name__}.wrinkle_limits must hold "
+                f"preform.drape.wrinkling.WrinkleLimit, not {type(limit).__name__}"
+            )
+    return stated
 
 
 def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
@@ -579,8 +602,7 @@ def shear_limit_warnings(
     weight = np.asarray(result.part_weight, dtype=float)
     area = np.asarray(result.area, dtype=float) * weight
     density = np.asarray(energy.energy_density, dtype=float)
-    cell_energy = density * result.node_spacing**2 * weight
-    total = float(cell_energy[counted].sum())
+    total = float((density * result.node_spacing**2 * weight)[counted].sum())
     messages: list[str] = []
     counts: dict[str, Any] = {}
     if limits.locking is not None:
@@ -591,34 +613,20 @@ def shear_limit_warnings(
                 f"{_share(past, area, counted)} are sheared past the locking angle "
                 f"{math.degrees(limits.locking):.1f}°: the fabric would wrinkle there"
             )
-    if limits.failure is not None or limits.failure_negative is not None:
-        past = np.asarray(energy.past_failure, dtype=bool) & counted
-        counts["cells_past_failure"] = int(np.count_nonzero(past))
-        senses = []
-        if limits.failure is not None:
-            senses.append(f"{math.degrees(limits.failure):.1f}° (parallel to the stitch)")
-        if limits.failure_negative is not None:
-            senses.append(
-                f"−{math.degrees(limits.failure_negative):.1f}° (perpendicular to the stitch)"
-            )
-        where = " or ".join(senses)
-        if past.any():
+    # Jamming and stitch failure are where the fabric would wrinkle (preform.drape.wrinkling):
+    # said with their energy share, where and how far; the same numbers as the wrinkling block.
+    wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
+    for zone in wrinkles.zones:
+        cause = zone.limit.cause
+        key = {PAST_JAMMING: "cells_past_packing", PAST_STITCH_FAILURE: "cells_past_failure"}
+        counts[key.get(cause, f"cells_{cause}")] = zone.cells
+        if zone.cells:
+            past = counted & zone.limit.past(gamma)
             messages.append(
-                f"{_share(past, area, counted)} are sheared past the stitch-failure angle "
-                f"{where}: the stitching "
-                "would break there"
-            )
-    if limits.packing is not None:
-        past = counted & (np.abs(gamma) > limits.packing)
-        counts["cells_past_packing"] = int(np.count_nonzero(past))
-        if past.any():
-            share = float(cell_energy[past].sum()) / total if total > 0 else 0.0
-            messages.append(
-                f"{_share(past, area, counted)} are sheared past "
-                f"{math.degrees(limits.packing):.1f}°, where the law's fabric is jammed (tows "
-                "packed solid or at the jamming force; it would wrinkle): the law only holds "
-                f"its jammed torque there, so their energy, {100 * share:.3g} % of the total "
-                f"{total:.3g} J, is not a physical energy"
+                f"{_share(past, area, counted)} are sheared past {zone.limit.name}: "
+                f"{zone.limit.consequence}, so their energy, {100 * zone.energy_share:.3g} % "
+                f"of the total {total:.3g} J, is not a physical energy but the law's "
+                f"continuation past that limit ({zone.where()})"
             )
     beyond_pos = (
         counted & (gamma > limits.data_positive)

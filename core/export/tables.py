@@ -42,6 +42,8 @@ CELL_COLUMNS: tuple[str, ...] = (
     "energy_J_per_m2",
     "past_locking",
     "past_failure",
+    "past_jamming",
+    "wrinkling",
 )
 
 
@@ -62,8 +64,8 @@ def cell_columns(
 ) -> dict[str, Any]:
     """The columns of ``cells_table`` as numpy arrays (name -> values, in column order), one
     entry a cell: what ``cells_csv`` writes without building a DataFrame. ``status`` is a list
-    of CellStatus names; ``past_locking`` and ``past_failure`` are masked bool arrays (masked:
-    not known). Values as ``cells_table`` describes."""
+    of CellStatus names; ``past_locking``, ``past_failure``, ``past_jamming`` and ``wrinkling``
+    are masked bool arrays (masked: not known). Values as ``cells_table`` describes."""
     n1, n2 = np.asarray(result.cell_status).shape
     ii, jj = np.meshgrid(np.arange(n1), np.arange(n2), indexing="ij")
     valid = np.asarray(result.cell_status == CellStatus.VALID).ravel()
@@ -110,6 +112,8 @@ def cell_columns(
         "energy_J_per_m2": energy_density,
         "past_locking": flags(None if energy is None else energy.past_locking),
         "past_failure": flags(None if energy is None else energy.past_failure),
+        "past_jamming": flags(None if energy is None else energy.past_jamming),
+        "wrinkling": flags(None if energy is None else energy.wrinkling),
     }
     assert tuple(columns) == CELL_COLUMNS
     if preform is not None:
@@ -139,7 +143,9 @@ def cells_table(
     ``thickness_ratio`` (t/t0 [-]: a thickening, formerly ``thinning``; from the model
     ``energy.thickness_model`` names, ``preform.drape.thickness``), ``thickness_mm`` (t0 · t/t0
     [mm], NaN when t0 is unknown), ``energy_J_per_m2`` (strain energy density [J/m²]),
-    ``past_locking`` and ``past_failure`` (nullable bool), ``part_share`` (the share 0..1 of the
+    ``past_locking`` and ``past_failure`` (nullable bool), ``past_jamming`` (past the law's
+    jamming angle) and ``wrinkling`` (past any limit where the fabric wrinkles: jamming, stitch
+    failure, the law's own; ``preform.drape.wrinkling``) (nullable bool), ``part_share`` (the share 0..1 of the
     cell's undeformed area inside the part, 0 outside it: the total energy is
     Σ energy_J_per_m2 · part_share · d²). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
@@ -152,7 +158,7 @@ def cells_table(
 
     columns = cell_columns(result, energy, preform)
     columns["status"] = pd.array(columns["status"], dtype="string")
-    for name in ("past_locking", "past_failure"):
+    for name in ("past_locking", "past_failure", "past_jamming", "wrinkling"):
         flags = columns[name]
         columns[name] = pd.arrays.BooleanArray(np.ma.getdata(flags), np.ma.getmaskarray(flags))
     return pd.DataFrame(columns)

@@ -109,8 +109,9 @@ def write_drape_vtu(
     ``shear_deg`` (signed shear [deg]), ``fibre_u`` and ``fibre_v`` (unit 3-vectors),
     ``thickness_ratio`` (t/t0 [-], the model ``energy.thickness_model`` names), ``thickness_mm``
     (t0 · t/t0 [mm], when t0 is known), ``status`` (CellStatus code), ``in_part`` (0/1) and,
-    when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking`` and
-    ``past_failure`` (0/1); with ``preform`` (the ``permeability`` output)
+    when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking``,
+    ``past_failure``, ``past_jamming`` and ``wrinkling`` (0/1: past any limit where the fabric
+    wrinkles, ``preform.drape.wrinkling``); with ``preform`` (the ``permeability`` output)
     ``preform_thickness_mm`` [mm], ``fibre_volume_fraction`` [-], ``permeability_m2`` (the
     in-plane tensor in the file's axes, 9 components [m²]), ``permeability_k1_m2`` and
     ``permeability_k2_m2`` (principal values k1 ≥ k2 [m²]) and ``permeability_k1_dir`` (k1's unit
@@ -151,6 +152,10 @@ def write_drape_vtu(
         cell_data["thickness_ratio"] = np.asarray(energy.thickness_ratio, dtype=float)[ci, cj]
         cell_data["past_locking"] = np.asarray(energy.past_locking, dtype=np.int32)[ci, cj]
         cell_data["past_failure"] = np.asarray(energy.past_failure, dtype=np.int32)[ci, cj]
+        for name in ("past_jamming", "wrinkling"):
+            flags = getattr(energy, name)
+            if flags is not None:
+                cell_data[name] = np.asarray(flags, dtype=np.int32)[ci, cj]
         if energy.thickness_reference_mm is not None:
             t0 = energy.thickness_reference_mm
             cell_data["thickness_mm"] = t0 * cell_data["thickness_ratio"]

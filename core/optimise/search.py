@@ -31,6 +31,22 @@ W_miss = max(W(+γ_m), W(−γ_m)) per unit area, the same rule for every archit
 pipeline then reports the case ``partial``). ``min_coverage`` > 0 marks an α whose coverage
 falls below it infeasible instead: never chosen as the optimum (its energy is still reported).
 
+What can be made [D]
+--------------------
+Least energy is compared among drapes that can be made. A drape needing cells past jamming or
+stitch failure wrinkles there (``preform.drape.wrinkling``), and the law's energy for those
+cells is its continuation, not a physical energy; 4–7 % of a part sheared past jamming can
+carry 95 % of a satin's energy, so E(α) alone would compare continuations. The rule, the same
+for every architecture (it reads only the law's limits): an angle is **makeable** when its
+drape would be ``ok`` by the status rule, at most half its drape energy from cells past a
+wrinkle limit, and, when the scene sets ``search.max_wrinkle_area_share``, at most that share
+of its covered part area past one. An angle that is not makeable is infeasible, as one below
+``min_coverage`` is: sampled and reported (``SearchPoint.makeable``, its wrinkle shares), never
+chosen. When no scanned angle is makeable the search returns the scanned angle of least
+wrinkle (least energy share past the limits, then least area share, then least energy),
+unrefined, with ``AngleSearchResult.makeable`` False; the pipeline then makes the case
+``partial`` and says that no angle drapes without wrinkling.
+
 Refinement and symmetry
 -----------------------
 The scan grid is laid symmetrically about 90° (90° ± k·step, plus the range ends), so a
@@ -67,6 +83,9 @@ from numpy.typing import NDArray
 from preform.drape.net import DrapeError, drape
 from preform.drape.result import DrapeResult
 from preform.drape.surface import Surface
+from preform.drape.verdict import law_range
+from preform.drape.wrinkling import WrinkleLimit, makeable, past_any
+from preform.drape.wrinkling import wrinkle_limits as limits_of
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
@@ -111,6 +130,22 @@ class DrapeEvaluation:
     draped: bool = True
     #: The net itself, when the caller asked to keep it.
     result: DrapeResult | None = field(default=None, repr=False, compare=False)
+    #: Of those, the cells past a limit where the fabric wrinkles (``preform.drape.wrinkling``:
+    #: jamming, stitch failure): their energy Σ W·s·d² [J] and draped area Σ s·area [m²].
+    wrinkle_energy_J: float = 0.0
+    wrinkle_area_m2: float = 0.0
+
+    @property
+    def wrinkle_energy_share(self) -> float:
+        """Share of the drape energy from cells past a wrinkle limit [-] (0 for no energy)."""
+        energy = self.drape_energy_J
+        return self.wrinkle_energy_J / energy if math.isfinite(energy) and energy > 0 else 0.0
+
+    @property
+    def wrinkle_area_share(self) -> float:
+        """Share of the covered part area past a wrinkle limit [-] (0 when nothing covered)."""
+        area = self.covered_area_m2
+        return self.wrinkle_area_m2 / area if area > 0 else 0.0
 
 
 class DrapeObjective:
@@ -122,7 +157,9 @@ class DrapeObjective:
     angle and, optionally, the orientation, the start point and the generators.
     ``region`` (a predicate on cell centroids (n, 3) [m]) restricts the part further.
     ``uncovered_shear_rad`` [rad]: price uncovered part area at W_miss = max W(±γ_m) [J/m²]
-    (module docstring; default None: no charge).
+    (module docstring; default None: no charge). ``wrinkle_limits``: where the fabric wrinkles
+    (``preform.drape.wrinkling``; default: the law's, through ``law_range``); each evaluation
+    carries the energy and area of its cells past them.
     """
 
     def __init__(
@@ -133,6 +170,7 @@ class DrapeObjective:
         region: CentroidPredicate | None = None,
         uncovered_shear_rad: float | None = None,
         energy_table_step_rad: float | None = DEFAULT_ENERGY_TABLE_STEP_RAD,
+        wrinkle_limits: Sequence[WrinkleLimit] | None = None,
         **drape_kwargs: Any,
     ) -> None:
         if "node_spacing_m" not in drape_kwargs or "ply" not in drape_kwargs:
@@ -155,6 +193,10 @@ class DrapeObjective:
         trim = drape_kwargs.get("trim")
         #: The part's own area [m²] when it knows it (a bare hemisphere: 2πR²), else None.
         self.part_area_m2: float | None = getattr(trim, "area_m2", None)
+        #: Where the fabric wrinkles instead of shearing (``preform.drape.wrinkling``).
+        self.wrinkle_limits: tuple[WrinkleLimit, ...] = (
+            limits_of(law_range(law)) if wrinkle_limits is None else tuple(wrinkle_limits)
+        )
         #: Number of drapes run so far.
         self.drapes = 0
         self._table = (
@@ -220,7 +262,8 @@ class DrapeObjective:
         start_xy_m: tuple[float, float] = (math.nan, math.nan),
         keep_result: bool = False,
     ) -> DrapeEvaluation:
-        """Energy [J], covered area [m²] and counted cells of a finished drape.
+        """Energy [J], covered area [m²] and counted cells of a finished drape, and the
+        energy and area of those past a wrinkle limit.
 
         Equal to :func:`preform.drape.fields.energy_field`'s total over the same cells, up to
         the energy table's interpolation (relative error ~1e-6 at the default step; pass
@@ -232,15 +275,19 @@ class DrapeObjective:
         share = result.part_weight[mask]
         density = self.energy_density(gamma)
         energy = float((density * share).sum() * result.node_spacing**2)
+        covered = result.area[mask] * share
+        past = past_any(self.wrinkle_limits, gamma)
         return DrapeEvaluation(
             generator_angle_rad=float(result.generator_angle),
             orientation_rad=float(result.orientation),
             start_xy_m=start_xy_m,
             drape_energy_J=energy,
-            covered_area_m2=float((result.area[mask] * share).sum()),
+            covered_area_m2=float(covered.sum()),
             cells_counted=int(np.count_nonzero(mask)),
             max_abs_shear_rad=float(np.abs(gamma).max()) if gamma.size else 0.0,
             result=result if keep_result else None,
+            wrinkle_energy_J=float((density * share)[past].sum() * result.node_spacing**2),
+            wrinkle_area_m2=float(covered[past].sum()),
         )
 
     def charged(self, evaluation: DrapeEvaluation, reference_area_m2: float) -> float:
@@ -270,6 +317,12 @@ class SearchPoint:
     #: Largest |γ| over the counted cells of this drape [rad] (to say where E(α) leaves the
     #: law's trustworthy range).
     max_abs_shear_rad: float = 0.0
+    #: Share of the covered part area, and of the drape energy, past a wrinkle limit [-], and
+    #: whether the drape can be made by that (``preform.drape.wrinkling.makeable``): an angle
+    #: that cannot is not feasible.
+    wrinkle_area_share: float = 0.0
+    wrinkle_energy_share: float = 0.0
+    makeable: bool = True
 
     @property
     def generator_angle_deg(self) -> float:
@@ -307,6 +360,9 @@ class AngleSearchResult:
     residual_rms_rel: float | None = None
     #: The knobs the search ran with (degrees, for the record).
     settings: dict[str, Any] = field(default_factory=dict)
+    #: False when no scanned angle can be made (module docstring, "What can be made"): the
+    #: optimum is then the scan's angle of least wrinkle, not of least energy.
+    makeable: bool = True
 
     @property
     def optimum_angle_deg(self) -> float:
@@ -340,6 +396,7 @@ class AngleSearchResult:
             "reference_area_m2": self.reference_area_m2,
             "uncovered_energy_density_J_per_m2": self.uncovered_energy_density_J_per_m2,
             "min_coverage": min((p.coverage for p in self.points), default=1.0),
+            "makeable": self.makeable,
             **self.settings,
         }
 
@@ -465,6 +522,7 @@ def search_generator_angle(
     max_drapes: int = DEFAULT_MAX_DRAPES,
     min_coverage: float = 0.0,
     part_area_m2: float | None = None,
+    max_wrinkle_area_share: float | None = None,
 ) -> AngleSearchResult:
     """The generator angle α [rad] of least comparable energy over ``angle_range_rad`` [rad].
 
@@ -472,7 +530,11 @@ def search_generator_angle(
     refinement around the best scan point with steps δ = step/2, step/4, ... down to
     ``tolerance_rad`` [rad] (module docstring), at most ``max_drapes`` drapes in all; finally a
     drape at the optimum itself. ``part_area_m2`` [m²] fixes the reference area (default: the
-    part's own area when it knows it, else the largest area covered in the scan); ``min_coverage`` [-] marks angles below it infeasible.
+    part's own area when it knows it, else the largest area covered in the scan);
+    ``min_coverage`` [-] marks angles below it infeasible, and so does an angle that cannot be
+    made (module docstring, "What can be made"): more than half its energy from cells past a
+    wrinkle limit or, when given, more than ``max_wrinkle_area_share`` [-] of its covered area
+    there.
     """
     lo, hi = (float(a) for a in angle_range_rad)
     if not (0.0 < lo < hi < math.pi):
@@ -490,6 +552,19 @@ def search_generator_angle(
             f"the scan alone needs {needed:,} drapes, more than max_drapes = "
             f"{max_drapes}; widen the step or raise the budget"
         )
+    settings: dict[str, Any] = {
+        "range_deg": [math.degrees(lo), math.degrees(hi)],
+        "scan_step_deg": math.degrees(scan_step_rad),
+        "tolerance_deg": math.degrees(tolerance_rad),
+        "max_drapes": max_drapes,
+        "min_coverage_required": min_coverage,
+        "uncovered_shear_deg": (
+            None
+            if objective.uncovered_shear_rad is None
+            else math.degrees(objective.uncovered_shear_rad)
+        ),
+        "max_wrinkle_area_share": max_wrinkle_area_share,
+    }
     grid = scan_angles(lo, hi, scan_step_rad)
     evaluated: dict[float, tuple[DrapeEvaluation, str]] = {}
     for alpha in grid:
@@ -507,6 +582,7 @@ def search_generator_angle(
         ev, stage = evaluated[alpha]
         energy = objective.charged(ev, reference)
         coverage = min(1.0, ev.covered_area_m2 / reference)
+        can = makeable(ev.wrinkle_energy_share, ev.wrinkle_area_share, max_wrinkle_area_share)
         return SearchPoint(
             alpha,
             energy,
@@ -514,9 +590,12 @@ def search_generator_angle(
             energy - ev.drape_energy_J,
             ev.covered_area_m2,
             coverage,
-            ev.draped and coverage >= min_coverage,
+            ev.draped and coverage >= min_coverage and can,
             stage,
             ev.max_abs_shear_rad,
+            ev.wrinkle_area_share,
+            ev.wrinkle_energy_share,
+            can,
         )
 
     def feasible_samples() -> tuple[FloatArray, FloatArray]:
@@ -526,7 +605,9 @@ def search_generator_angle(
 
     xs, ys = feasible_samples()
     if xs.size == 0:
-        raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+        # No angle can be made: the one that wrinkles least, said so (module docstring).
+        scanned = [point(a) for a in sorted(evaluated)]
+        return _least_wrinkle(objective, scanned, first, reference, settings, min_coverage)
     best = int(np.argmin(ys))
     # Ties (a symmetric set-up) go to the angle nearest the middle of the range.
     ties = np.flatnonzero(ys <= ys[best] * (1 + 1e-12) + 1e-300)
@@ -577,7 +658,11 @@ def search_generator_angle(
         evaluated[estimate] = (objective.evaluate(estimate), "optimum")
         final = point(estimate)
     if not final.feasible:
-        raise SearchError("the refined optimum is not feasible; raise min_coverage's margin")
+        # The refined angle left the feasible (covered, makeable) angles, between a feasible
+        # sample and an infeasible one: the best feasible sample is the answer.
+        xs, ys = feasible_samples()
+        estimate = float(xs[int(np.argmin(ys))])
+        final = point(estimate)
     points = tuple(point(a) for a in sorted(evaluated))
     ok = [p for p in points if p.feasible and math.isfinite(p.energy_J)]
     uncertainty, roughness = optimum_uncertainty(
@@ -599,18 +684,51 @@ def search_generator_angle(
         uncovered_energy_density_J_per_m2=objective.uncovered_energy_density,
         uncertainty_rad=uncertainty,
         residual_rms_rel=roughness,
-        settings={
-            "range_deg": [math.degrees(lo), math.degrees(hi)],
-            "scan_step_deg": math.degrees(scan_step_rad),
-            "tolerance_deg": math.degrees(tolerance_rad),
-            "max_drapes": max_drapes,
-            "min_coverage_required": min_coverage,
-            "uncovered_shear_deg": (
-                None
-                if objective.uncovered_shear_rad is None
-                else math.degrees(objective.uncovered_shear_rad)
-            ),
-        },
+        settings=settings,
+    )
+
+
+def _least_wrinkle(
+    objective: DrapeObjective,
+    scanned: list[SearchPoint],
+    first: int,
+    reference: float,
+    settings: dict[str, Any],
+    min_coverage: float,
+) -> AngleSearchResult:
+    """The scan's angle of least wrinkle when none can be made (module docstring): least
+    energy share past the wrinkle limits, then least area share, then least energy, among the
+    angles that drape and reach ``min_coverage``; ties to the middle of the range. Not
+    refined: the wrinkle shares are no smooth objective, and the angle is a sampled one."""
+    candidates = [p for p in scanned if p.coverage >= min_coverage and math.isfinite(p.energy_J)]
+    if not candidates:
+        raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+    lo, hi = (math.radians(a) for a in settings["range_deg"])
+    best = min(
+        candidates,
+        # rounded, so that mirror angles of a symmetric set-up tie to the last bits
+        key=lambda p: (
+            round(p.wrinkle_energy_share, 12),
+            round(p.wrinkle_area_share, 12),
+            p.energy_J,
+            abs(p.generator_angle_rad - 0.5 * (lo + hi)),
+        ),
+    )
+    step = math.radians(settings["scan_step_deg"])
+    alpha = best.generator_angle_rad
+    return AngleSearchResult(
+        optimum_angle_rad=alpha,
+        optimum_energy_J=best.energy_J,
+        points=tuple(scanned),
+        drapes=objective.drapes - first,
+        bracket_rad=(max(lo, alpha - step), min(hi, alpha + step)),
+        vertex_std_rad=None,
+        at_boundary=min(alpha - lo, hi - alpha) < 0.5 * step,
+        noise_limited=False,
+        reference_area_m2=reference,
+        uncovered_energy_density_J_per_m2=objective.uncovered_energy_density,
+        settings=settings,
+        makeable=False,
     )
 
 

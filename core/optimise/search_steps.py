@@ -13,6 +13,8 @@ fidelity knobs (degrees, as in every scene; defaults in brackets):
       tolerance_deg: 1            # refinement stops below this step [1]
       max_drapes: 60              # budget of the angle search [60]
       min_coverage: 0.0           # angles covering less of the part are infeasible [0]
+      max_wrinkle_area_share: null   # angles with more of their area past jamming or
+                                  # stitch failure cannot be made [off: the status rule alone]
       part_area_mm2: null         # the part's area; default: the part's own (a bare
                                   # hemisphere: 2πR²), else the best coverage of the scan
       uncovered_shear_deg: null   # price bare part area at W(this shear) [off: no charge];
@@ -42,8 +44,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.steps import drape_settings, record_knobs, start_problem
+from preform.drape.steps import drape_settings, judge_wrinkling, record_knobs, start_problem
 from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
+from preform.drape.wrinkling import wrinkling
 from preform.optimise.search import (
     AngleSearchResult,
     DrapeObjective,
@@ -83,6 +86,7 @@ def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, An
         "max_drapes": knobs.max_drapes,
         "energy_table_step_deg": knobs.energy_table_step_deg,
         "min_coverage": section.min_coverage,
+        "max_wrinkle_area_share": section.max_wrinkle_area_share,
         "part_area_mm2": section.part_area_mm2,
         "uncovered_shear_deg": section.uncovered_shear_deg,
         "layout": section.layout,
@@ -137,6 +141,7 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
                 max_drapes=knobs["max_drapes"],
                 min_coverage=knobs["min_coverage"],
                 part_area_m2=None if area is None else float(area) * MM * MM,
+                max_wrinkle_area_share=knobs["max_wrinkle_area_share"],
             )
     except SearchError as error:
         broken = law_nonfinite_angle(objective.law)
@@ -160,6 +165,9 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     ctx.summary["energy_vs_angle_feasible"] = [
         [p.generator_angle_deg, p.feasible] for p in result.points
     ]
+    ctx.summary["energy_vs_angle_table"] = trade_table(result)
+    ctx.summary["search_makeable"] = result.makeable
+    ctx.summary["search_angles_not_makeable"] = sum(not p.makeable for p in result.points)
     ctx.summary["search_min_coverage"] = min(p.coverage for p in result.points)
     ctx.summary["search_reference_area_m2"] = result.reference_area_m2
     ctx.summary["search_uncovered_energy_density_J_per_m2"] = (
@@ -168,6 +176,44 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     ctx.summary["search_drapes"] = result.drapes
     ctx.summary["search_settings"] = {**knobs, **result.settings}
     return {"energy_vs_angle": AngleStudy(result, objective)}
+
+
+#: Columns of the energy/wrinkle trade table (``energy_vs_angle.csv``, the summary's
+#: ``energy_vs_angle_table``), one row per evaluated angle.
+TRADE_COLUMNS = (
+    "generator_angle_deg",
+    "energy_J",
+    "drape_energy_J",
+    "coverage",
+    "wrinkle_area_share",
+    "wrinkle_energy_share",
+    "makeable",
+    "feasible",
+    "max_abs_shear_deg",
+    "stage",
+)
+
+
+def trade_table(search: AngleSearchResult) -> list[dict[str, Any]]:
+    """The energy/wrinkle trade table of a search: per evaluated angle, by angle, its
+    comparable energy [J], drape energy [J], coverage [-], the shares of its covered area and
+    of its energy past a wrinkle limit [-], whether it can be made and is feasible, its
+    largest |γ| [deg] and the search stage that drew it."""
+    return [
+        {
+            "generator_angle_deg": p.generator_angle_deg,
+            "energy_J": p.energy_J,
+            "drape_energy_J": p.drape_energy_J,
+            "coverage": p.coverage,
+            "wrinkle_area_share": p.wrinkle_area_share,
+            "wrinkle_energy_share": p.wrinkle_energy_share,
+            "makeable": p.makeable,
+            "feasible": p.feasible,
+            "max_abs_shear_deg": math.degrees(p.max_abs_shear_rad),
+            "stage": p.stage,
+        }
+        for p in search.points
+    ]
 
 
 def _angles_text(angles_deg: list[float]) -> str:
@@ -250,6 +296,14 @@ def _judge_optimum_drape(
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
         ctx.warn(cover.fold_warning())
+    # the status rule on wrinkling, as the drape step gives it (preform.drape.wrinkling)
+    result = evaluation.result
+    counted = objective.counted(result)
+    density = np.zeros(counted.shape)
+    density[counted] = objective.energy_density(result.shear[counted])
+    judge_wrinkling(
+        ctx, wrinkling(result, density, objective.wrinkle_limits), cover.covered_fraction
+    )
 
 
 def run_optimum(ctx: CaseContext) -> dict[str, Any]:
@@ -282,6 +336,9 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
         search.points, key=lambda p: abs(p.generator_angle_rad - search.optimum_angle_rad)
     )
     uncovered = max(0.0, search.reference_area_m2 - at_optimum.covered_area_m2)
+    ctx.summary["optimum_makeable"] = at_optimum.makeable
+    ctx.summary["optimum_wrinkle_area_share"] = at_optimum.wrinkle_area_share
+    ctx.summary["optimum_wrinkle_energy_share"] = at_optimum.wrinkle_energy_share
     ctx.summary["optimum_part_area_m2"] = search.reference_area_m2
     ctx.summary["optimum_uncovered_part_area_m2"] = uncovered
     if objective.uncovered_energy_density > 0:
@@ -294,6 +351,8 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
             f"energy alone; at the optimum {uncovered * 1e6:.4g} mm² of the part is bare",
             min(1.0, at_optimum.coverage),
         )
+    if not search.makeable:
+        ctx.partial(_no_makeable_angle(search, at_optimum), min(1.0, at_optimum.coverage))
     layout = knobs["layout"]
     if layout:
         _run_layout(ctx, objective, search, layout, optimum)
@@ -310,6 +369,24 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
         # Otherwise the drape step drapes at the optimum and judges that same net itself.
         _judge_optimum_drape(ctx, objective, optimum)
     return {"optimum": optimum}
+
+
+def _no_makeable_angle(search: AngleSearchResult, at: Any) -> str:
+    """Why a search that found no makeable angle is partial, in words."""
+    lo, hi = search.settings.get("range_deg", [math.nan, math.nan])
+    cap = search.settings.get("max_wrinkle_area_share")
+    rule = "more than half its energy comes from cells past jamming or stitch failure" + (
+        f", or more than {100 * cap:.3g} % of its area lies there (search.max_wrinkle_area_share)"
+        if cap is not None
+        else ""
+    )
+    return (
+        f"no generator angle in [{lo:.4g}°, {hi:.4g}°] drapes without wrinkling: at every "
+        f"scanned angle {rule}; the search returns the angle of least wrinkle, "
+        f"{search.optimum_angle_deg:.4g}°, where {100 * at.wrinkle_energy_share:.3g} % of the "
+        f"energy comes from {100 * at.wrinkle_area_share:.3g} % of the covered area past those "
+        "limits (not the angle of least energy)"
+    )
 
 
 def _run_layout(
@@ -456,6 +533,19 @@ def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:
     return {"energy_plot_png": "energy_vs_angle.png"}
 
 
+def write_energy_vs_angle_csv(ctx: CaseContext) -> dict[str, Any]:
+    """energy_vs_angle.csv: the energy/wrinkle trade table (:func:`trade_table`)."""
+    from preform.export.csv_columns import write_csv_columns
+
+    study: AngleStudy = ctx.products["energy_vs_angle"]
+    rows = trade_table(study.search)
+    write_csv_columns(
+        {name: [row[name] for row in rows] for name in TRADE_COLUMNS},
+        ctx.case_dir / "energy_vs_angle.csv",
+    )
+    return {"energy_vs_angle_csv": "energy_vs_angle.csv"}
+
+
 def run_library_energy_png(ctx: CaseContext) -> dict[str, Any]:
     """Nothing per case: the figure is drawn once per scene, by ``energy_vs_angle_library``,
     from the curves the case summaries hold (``energy_vs_angle``, which this step requires)."""
@@ -524,6 +614,16 @@ EXPORTERS = [
         "1",
         write_energy_plot_png,
         "energy_vs_angle.png per case (one fabric's E(α), its optimum marked)",
+        writes_files=True,
+    ),
+    Step(
+        "energy_vs_angle_csv",
+        ("energy_vs_angle_csv",),
+        ("energy_vs_angle",),
+        "1",
+        write_energy_vs_angle_csv,
+        "energy_vs_angle.csv per case: the energy/wrinkle trade table (energy, coverage, wrinkle "
+        "area and energy shares, makeable) at every searched angle",
         writes_files=True,
     ),
     Step(

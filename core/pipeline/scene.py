@@ -178,6 +178,14 @@ class SearchSection(BaseModel):
         "part's own area when known, e.g. 2πR² for a bare hemisphere, else the largest area "
         "any scanned drape covers).",
     )
+    max_wrinkle_area_share: float | None = Field(
+        default=None,
+        ge=0,
+        le=1,
+        description="An angle whose drape has more than this share of its covered part area "
+        "past jamming or stitch failure (where the fabric wrinkles) cannot be made, besides "
+        "more than half its energy there (the status rule). Default: the status rule alone.",
+    )
     uncovered_shear_deg: float | None = Field(
         default=None,
         gt=0,

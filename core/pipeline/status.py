@@ -33,9 +33,9 @@ class CaseStatus(StrEnum):
 
 #: One line per status, for the docs, ``--help`` and the end-of-run legend.
 MEANING: dict[CaseStatus, str] = {
-    CaseStatus.OK: "complete and finite",
-    CaseStatus.PARTIAL: "finite, but covers less than the scene asked (see covered_fraction "
-    "and reasons)",
+    CaseStatus.OK: "complete, finite and physical",
+    CaseStatus.PARTIAL: "finite, but covers less than the scene asked, or its energy comes "
+    "mostly from where the fabric would wrinkle (see covered_fraction and reasons)",
     CaseStatus.FAILED: "no result: see the error",
     CaseStatus.TIMED_OUT: "stopped at the case time limit",
     CaseStatus.INTERRUPTED: "the run was stopped before this case finished; rerun to redo it",

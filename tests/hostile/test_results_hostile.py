@@ -329,7 +329,12 @@ def test_the_hat_mould_is_partial_with_its_covered_fraction(
 ) -> None:
     path = write(tmp_path / "hat.yaml", HAT.format(spacing=spacing, alpha=alpha))
     ctx = run(context(sandbox, bundled, "plain-weave-150", path))
-    (reason,) = ctx.partial_reasons
+    (reason,) = [r for r in ctx.partial_reasons if r.startswith("the net covers")]
+    # the cells sheared towards ±90° behind the block's rounded corners are past jamming: when
+    # they carry most of the energy, that is said as a second reason (issue 24)
+    wrinkle = [r for r in ctx.partial_reasons if r != reason]
+    assert len(wrinkle) == int(ctx.summary["wrinkling"]["mostly_wrinkle"])
+    assert all(r.startswith("the drape would wrinkle") for r in wrinkle)
     result = ctx.products["drape"].result
 
     # Independent count: the mould's plan is the 300 × 200 mm plate; a node's undeformed plan
@@ -567,7 +572,9 @@ def test_cells_past_locking_are_counted(
         f"past the locking angle {math.degrees(law.locking_angle):.1f}°: the fabric would "
         "wrinkle there"
     )
-    assert ctx.partial_reasons == []
+    # locking alone never makes a case partial; mostly energy past jamming does (issue 24)
+    wrinkle = ["the drape would wrinkle"] if ctx.summary["wrinkling"]["mostly_wrinkle"] else []
+    assert [r[: len("the drape would wrinkle")] for r in ctx.partial_reasons] == wrinkle
 
 
 def test_cells_past_stitch_failure_are_counted(

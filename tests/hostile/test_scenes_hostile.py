@@ -617,6 +617,18 @@ SECTION_CASES = {
         (5, 10, "search.generator_angle_deg"),
         "got [30°, 200°]",
     ),
+    "wrinkle area share above one": (
+        "",
+        "search: {max_wrinkle_area_share: 1.5}",
+        (5, 34, "search.max_wrinkle_area_share"),
+        "less than or equal to 1",
+    ),
+    "wrinkle area share as a word": (
+        "",
+        "search: {max_wrinkle_area_share: some}",
+        (5, 34, "search.max_wrinkle_area_share"),
+        "number",
+    ),
     "shear step of 1e-9°": (
         "",
         "shear: {angles_deg: {min: 0, max: 60, step: 1e-9}}",
