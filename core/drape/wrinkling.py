@@ -100,8 +100,8 @@ def wrinkle_limits(limits: LawRange) -> tuple[WrinkleLimit, ...]:
                 PAST_JAMMING,
                 limits.packing,
                 limits.packing,
-                f"{deg:.1f}°, where the law's fabric is jammed (tows packed solid or at the "
-                "jamming force)",
+                f"{deg:.1f}°, where the law's fabric is jammed (its tows at the weave's "
+                "jamming fraction)",
                 "it would wrinkle there, and the law only holds its jammed torque",
             )
         )
