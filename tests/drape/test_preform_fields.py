@@ -108,7 +108,9 @@ def test_cells_take_thickness_and_vf_from_the_sheared_cell(draped) -> None:  # t
         assert row["fibre_volume_fraction"] == pytest.approx(cell.fibre_volume_fraction, rel=2e-3)
         assert row["permeability_k1_m2"] >= row["permeability_k2_m2"] > 0
     summary = draped.summary
-    assert summary["fibre_volume_fraction_max"] <= 0.472 + 1e-3  # the cell's plateau
+    # the cell's plateau: past jamming the fabric fraction stays at its value at the jam
+    plateau = fabric.sheared_cell(fabric.sheared_cell(0.0).jamming_angle).fibre_volume_fraction
+    assert summary["fibre_volume_fraction_max"] <= plateau + 1e-3
     assert summary["fibre_volume_fraction_min"] >= 0.366 - 1e-3  # the unsheared cell's
     assert (
         summary["preform_thickness_mm_max"]
