@@ -1,13 +1,12 @@
 """``preform calibrate``: fit a fabric's mechanistic-law constants to a measured shear test.
 
-The work is ``preform.shear.calibrate``; this module reads the command line, the test file and
-the library, and writes what was asked (YAML library file, figure, JSON).
+The work is ``preform.calibrate`` (``preform.shear.calibrate``); this module reads the command
+line and the library, and writes what was asked (YAML library file, figure, JSON).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import click
 
@@ -19,58 +18,6 @@ from preform.commands.options import (
     library_options,
     load_library_or_exit,
 )
-
-
-def calibrate_fabric(
-    library: Any,
-    name: str,
-    data: str | Path,
-    test: str,
-    *,
-    side_mm: float | None = None,
-    fabric_side_mm: float | None = None,
-    height_mm: float | None = None,
-    width_mm: float | None = None,
-    constants: Any = None,
-    max_angle_deg: float | None = None,
-) -> Any:
-    """Read ``data`` (a test CSV), normalise it and calibrate fabric ``name`` of ``library``;
-    a ``preform.shear.calibrate.Calibration``. ValueError (CalibrationError) for bad input."""
-    from preform.shear.calibrate import calibrate_law, file_sha256, resolve_constants
-    from preform.shear.commands import normalise_rows, read_test_csv
-
-    fabric = library.fabric(name)
-    rows = read_test_csv(data)
-    angle, force = normalise_rows(
-        rows,
-        test,
-        side_mm=side_mm,
-        height_mm=height_mm,
-        width_mm=width_mm,
-        fabric_side_mm=fabric_side_mm,
-    )
-    specimen = {
-        key: value
-        for key, value in (
-            ("side", side_mm),
-            ("fabric side", fabric_side_mm),
-            ("height", height_mm),
-            ("width", width_mm),
-        )
-        if value is not None
-    }
-    return calibrate_law(
-        fabric,
-        library.registry,
-        angle,
-        force,
-        resolve_constants(fabric, constants),
-        max_angle_deg=max_angle_deg,
-        test=test,
-        specimen=specimen,
-        data_file=str(data),
-        data_sha256=file_sha256(data),
-    )
 
 
 @click.command("calibrate")
@@ -141,22 +88,23 @@ def calibrate_command(
     correlation; --out writes the calibrated entry as a library file with its provenance,
     --plot the data against the law; --json prints the report.
     """
+    from preform.api import calibrate
     from preform.shear.calibrate import CalibrationError, transfers
 
     lib = load_library_or_exit(libraries, bundled=not no_bundled)
     fabric_or_exit(lib, name)
     try:
-        calibration = calibrate_fabric(
-            lib,
+        calibration = calibrate(
             name,
             data,
-            test,
+            test=test,
             side_mm=side_mm,
             fabric_side_mm=fabric_side_mm,
             height_mm=height_mm,
             width_mm=width_mm,
             constants=list(params) or None,
             max_angle_deg=max_angle_deg,
+            library=lib,
         )
         carried = transfers(calibration, lib, apply_to) if apply_to else []
     except (CalibrationError, ValueError) as error:

@@ -399,7 +399,7 @@ def calibration_figure(
         ax.text(
             0.99,
             0.02,
-            f"{', '.join(clipped)}: above {top:.3g} N/mm, off the scale",
+            f"{len(clipped)} curve(s) rise above {top:.3g} N/mm, off the scale",
             transform=ax.transAxes,
             ha="right",
             va="bottom",
@@ -411,7 +411,7 @@ def calibration_figure(
     ax.set_ylabel("shear force per unit length F$_s$/L [N/mm]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small", loc="upper left")
-    ax.set_title(title or "Shear law calibrated on test data", fontsize="medium")
+    ax.set_title(title or "Shear law calibrated on test data", fontsize="small")
     fig.tight_layout()
     save_figure(fig, path)
     return fig

@@ -208,7 +208,9 @@ def resolve_constants(
             (p, None) for p in DEFAULT_CONSTANTS[law]
         ]
     elif isinstance(specs, Mapping):
-        pairs = [(str(k), None if v is None else (float(v[0]), float(v[1]))) for k, v in specs.items()]
+        pairs = [
+            (str(k), None if v is None else (float(v[0]), float(v[1]))) for k, v in specs.items()
+        ]
     else:
         pairs = [parse_constant_spec(s) for s in specs]
     if not pairs:
@@ -286,9 +288,7 @@ class TrialLaws:
             set_path(entry, constant.path, float(value))
         return entry
 
-    def fabric_with(
-        self, constants: Sequence[Constant], values: Sequence[float]
-    ) -> FabricBase:
+    def fabric_with(self, constants: Sequence[Constant], values: Sequence[float]) -> FabricBase:
         return validated_fabric(self.entry_with(constants, values), self.registry)
 
     def law(self, constants: Sequence[Constant], values: Sequence[float]) -> Any:
@@ -466,6 +466,10 @@ class Calibration:
         lines += self.notes
         return lines
 
+    def _short(self, q: Quality) -> str:
+        where = "up to locking" if self.locking_angle_deg is not None else "over the fit range"
+        return f"{100 * q.relative_rms:.0f} % rms {where}"
+
     def _locking_words(self) -> str:
         if self.locking_angle_deg is None:
             return f"no locking angle in the law: over the fit range, {self.up_to_locking.words()}"
@@ -491,6 +495,11 @@ class Calibration:
         law = build_shear_law(validated_fabric(entry, self.registry), self.registry)
         return force_per_length_N_per_mm(law, np.radians(angle_deg))
 
+    def apply_to(self, pattern: str, library: Library) -> list[Transfer]:
+        """The calibrated constants carried to ``library``'s fabrics matching ``pattern`` (a
+        glob) that are built from the same tows; see :func:`transfer`."""
+        return transfers(self, library, pattern)
+
     def plot(self, path: str | Path, title: str | None = None) -> Any:
         """The data against the calibrated law (and the law before calibration), F_s/L [N/mm]
         over γ [deg]; the locking angle and fit range marked. Returns the saved figure."""
@@ -503,11 +512,11 @@ class Calibration:
         return calibration_figure(
             data=(self.angle_deg, self.force_N_per_mm),
             curves=[
-                (grid, self.model_curve(grid), f"calibrated: {self.up_to_locking.words()}"),
+                (grid, self.model_curve(grid), f"calibrated: {self._short(self.up_to_locking)}"),
                 (
                     grid,
                     self.model_curve(grid, calibrated=False),
-                    f"before: {self.start_up_to_locking.words()}",
+                    f"before: {self._short(self.start_up_to_locking)}",
                 ),
             ],
             path=path,
@@ -604,9 +613,7 @@ def calibrate_law(
     start_law = build_shear_law(fabric, registry)
     locking = getattr(law, "locking_angle", None)
     locking_deg = None if locking is None else math.degrees(locking)
-    fit_quality = quality(
-        force_per_length_N_per_mm(law, gamma), data, angle[chosen]
-    )
+    fit_quality = quality(force_per_length_N_per_mm(law, gamma), data, angle[chosen])
     upto = angle <= (top if locking_deg is None else locking_deg)
     g_lock = np.radians(angle[upto])
 
@@ -669,7 +676,11 @@ def _covariance(
     for k, kept in enumerate(keep):
         if not kept:
             undetermined |= np.abs(vt[k]) > 1e-6
-    inv = (vt.T[:, keep] / singular[keep] ** 2) @ vt[keep] if np.any(keep) else np.zeros((count, count))
+    inv = (
+        (vt.T[:, keep] / singular[keep] ** 2) @ vt[keep]
+        if np.any(keep)
+        else np.zeros((count, count))
+    )
     cov = s2 * inv
     sigma: list[float | None] = [
         None if undetermined[i] else float(math.sqrt(max(cov[i, i], 0.0))) for i in range(count)
