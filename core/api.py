@@ -645,6 +645,7 @@ def calibrate(
     width_mm: float | None = None,
     constants: Sequence[str] | Mapping[str, tuple[float, float] | None] | None = None,
     max_angle_deg: float | None = None,
+    weights: str = "relative",
     library: Library | None = None,
 ) -> Calibration:
     """Fit constants of ``fabric``'s mechanistic law to a measured shear test, as
@@ -656,7 +657,8 @@ def calibrate(
     paths into the fabric's entry (``"shear_law.pretension_N"``, ``"threads[0].failure_strain"``,
     optionally ``"PATH=LO:HI"``) or a mapping path → (low, high) | None, in the entry's units;
     default: the law's defaults (``preform.shear.calibrate.DEFAULT_CONSTANTS``). Points up to
-    ``max_angle_deg`` [deg] (default all) are fitted.
+    ``max_angle_deg`` [deg] (default all) are fitted, with ``weights`` ``"relative"`` (residuals
+    over the force, floored at 5 % of its peak) or ``"absolute"`` (in N/mm).
 
     Returns a ``Calibration``: ``constants`` (value, linearised standard uncertainty),
     ``correlation``, ``fit`` and ``up_to_locking`` quality, ``entry`` (the calibrated library
@@ -714,4 +716,5 @@ def calibrate(
         specimen=specimen,
         data_file=data_file,
         data_sha256=digest,
+        weights=weights,
     )

@@ -44,6 +44,14 @@ from preform.commands.options import (
     help="Fit the points up to this shear angle [deg] (default: all).",
 )
 @click.option(
+    "--weights",
+    type=click.Choice(["relative", "absolute"]),
+    default="relative",
+    show_default=True,
+    help="Residuals relative to the measured force (floored at 5 % of its peak: scatter that "
+    "grows with force) or in N/mm (minimises the reported rms).",
+)
+@click.option(
     "--out",
     type=click.Path(dir_okay=False),
     metavar="FILE",
@@ -75,6 +83,7 @@ def calibrate_command(
     width_mm: float | None,
     params: tuple[str, ...],
     max_angle_deg: float | None,
+    weights: str,
     out: str | None,
     plot: str | None,
     apply_to: str | None,
@@ -104,6 +113,7 @@ def calibrate_command(
             width_mm=width_mm,
             constants=list(params) or None,
             max_angle_deg=max_angle_deg,
+            weights=weights,
             library=lib,
         )
         carried = transfers(calibration, lib, apply_to) if apply_to else []
