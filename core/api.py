@@ -676,8 +676,8 @@ def calibrate(
     lib = library or load_library()
     chosen = _fabric(fabric, lib)
     if isinstance(data, str | os.PathLike):
-        rows = read_test_csv(data)
-        data_file, digest = str(data), file_sha256(data)
+        rows = read_test_csv(Path(data))
+        data_file, digest = str(data), file_sha256(Path(data))
     else:
         displacement, force = data
         if len(displacement) != len(force):

@@ -18,16 +18,13 @@ from preform.commands.options import (
     library_options,
     load_library_or_exit,
 )
+from preform.shear.commands import specimen_options
 
 
 @click.command("calibrate")
 @click.argument("name", metavar="FABRIC")
 @click.argument("data", type=click.Path(exists=True, dir_okay=False))
-@click.option("--test", type=click.Choice(["picture-frame", "bias-extension"]), required=True)
-@click.option("--side-mm", type=float, help="Picture-frame side, pin to pin [mm].")
-@click.option("--fabric-side-mm", type=float, help="Cruciform specimen: sheared fabric side [mm].")
-@click.option("--height-mm", type=float, help="Bias-extension specimen height H [mm].")
-@click.option("--width-mm", type=float, help="Bias-extension specimen width W [mm].")
+@specimen_options
 @click.option(
     "--param",
     "params",

@@ -792,10 +792,10 @@ def transfer(calibration: Calibration, target: FabricBase, registry: Registry) -
     carried = []
     for constant in calibration.constants:
         path = parse_path(constant.name)
-        for where, other in rename.items():
+        for where, target_tow in rename.items():
             prefix = parse_path(where)
-            if path[: len(prefix)] == prefix and other is not None:
-                path = (*parse_path(other), *path[len(prefix) :])
+            if path[: len(prefix)] == prefix and target_tow is not None:
+                path = (*parse_path(target_tow), *path[len(prefix) :])
                 break
         try:
             get_path(entry, path[:-1])

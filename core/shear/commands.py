@@ -431,13 +431,28 @@ def plot_fit(report: FitReport, path: str | Path, title: str | None = None) -> N
     fit_figure(curves, path, title=title)
 
 
+def specimen_options(func: Any) -> Any:
+    """``--test`` and the specimen's sizes, as ``fit`` and ``calibrate`` take them."""
+    for option in reversed(
+        (
+            click.option(
+                "--test", type=click.Choice(["picture-frame", "bias-extension"]), required=True
+            ),
+            click.option("--side-mm", type=float, help="Picture-frame side, pin to pin [mm]."),
+            click.option(
+                "--fabric-side-mm", type=float, help="Cruciform specimen: sheared fabric side [mm]."
+            ),
+            click.option("--height-mm", type=float, help="Bias-extension specimen height H [mm]."),
+            click.option("--width-mm", type=float, help="Bias-extension specimen width W [mm]."),
+        )
+    ):
+        func = option(func)
+    return func
+
+
 @click.command("fit")
 @click.argument("data", type=click.Path(exists=True, dir_okay=False))
-@click.option("--test", type=click.Choice(["picture-frame", "bias-extension"]), required=True)
-@click.option("--side-mm", type=float, help="Picture-frame side, pin to pin [mm].")
-@click.option("--fabric-side-mm", type=float, help="Cruciform specimen: sheared fabric side [mm].")
-@click.option("--height-mm", type=float, help="Bias-extension specimen height H [mm].")
-@click.option("--width-mm", type=float, help="Bias-extension specimen width W [mm].")
+@specimen_options
 @click.option(
     "--sense", type=click.Choice(["parallel", "perpendicular", "both"]), default="parallel"
 )
@@ -480,8 +495,8 @@ def fit_command(
 ) -> None:
     """Normalise a shear test (DATA.csv: displacement, force[, sense]) and fit a law.
 
-    The header may read ``displacement, force``, ``displacement_mm,force_N`` or
-    ``Displacement (mm),Force (N)`` (any case; cm, m and kN are converted).
+    The header may read "displacement, force", "displacement_mm,force_N" or
+    "Displacement (mm),Force (N)" (any case; cm, m and kN are converted).
 
     Prints the shear_law YAML block (with its fit quality as comments), or writes it to --out;
     --json prints the block, the quality per sense and the files written.
