@@ -36,6 +36,7 @@ if TYPE_CHECKING:
     from preform.material import FabricBase
     from preform.pipeline.runner import CaseResult, RunReport
     from preform.pipeline.scene import Scene
+    from preform.shear.calibrate import Calibration
     from preform.step import CaseContext
 
 PathLike = str | os.PathLike[str]
@@ -658,3 +659,92 @@ __all__ = [
     "run",
     "scene",
 ]
+
+
+# -- calibration ----------------------------------------------------------------------------
+
+
+def calibrate(
+    fabric: str | FabricBase,
+    data: PathLike | tuple[Sequence[float], Sequence[float]],
+    *,
+    test: str,
+    side_mm: float | None = None,
+    fabric_side_mm: float | None = None,
+    height_mm: float | None = None,
+    width_mm: float | None = None,
+    constants: Sequence[str] | Mapping[str, tuple[float, float] | None] | None = None,
+    max_angle_deg: float | None = None,
+    weights: str = "relative",
+    library: Library | None = None,
+) -> Calibration:
+    """Fit constants of ``fabric``'s mechanistic law to a measured shear test, as
+    ``preform calibrate`` does.
+
+    ``data``: a test CSV (displacement [mm], force [N]; see ``preform fit``) or a pair of
+    sequences (displacement_mm, force_N). ``test``: ``"picture-frame"`` (``side_mm``, optional
+    ``fabric_side_mm``) or ``"bias-extension"`` (``height_mm``, ``width_mm``). ``constants``:
+    paths into the fabric's entry (``"shear_law.pretension_N"``, ``"threads[0].failure_strain"``,
+    optionally ``"PATH=LO:HI"``) or a mapping path → (low, high) | None, in the entry's units;
+    default: the law's defaults (``preform.shear.calibrate.DEFAULT_CONSTANTS``). Points up to
+    ``max_angle_deg`` [deg] (default all) are fitted, with ``weights`` ``"relative"`` (residuals
+    over the force, floored at 5 % of its peak) or ``"absolute"`` (in N/mm).
+
+    Returns a ``Calibration``: ``constants`` (value, linearised standard uncertainty),
+    ``correlation``, ``fit`` and ``up_to_locking`` quality, ``entry`` (the calibrated library
+    entry), ``to_yaml()``, ``plot(path)``, ``as_json()``, ``apply_to(glob, library)``. Raises
+    ``preform.shear.calibrate.CalibrationError`` (a ValueError) for bad input.
+    """
+    from preform.shear.calibrate import (
+        CalibrationError,
+        calibrate_law,
+        file_sha256,
+        resolve_constants,
+    )
+    from preform.shear.commands import normalise_rows, read_test_csv
+
+    lib = library or load_library()
+    chosen = _fabric(fabric, lib)
+    if isinstance(data, str | os.PathLike):
+        rows = read_test_csv(Path(data))
+        data_file, digest = str(data), file_sha256(Path(data))
+    else:
+        displacement, force = data
+        if len(displacement) != len(force):
+            raise CalibrationError("data: displacement and force differ in length")
+        rows = [
+            {"displacement_mm": repr(float(d)), "force_N": repr(float(f))}
+            for d, f in zip(displacement, force, strict=True)
+        ]
+        data_file, digest = "", ""
+    angle, force_per_length = normalise_rows(
+        rows,
+        test,
+        side_mm=side_mm,
+        height_mm=height_mm,
+        width_mm=width_mm,
+        fabric_side_mm=fabric_side_mm,
+    )
+    specimen = {
+        key: float(value)
+        for key, value in (
+            ("side", side_mm),
+            ("fabric side", fabric_side_mm),
+            ("height", height_mm),
+            ("width", width_mm),
+        )
+        if value is not None
+    }
+    return calibrate_law(
+        chosen,
+        lib.registry,
+        angle,
+        force_per_length,
+        resolve_constants(chosen, constants),
+        max_angle_deg=max_angle_deg,
+        test=test,
+        specimen=specimen,
+        data_file=data_file,
+        data_sha256=digest,
+        weights=weights,
+    )

@@ -66,7 +66,15 @@ LAZY_COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "fit": (
         "preform.shear.commands:fit_command",
-        "Normalise a shear test (DATA.csv: displacement_mm, force_N[, sense]) and fit a law.",
+        "Normalise a shear test (DATA.csv: displacement, force[, sense]) and fit a law.",
+    ),
+    "calibrate": (
+        "preform.commands.calibrate:calibrate_command",
+        "Fit constants of fabric FABRIC's law to a shear test (DATA.csv: displacement, force).",
+    ),
+    "validate": (
+        "preform.validation_suite.runner:validate_command",
+        "Compare the model with published measured shear curves: figures and a table.",
     ),
     "bench": (
         "preform.bench.tradeoff:bench",

@@ -83,6 +83,22 @@ COMMANDS: dict[str, dict[str, object]] = {
         ],
         "error": (["fit", "{tmp}/frame.csv", "--test", "picture-frame"], 2, "--side-mm"),
     },
+    "calibrate": {
+        "json": [
+            "calibrate", "plain-weave-600", "{tmp}/frame.csv", "--test", "picture-frame",
+            "--side-mm", "150", "--param", "shear_law.pretension_N", "--max-angle-deg", "35",
+            "--out", "{tmp}/calibrated.yaml", "--json",
+        ],
+        "error": (
+            ["calibrate", "plain-weave-600", "{tmp}/frame.csv", "--test", "picture-frame",
+             "--side-mm", "150", "--param", "shear_law.nosuch"],
+            2, "unknown constant path 'shear_law.nosuch'",
+        ),
+    },
+    "validate": {
+        "json": ["validate", "--out", "{tmp}/validation", "--json"],
+        "error": (["validate", "--nosuch"], 2, "No such option"),
+    },
     "bench tradeoff": {
         "json": ["bench", "tradeoff", "--quick", "--out", "{tmp}/bench", "--json"],
         "error": (["bench", "tradeoff", "--material", "nosuch"], 2, "nosuch"),

@@ -361,3 +361,57 @@ def fit_figure(
     fig.tight_layout()
     save_figure(fig, path)
     return fig
+
+
+def calibration_figure(
+    *,
+    data: tuple[Any, Any],
+    curves: Sequence[tuple[Any, Any, str]],
+    path: str | os.PathLike[str],
+    locking_deg: float | None = None,
+    fit_range_deg: float | None = None,
+    title: str | None = None,
+    size_px: tuple[int, int] = (900, 600),
+) -> Figure:
+    """Measured F_s/L [N/mm] against γ [deg] as points, model curves ``(angle_deg,
+    force_N_per_mm, label)`` as lines (the first bold), the locking angle and the end of the
+    fit range as vertical lines. The y axis ends at twice the data's largest force, so a model
+    many times stiffer than the data does not flatten them; a clipped model says so."""
+    fig = new_figure(size_px)
+    ax = fig.subplots()
+    angle, force = (np.asarray(v, dtype=float) for v in data)
+    ax.plot(angle, force, "o", color="black", ms=3.5, label="measured (normalised)")
+    styles = (("-", 2.2, "#b2182b"), ("--", 1.4, "#2166ac"), (":", 1.4, "#1a9850"))
+    top = 2.0 * float(np.max(np.abs(force))) if force.size else 1.0
+    clipped = []
+    for n, (grid, model, label) in enumerate(curves):
+        line, width, colour = styles[n % len(styles)]
+        g, m = np.asarray(grid, dtype=float), np.asarray(model, dtype=float)
+        ax.plot(g, m, line, lw=width, color=colour, label=label)
+        if np.any(m > top):
+            clipped.append(label.split(":")[0])
+    if locking_deg is not None:
+        ax.axvline(locking_deg, color="grey", lw=1, ls="-.", label=f"locking {locking_deg:.1f}°")
+    if fit_range_deg is not None:
+        ax.axvline(fit_range_deg, color="grey", lw=0.8, ls=":", label="end of fit range")
+    ax.set_ylim(bottom=min(0.0, float(np.min(force)) if force.size else 0.0), top=top)
+    if clipped:
+        ax.text(
+            0.99,
+            0.02,
+            f"{len(clipped)} curve(s) rise above {top:.3g} N/mm, off the scale",
+            transform=ax.transAxes,
+            ha="right",
+            va="bottom",
+            fontsize="small",
+            color="0.3",
+        )
+    ax.set_xlim(left=0.0)
+    ax.set_xlabel("shear angle γ [deg]")
+    ax.set_ylabel("shear force per unit length F$_s$/L [N/mm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="upper left")
+    ax.set_title(title or "Shear law calibrated on test data", fontsize="small")
+    fig.tight_layout()
+    save_figure(fig, path)
+    return fig

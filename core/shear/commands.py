@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -154,12 +155,97 @@ def shear_command(
         click.echo(f"wrote {path}")
 
 
+#: Units a test file's column may be written in, with their factor to mm and N.
+_DISPLACEMENT_UNITS = {"": 1.0, "mm": 1.0, "cm": 10.0, "m": 1000.0}
+_FORCE_UNITS = {"": 1.0, "n": 1.0, "kn": 1000.0}
+#: Column words (lower case, unit removed) read as displacement, force and sense.
+_COLUMN_WORDS = {
+    "displacement": "displacement_mm",
+    "disp": "displacement_mm",
+    "extension": "displacement_mm",
+    "elongation": "displacement_mm",
+    "crosshead displacement": "displacement_mm",
+    "force": "force_N",
+    "load": "force_N",
+    "sense": "sense",
+}
+
+
+def _column(header: str) -> tuple[str | None, str]:
+    """(canonical column, unit) of a header cell: ``displacement``, ``displacement_mm``,
+    ``Displacement (mm)``, ``displacement [mm]``, ``Force (kN)``... (None when unknown)."""
+    text = header.strip().lower()
+    unit = ""
+    bracketed = re.fullmatch(r"(.*?)\s*[(\[]\s*([a-z]*)\s*[)\]]", text)
+    if bracketed:
+        text, unit = bracketed.group(1), bracketed.group(2)
+    else:
+        suffixed = re.fullmatch(r"(.*?)_(mm|cm|m|n|kn)", text)
+        if suffixed:
+            text, unit = suffixed.group(1), suffixed.group(2)
+    word = re.sub(r"[\s_]+", " ", text).strip()
+    return _COLUMN_WORDS.get(word), unit
+
+
 def read_test_csv(path: str | Path) -> list[dict[str, str]]:
-    """Rows of a test file with columns displacement_mm, force_N and optionally sense."""
-    with open(path, newline="", encoding="utf-8") as handle:
-        rows = list(csv.DictReader(handle))
-    if not rows or not {"displacement_mm", "force_N"} <= set(rows[0]):
-        raise ValueError(f"{path}: need a header with displacement_mm and force_N")
+    """Rows of a shear-test file as ``{"displacement_mm", "force_N"[, "sense"]}`` (text).
+
+    The header names a displacement and a force column in any of the usual spellings
+    (``displacement, force``, ``displacement_mm,force_N``, ``Displacement (mm),Force (N)``,
+    spaces after the commas, any case); displacement in mm (or cm, m) and force in N (or kN),
+    converted to mm and N; without a unit, mm and N. Lines starting with ``#`` before the header
+    and blank lines are skipped. A ValueError says the file and line of what is wrong.
+    """
+    with open(path, newline="", encoding="utf-8-sig") as handle:
+        lines = [
+            (number, line)
+            for number, line in enumerate(handle, start=1)
+            if line.strip() and not line.lstrip().startswith("#")
+        ]
+    if not lines:
+        raise ValueError(f"{path}: no header and no data")
+    header_line, header = lines[0]
+    cells = next(csv.reader([header]))
+    columns: dict[str, tuple[int, float]] = {}
+    for index, cell in enumerate(cells):
+        name, unit = _column(cell)
+        if name is None:
+            continue
+        units = _DISPLACEMENT_UNITS if name == "displacement_mm" else _FORCE_UNITS
+        if name != "sense" and unit not in units:
+            known = ", ".join(u for u in units if u)
+            raise ValueError(
+                f"{path}:{header_line}: column {cell.strip()!r}: unit {unit!r} is not one of {known}"
+            )
+        columns.setdefault(name, (index, 1.0 if name == "sense" else units[unit]))
+    missing = [n for n in ("displacement_mm", "force_N") if n not in columns]
+    if missing:
+        raise ValueError(
+            f"{path}:{header_line}: need a displacement and a force column (e.g. "
+            f"'displacement, force' or 'displacement_mm,force_N'), got {header.strip()!r}"
+        )
+    rows: list[dict[str, str]] = []
+    for number, line in lines[1:]:
+        values = [v.strip() for v in next(csv.reader([line]))]
+        row: dict[str, str] = {}
+        for name, (index, factor) in columns.items():
+            if index >= len(values):
+                raise ValueError(f"{path}:{number}: missing the {name} column")
+            if name == "sense":
+                row[name] = values[index]
+                continue
+            try:
+                value = float(values[index])
+            except ValueError:
+                raise ValueError(
+                    f"{path}:{number}: {name}: {values[index]!r} is not a number"
+                ) from None
+            if not math.isfinite(value):
+                raise ValueError(f"{path}:{number}: {name}: {values[index]!r} is not finite")
+            row[name] = repr(value * factor)
+        rows.append(row)
+    if not rows:
+        raise ValueError(f"{path}:{header_line}: a header but no data rows")
     return rows
 
 
@@ -193,6 +279,31 @@ class FitReport:
             "senses": senses,
             "comments": self.comments,
         }
+
+
+def normalise_rows(
+    rows: list[dict[str, str]],
+    test: str,
+    side_mm: float | None = None,
+    height_mm: float | None = None,
+    width_mm: float | None = None,
+    fabric_side_mm: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of :func:`read_test_csv` → (γ [deg], F_s/L [N/mm]) in order of displacement."""
+    delta = np.array([float(r["displacement_mm"]) for r in rows])
+    force = np.array([float(r["force_N"]) for r in rows])
+    order = np.argsort(delta, kind="stable")
+    if test == "picture-frame":
+        if side_mm is None:
+            raise ValueError("picture-frame needs --side-mm")
+        result = normalise_picture_frame(delta[order], force[order], side_mm, fabric_side_mm)
+    elif test == "bias-extension":
+        if height_mm is None or width_mm is None:
+            raise ValueError("bias-extension needs --height-mm and --width-mm")
+        result = normalise_bias_extension(delta[order], force[order], height_mm, width_mm)
+    else:
+        raise ValueError(f"unknown test {test!r}")
+    return np.degrees(result.shear_angle), result.force_per_length_N_per_mm
 
 
 def fit_test_data(
@@ -244,20 +355,14 @@ def fit_report(
     """:func:`fit_test_data`, keeping the normalised data and the fits (for the plot)."""
 
     def normalise(selected: list[dict[str, str]]) -> tuple[np.ndarray, np.ndarray]:
-        delta = np.array([float(r["displacement_mm"]) for r in selected])
-        force = np.array([float(r["force_N"]) for r in selected])
-        order = np.argsort(delta, kind="stable")
-        if test == "picture-frame":
-            if side_mm is None:
-                raise ValueError("picture-frame needs --side-mm")
-            result = normalise_picture_frame(delta[order], force[order], side_mm, fabric_side_mm)
-        elif test == "bias-extension":
-            if height_mm is None or width_mm is None:
-                raise ValueError("bias-extension needs --height-mm and --width-mm")
-            result = normalise_bias_extension(delta[order], force[order], height_mm, width_mm)
-        else:
-            raise ValueError(f"unknown test {test!r}")
-        return np.degrees(result.shear_angle), result.force_per_length_N_per_mm
+        return normalise_rows(
+            selected,
+            test,
+            side_mm=side_mm,
+            height_mm=height_mm,
+            width_mm=width_mm,
+            fabric_side_mm=fabric_side_mm,
+        )
 
     def select(which: str) -> list[dict[str, str]]:
         if "sense" not in rows[0]:
@@ -326,13 +431,28 @@ def plot_fit(report: FitReport, path: str | Path, title: str | None = None) -> N
     fit_figure(curves, path, title=title)
 
 
+def specimen_options(func: Any) -> Any:
+    """``--test`` and the specimen's sizes, as ``fit`` and ``calibrate`` take them."""
+    for option in reversed(
+        (
+            click.option(
+                "--test", type=click.Choice(["picture-frame", "bias-extension"]), required=True
+            ),
+            click.option("--side-mm", type=float, help="Picture-frame side, pin to pin [mm]."),
+            click.option(
+                "--fabric-side-mm", type=float, help="Cruciform specimen: sheared fabric side [mm]."
+            ),
+            click.option("--height-mm", type=float, help="Bias-extension specimen height H [mm]."),
+            click.option("--width-mm", type=float, help="Bias-extension specimen width W [mm]."),
+        )
+    ):
+        func = option(func)
+    return func
+
+
 @click.command("fit")
 @click.argument("data", type=click.Path(exists=True, dir_okay=False))
-@click.option("--test", type=click.Choice(["picture-frame", "bias-extension"]), required=True)
-@click.option("--side-mm", type=float, help="Picture-frame side, pin to pin [mm].")
-@click.option("--fabric-side-mm", type=float, help="Cruciform specimen: sheared fabric side [mm].")
-@click.option("--height-mm", type=float, help="Bias-extension specimen height H [mm].")
-@click.option("--width-mm", type=float, help="Bias-extension specimen width W [mm].")
+@specimen_options
 @click.option(
     "--sense", type=click.Choice(["parallel", "perpendicular", "both"]), default="parallel"
 )
@@ -373,7 +493,10 @@ def fit_command(
     plot: str | None,
     as_json: bool,
 ) -> None:
-    """Normalise a shear test (DATA.csv: displacement_mm, force_N[, sense]) and fit a law.
+    """Normalise a shear test (DATA.csv: displacement, force[, sense]) and fit a law.
+
+    The header may read "displacement, force", "displacement_mm,force_N" or
+    "Displacement (mm),Force (N)" (any case; cm, m and kN are converted).
 
     Prints the shear_law YAML block (with its fit quality as comments), or writes it to --out;
     --json prints the block, the quality per sense and the files written.

@@ -1,0 +1,76 @@
+"""The validation suite (``preform validate``): the datasets say where they come from, the
+runner writes what it promises, and the calibrated law against the measured benchmark curves.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from preform.shear.commands import read_test_csv
+from preform.validation_suite.runner import dataset_dirs, load_dataset, run_validation
+
+REQUIRED = ("title", "citation", "figure", "test", "specimen", "points", "digitised_by",
+            "uncertainty", "licence", "fabric", "closest_bundled")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    return run_validation(tmp_path_factory.mktemp("validation"))
+
+
+def rows(report: dict, model: str) -> dict[str, dict]:
+    return {r["dataset"]: r for r in report["rows"] if r["model"] == model}
+
+
+def test_every_dataset_says_where_it_comes_from() -> None:
+    folders = dataset_dirs()
+    assert len(folders) >= 2
+    for folder in folders:
+        meta = load_dataset(folder)
+        missing = [key for key in REQUIRED if not meta.get(key)]
+        assert not missing, (folder, missing)
+        assert "doi:" in meta["citation"]
+        assert len(read_test_csv(meta["points_path"])) == meta["point_count"]
+
+
+def test_the_runner_writes_a_figure_per_dataset_and_the_table(report: dict) -> None:
+    files = report["files"]
+    assert len(files["figures"]) == len(dataset_dirs())
+    for figure in files["figures"]:
+        assert Path(figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with open(files["table"], newline="") as handle:
+        table = list(csv.DictReader(handle))
+    assert len(table) == 3 * len(dataset_dirs())
+    assert "| calibrated |" in Path(files["markdown"]).read_text()
+
+
+def test_calibration_brings_the_law_closer_to_the_measured_curves(report: dict) -> None:
+    before, after = rows(report, "benchmark"), rows(report, "calibrated")
+    for dataset, row in after.items():
+        assert row["relative_rms"] < 0.2 * before[dataset]["relative_rms"], dataset
+
+
+def test_one_fabric_gives_one_pretension_whatever_the_specimen_size(report: dict) -> None:
+    """Two specimen sizes of the same fabric (the normalisation removes the size): the fitted
+    constant must agree within the two fits' combined uncertainty (3σ)."""
+    after = rows(report, "calibrated")
+    values = []
+    for row in after.values():
+        value, sigma = row["constants"].split("=")[1].split("±")
+        values.append((float(value), float(sigma)))
+    (a, sa), (b, sb) = values
+    assert abs(a - b) <= 3 * (sa**2 + sb**2) ** 0.5
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the friction_compaction law holds a constant Coulomb force before locking while the "
+    "measured curves rise from zero: calibrated, it is 34 % (115 x 230) and 38 % (150 x 450) "
+    "rms of the data up to locking, not 15 % (docs/validation.md)",
+)
+def test_the_calibrated_law_reproduces_the_benchmark_within_15_percent(report: dict) -> None:
+    for dataset, row in rows(report, "calibrated").items():
+        assert row["relative_rms"] <= 0.15, (dataset, row["relative_rms"])
