@@ -56,6 +56,8 @@ reported too (``residual_rms_rel``), a direct measure of E(α)'s roughness.
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -67,6 +69,7 @@ from numpy.typing import NDArray
 from preform.drape.net import DrapeError, drape
 from preform.drape.result import DrapeResult
 from preform.drape.surface import Surface
+from preform.drape.verdict import coverage
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
@@ -111,6 +114,21 @@ class DrapeEvaluation:
     draped: bool = True
     #: The net itself, when the caller asked to keep it.
     result: DrapeResult | None = field(default=None, repr=False, compare=False)
+    #: The drape's fold zones (``Coverage.fold_zones``: undeformed plan centre (x, y) [m],
+    #: fabric area [m²], largest first) and the fabric area [m²] of the ply cells the net
+    #: failed to drape (d² a cell: fold zones, and cells asked for and not covered).
+    fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
+    lost_area_m2: float = 0.0
+    #: Per cell (ni−1, nj−1): the energy it adds to ``drape_energy_J`` [J] (0 where not
+    #: counted), and whether the net failed to drape it (``Coverage.lost_cells``). Kept so
+    #: the angle search can leave out of every angle's sum a cell lost at any angle.
+    cell_energy_J: FloatArray | None = field(default=None, repr=False, compare=False)
+    lost_cells: BoolArray | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def fold_zone_area_m2(self) -> float:
+        """Fabric area of the fold zones [m²]."""
+        return float(sum(area for _, area in self.fold_zones))
 
 
 class DrapeObjective:
@@ -232,6 +250,17 @@ class DrapeObjective:
         share = result.part_weight[mask]
         density = self.energy_density(gamma)
         energy = float((density * share).sum() * result.node_spacing**2)
+        per_cell = np.zeros(mask.shape)
+        per_cell[mask] = density * share * result.node_spacing**2
+        # The flat ply is laid from the start's plan position: the given one, else the start
+        # node's own (a start given as a 3-D point).
+        if math.isfinite(start_xy_m[0]) and math.isfinite(start_xy_m[1]):
+            plan = start_xy_m
+        else:
+            i0, j0 = result.start_index
+            plan = (float(result.nodes[i0, j0, 0]), float(result.nodes[i0, j0, 1]))
+        cover = coverage(result, self.surface, plan)
+        lost = cover.lost_cells
         return DrapeEvaluation(
             generator_angle_rad=float(result.generator_angle),
             orientation_rad=float(result.orientation),
@@ -241,6 +270,12 @@ class DrapeObjective:
             cells_counted=int(np.count_nonzero(mask)),
             max_abs_shear_rad=float(np.abs(gamma).max()) if gamma.size else 0.0,
             result=result if keep_result else None,
+            fold_zones=cover.fold_zones,
+            lost_area_m2=(
+                0.0 if lost is None else float(np.count_nonzero(lost)) * result.node_spacing**2
+            ),
+            cell_energy_J=per_cell,
+            lost_cells=lost,
         )
 
     def charged(self, evaluation: DrapeEvaluation, reference_area_m2: float) -> float:
@@ -270,19 +305,116 @@ class SearchPoint:
     #: Largest |γ| over the counted cells of this drape [rad] (to say where E(α) leaves the
     #: law's trustworthy range).
     max_abs_shear_rad: float = 0.0
+    #: The energy [J] of this drape's cells that another compared angle fails to drape, left
+    #: out of ``energy_J`` so that every angle is judged on the same fabric (module docstring:
+    #: ``energy_J`` = ``drape_energy_J`` + ``uncovered_charge_J`` − ``excluded_energy_J``).
+    excluded_energy_J: float = 0.0
+    #: Cells counted, the drape's fold zones (number, fabric area [m²]) and the fabric area
+    #: [m²] of the ply cells the net failed to drape (fold zones and cells not covered).
+    cells_counted: int = 0
+    fold_zones: int = 0
+    fold_zone_area_m2: float = 0.0
+    lost_area_m2: float = 0.0
 
     @property
     def generator_angle_deg(self) -> float:
         return math.degrees(self.generator_angle_rad)
 
 
+#: A jump of E(α)'s accounting between two neighbouring samples: a change of the covered part
+#: area, or of the fabric the net fails to drape, by more than this share of the reference
+#: area [-] (module docstring, "Discontinuities"); a change of the number of fold zones is a
+#: jump whatever its size.
+JUMP_AREA_SHARE = 0.01
+
+
+@dataclass(frozen=True)
+class Discontinuity:
+    """A jump of E(α) between two neighbouring samples α_lo < α_hi [rad], with its causes in
+    words (fold zones appearing or disappearing, a jump of the coverage or of the fabric the
+    net fails to drape). The jump lies somewhere inside (α_lo, α_hi)."""
+
+    lo_rad: float
+    hi_rad: float
+    causes: tuple[str, ...]
+
+    def words(self) -> str:
+        return (
+            f"between {math.degrees(self.lo_rad):.4g}° and {math.degrees(self.hi_rad):.4g}°: "
+            + "; ".join(self.causes)
+        )
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "between_deg": [math.degrees(self.lo_rad), math.degrees(self.hi_rad)],
+            "causes": list(self.causes),
+        }
+
+
+def find_discontinuities(
+    points: Sequence[SearchPoint], reference_area_m2: float, share: float = JUMP_AREA_SHARE
+) -> tuple[Discontinuity, ...]:
+    """The jumps of E(α)'s accounting between neighbouring feasible samples (module docstring,
+    "Discontinuities"): the number of fold zones changes, or the covered part area [m²] or the
+    fabric area the net fails to drape [m²] changes by more than ``share`` × the reference area
+    ``reference_area_m2`` [m²]. Sorted by angle."""
+    usable = sorted(
+        (p for p in points if p.feasible and math.isfinite(p.energy_J)),
+        key=lambda p: p.generator_angle_rad,
+    )
+    step = share * reference_area_m2
+    jumps = []
+    for a, b in itertools.pairwise(usable):
+        causes = []
+        if a.fold_zones != b.fold_zones:
+            causes.append(
+                f"fold zones {a.fold_zones} → {b.fold_zones} "
+                f"({1e6 * a.fold_zone_area_m2:.0f} → {1e6 * b.fold_zone_area_m2:.0f} mm² of "
+                "fabric)"
+            )
+        if abs(b.lost_area_m2 - a.lost_area_m2) > step:
+            causes.append(
+                f"fabric the net fails to drape {1e6 * a.lost_area_m2:.0f} → "
+                f"{1e6 * b.lost_area_m2:.0f} mm²"
+            )
+        if abs(b.covered_area_m2 - a.covered_area_m2) > step:
+            causes.append(
+                f"covered part area {1e6 * a.covered_area_m2:.0f} → "
+                f"{1e6 * b.covered_area_m2:.0f} mm² ({a.cells_counted} → {b.cells_counted} "
+                "cells counted)"
+            )
+        if causes:
+            jumps.append(Discontinuity(a.generator_angle_rad, b.generator_angle_rad, tuple(causes)))
+    return tuple(jumps)
+
+
+def continuous_span(
+    centre_rad: float, jumps: Sequence[Discontinuity], lo_rad: float, hi_rad: float
+) -> tuple[float, float]:
+    """The span [rad] of ``[lo_rad, hi_rad]`` around ``centre_rad`` that no jump crosses: from
+    the upper sample of the nearest jump below to the lower sample of the nearest jump above
+    (a single point when the centre is a sample with a jump on both sides). A centre inside an
+    unresolved jump (between its two samples) gets the centre alone: which side it belongs to
+    is not known until it is draped."""
+    low, high = lo_rad, hi_rad
+    eps = 1e-12
+    for jump in jumps:
+        if jump.hi_rad <= centre_rad + eps:
+            low = max(low, jump.hi_rad)
+        elif jump.lo_rad >= centre_rad - eps:
+            high = min(high, jump.lo_rad)
+        else:
+            return centre_rad, centre_rad
+    return low, high
+
+
 @dataclass(frozen=True)
 class AngleSearchResult:
     """The generator-angle search: the optimum, the whole curve, and how well it is resolved."""
 
-    #: The optimum generator angle α* [rad] and its comparable energy [J] (a drape at α*). α*
-    #: is the vertex of a least-squares fit, so with the energy's small staircase its energy
-    #: may exceed the lowest sampled one by that noise.
+    #: The optimum generator angle α* [rad] and its comparable energy [J] (a drape at α*): the
+    #: vertex of a least-squares fit, or the best feasible sample when the fit's drape is not
+    #: cheaper (``optimum_from``); never more than the lowest feasible sampled energy.
     optimum_angle_rad: float
     optimum_energy_J: float
     #: Every evaluated angle, sorted by angle (scan, refinement and the optimum).
@@ -307,6 +439,20 @@ class AngleSearchResult:
     residual_rms_rel: float | None = None
     #: The knobs the search ran with (degrees, for the record).
     settings: dict[str, Any] = field(default_factory=dict)
+    #: The jumps of E(α) found between neighbouring samples (module docstring); no fit
+    #: straddles one.
+    discontinuities: tuple[Discontinuity, ...] = ()
+    #: "fit" (α* is a fit's vertex, or a sample the fits confirmed) or "best sample" (the fit's
+    #: drape was dearer than the best sample, or no fit could be made: ``optimum_note`` says
+    #: why).
+    optimum_from: str = "fit"
+    optimum_note: str = ""
+    #: Fabric area [m²] (d² a cell) left out of every angle's energy because some compared
+    #: angle fails to drape it (module docstring), and its share of the counted fabric [-].
+    excluded_fabric_area_m2: float = 0.0
+    #: The fold zones of the drape at α* (undeformed plan centre (x, y) [m], fabric area
+    #: [m²], largest first).
+    optimum_fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
 
     @property
     def optimum_angle_deg(self) -> float:
@@ -340,6 +486,13 @@ class AngleSearchResult:
             "reference_area_m2": self.reference_area_m2,
             "uncovered_energy_density_J_per_m2": self.uncovered_energy_density_J_per_m2,
             "min_coverage": min((p.coverage for p in self.points), default=1.0),
+            "discontinuities": [jump.summary() for jump in self.discontinuities],
+            "optimum_from": self.optimum_from,
+            "optimum_note": self.optimum_note,
+            "excluded_fabric_area_m2": self.excluded_fabric_area_m2,
+            "optimum_fold_zones": len(self.optimum_fold_zones),
+            "optimum_fold_zone_area_m2": float(sum(a for _, a in self.optimum_fold_zones)),
+            "optimum_fold_zone_centres_m": [list(c) for c, _ in self.optimum_fold_zones],
             **self.settings,
         }
 
@@ -519,33 +672,48 @@ def search_generator_angle(
             ev.max_abs_shear_rad,
         )
 
-    def feasible_samples() -> tuple[FloatArray, FloatArray]:
-        pts = [point(a) for a in sorted(evaluated)]
+    accounting = _SameFabric(evaluated, point, float(objective.drape_kwargs["node_spacing_m"]))
+
+    def feasible_samples(centre: float | None = None) -> tuple[FloatArray, FloatArray]:
+        """Feasible samples (α, compared E), within the continuous span about ``centre``."""
+        pts = accounting.points()
         ok = [p for p in pts if p.feasible and math.isfinite(p.energy_J)]
+        if centre is not None:
+            low, high = continuous_span(centre, accounting.jumps(reference), lo, hi)
+            ok = [p for p in ok if low - 1e-12 <= p.generator_angle_rad <= high + 1e-12]
         return (np.array([p.generator_angle_rad for p in ok]), np.array([p.energy_J for p in ok]))
 
-    xs, ys = feasible_samples()
-    if xs.size == 0:
-        raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
-    best = int(np.argmin(ys))
-    # Ties (a symmetric set-up) go to the angle nearest the middle of the range.
-    ties = np.flatnonzero(ys <= ys[best] * (1 + 1e-12) + 1e-300)
-    best = int(ties[np.argmin(np.abs(xs[ties] - 0.5 * (lo + hi)))])
-    estimate = float(xs[best])
-    at_boundary = best in (0, len(xs) - 1)
+    def best_sample() -> tuple[float, float]:
+        """The feasible sample of least compared energy (α, E); ties (a symmetric set-up) go
+        to the angle nearest the middle of the range."""
+        x, y = feasible_samples()
+        if x.size == 0:
+            raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+        k = int(np.argmin(y))
+        ties = np.flatnonzero(y <= y[k] * (1 + 1e-12) + 1e-300)
+        k = int(ties[np.argmin(np.abs(x[ties] - 0.5 * (lo + hi)))])
+        return float(x[k]), float(y[k])
+
+    xs, _ = feasible_samples()
+    estimate, _ = best_sample()
+    at_boundary = estimate in (float(xs[0]), float(xs[-1]))
     half_window = scan_step_rad
     vertex_std: float | None = None
     noise_limited = False
 
-    def refit(centre: float, window: float) -> _Fit | None:
-        x, y = feasible_samples()
+    def refit(centre: float, window: float) -> tuple[_Fit | None, float, float]:
+        """The parabola over the samples within ``window`` of ``centre`` and on its side of
+        every jump, and the span [rad] its vertex may move in."""
+        x, y = feasible_samples(centre)
+        low, high = continuous_span(centre, accounting.jumps(reference), lo, hi)
         # A relative slack keeps a mirror pair together at the window's edge.
         inside = np.abs(x - centre) <= window * (1 + 1e-6)
-        return _parabola(x[inside], y[inside], centre)
+        span = (max(low, centre - window), min(high, centre + window))
+        return _parabola(x[inside], y[inside], centre), span[0], span[1]
 
-    fit = refit(estimate, half_window)
+    fit, low, high = refit(estimate, half_window)
     if fit is not None and fit.curvature > 0:
-        estimate = float(np.clip(fit.vertex, estimate - half_window, estimate + half_window))
+        estimate = float(np.clip(fit.vertex, low, high))
         vertex_std = fit.std
     delta = 0.5 * scan_step_rad
     while delta >= tolerance_rad:
@@ -557,41 +725,90 @@ def search_generator_angle(
         for alpha in new:
             evaluated[alpha] = (objective.evaluate(alpha), "refine")
         window = 2.0 * delta
-        fit = refit(estimate, window)
+        fit, low, high = refit(estimate, window)
+        if fit is None and high - low < window:
+            # A jump within the window leaves too few samples on the estimate's side for a
+            # fit: go on by bisection on the samples (the cheapest one within the window),
+            # which also narrows where the jump lies.
+            x, y = feasible_samples()
+            near = np.abs(x - estimate) <= window * (1 + 1e-6)
+            if near.any():
+                estimate = float(x[near][np.argmin(y[near])])
+            vertex_std = None
+            half_window = delta
+            delta *= 0.5
+            continue
         if fit is None or not fit.curvature > 0:
             noise_limited = fit is not None
             break
-        estimate = float(
-            np.clip(fit.vertex, max(lo, estimate - window), min(hi, estimate + window))
-        )
+        estimate = float(np.clip(fit.vertex, low, high))
         vertex_std = fit.std
         half_window = window
         delta *= 0.5
     estimate = float(np.clip(estimate, lo, hi))
-    at_boundary = at_boundary or min(estimate - lo, hi - estimate) < 0.5 * scan_step_rad
     known = np.array(list(evaluated))
     nearest = float(known[np.argmin(np.abs(known - estimate))])
     if abs(nearest - estimate) <= 1e-9 * tolerance_rad:
-        final = point(nearest)
+        estimate = nearest
     else:
         evaluated[estimate] = (objective.evaluate(estimate), "optimum")
-        final = point(estimate)
-    if not final.feasible:
-        raise SearchError("the refined optimum is not feasible; raise min_coverage's margin")
-    points = tuple(point(a) for a in sorted(evaluated))
-    ok = [p for p in points if p.feasible and math.isfinite(p.energy_J)]
+    # Judged on the fabric every compared angle drapes, the optimum's drape included (its
+    # lost cells leave the others' sums too), and never dearer than the best sample.
+    final = accounting.point(estimate)
+    sample_angle, sample_energy = best_sample()
+    optimum_from, note = "fit", ""
+    if not final.feasible or not final.energy_J <= sample_energy:
+        why = (
+            "is not feasible"
+            if not final.feasible
+            else f"costs {final.energy_J:.6g} J, more than the best sample's {sample_energy:.6g} J"
+        )
+        note = (
+            f"the refined estimate {math.degrees(estimate):.6g}° {why}; the optimum is the "
+            f"best sample, {math.degrees(sample_angle):.6g}°"
+        )
+        optimum_from, estimate = "best sample", sample_angle
+        final = accounting.point(estimate)
+        vertex_std = None
+    jumps = accounting.jumps(reference)
+    low, high = continuous_span(estimate, jumps, lo, hi)
+    if optimum_from == "fit" and low == high:
+        optimum_from = "best sample"
+        note = (
+            f"E(α) jumps on both sides of the sample {math.degrees(estimate):.6g}°, so no fit "
+            "can be made there; the optimum is that sample"
+        )
+        vertex_std = None
+    at_boundary = at_boundary or min(estimate - lo, hi - estimate) < 0.5 * scan_step_rad
+    points = accounting.points()
+    ok = [
+        p
+        for p in points
+        if p.feasible
+        and math.isfinite(p.energy_J)
+        and low - 1e-12 <= p.generator_angle_rad <= high + 1e-12
+    ]
     uncertainty, roughness = optimum_uncertainty(
         np.array([p.generator_angle_rad for p in ok]),
         np.array([p.energy_J for p in ok]),
         estimate,
         scan_step_rad,
     )
+    if optimum_from == "best sample":
+        # The minimum lies between the best sample's feasible neighbours, as far as the
+        # samples tell.
+        angles = sorted(p.generator_angle_rad for p in points if p.feasible)
+        k = angles.index(estimate)
+        bracket = (angles[max(k - 1, 0)], angles[min(k + 1, len(angles) - 1)])
+    else:
+        bracket = (max(lo, estimate - half_window), min(hi, estimate + half_window))
+    final_ev = evaluated[estimate][0]
     return AngleSearchResult(
         optimum_angle_rad=estimate,
         optimum_energy_J=final.energy_J,
         points=points,
         drapes=objective.drapes - first,
-        bracket_rad=(max(lo, estimate - half_window), min(hi, estimate + half_window)),
+        bracket_rad=bracket,
         vertex_std_rad=vertex_std,
         at_boundary=at_boundary,
         noise_limited=noise_limited,
@@ -611,7 +828,89 @@ def search_generator_angle(
                 else math.degrees(objective.uncovered_shear_rad)
             ),
         },
+        discontinuities=jumps,
+        optimum_from=optimum_from,
+        optimum_note=note,
+        excluded_fabric_area_m2=accounting.excluded_area_m2(),
+        optimum_fold_zones=final_ev.fold_zones,
     )
+
+
+class _SameFabric:
+    """The search's samples judged on the same fabric (module docstring, "The same fabric at
+    every angle"): a ply cell that a feasible sample fails to drape (a fold zone, or a cell
+    asked for and not covered) is left out of every sample's energy. Recomputed only when a
+    sample is added."""
+
+    def __init__(
+        self,
+        evaluated: dict[float, tuple[DrapeEvaluation, str]],
+        point: Callable[[float], SearchPoint],
+        node_spacing_m: float,
+    ) -> None:
+        self._evaluated = evaluated
+        self._point = point
+        self._spacing = float(node_spacing_m)
+        self._reference = math.nan
+        self._count = -1
+        self._points: dict[float, SearchPoint] = {}
+        self._excluded: BoolArray | None = None
+        self._jumps: tuple[Discontinuity, ...] = ()
+
+    def _update(self) -> None:
+        if self._count == len(self._evaluated):
+            return
+        base = {alpha: self._point(alpha) for alpha in self._evaluated}
+        masks = [
+            ev.lost_cells
+            for alpha, (ev, _) in self._evaluated.items()
+            if base[alpha].feasible and ev.lost_cells is not None
+        ]
+        shapes = {mask.shape for mask in masks}
+        excluded = None
+        if len(shapes) == 1 and any(mask.any() for mask in masks):
+            excluded = np.logical_or.reduce(masks)
+        self._excluded = excluded
+        self._points = {}
+        for alpha, p in base.items():
+            ev = self._evaluated[alpha][0]
+            removed = 0.0
+            cells = ev.cell_energy_J
+            if excluded is not None and cells is not None and cells.shape == excluded.shape:
+                removed = float(cells[excluded].sum())
+            self._points[alpha] = dataclasses.replace(
+                p,
+                energy_J=p.energy_J - removed,
+                excluded_energy_J=removed,
+                cells_counted=ev.cells_counted,
+                fold_zones=len(ev.fold_zones),
+                fold_zone_area_m2=ev.fold_zone_area_m2,
+                lost_area_m2=ev.lost_area_m2,
+            )
+        self._count = len(self._evaluated)
+        self._jumps = ()
+        self._reference = math.nan
+
+    def point(self, alpha: float) -> SearchPoint:
+        self._update()
+        return self._points[alpha]
+
+    def points(self) -> tuple[SearchPoint, ...]:
+        self._update()
+        return tuple(self._points[a] for a in sorted(self._points))
+
+    def jumps(self, reference_area_m2: float) -> tuple[Discontinuity, ...]:
+        self._update()
+        if self._reference != reference_area_m2:
+            self._jumps = find_discontinuities(self.points(), reference_area_m2)
+            self._reference = reference_area_m2
+        return self._jumps
+
+    def excluded_area_m2(self) -> float:
+        self._update()
+        if self._excluded is None:
+            return 0.0
+        return float(np.count_nonzero(self._excluded)) * self._spacing**2
 
 
 # --------------------------------------------------------------------------------------------
