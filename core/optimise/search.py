@@ -31,6 +31,43 @@ W_miss = max(W(+γ_m), W(−γ_m)) per unit area, the same rule for every archit
 pipeline then reports the case ``partial``). ``min_coverage`` > 0 marks an α whose coverage
 falls below it infeasible instead: never chosen as the optimum (its energy is still reported).
 
+The same fabric at every angle [D]
+----------------------------------
+A drape can lose ply cells: behind a sharp convex vertex the net folds (its *fold zones*,
+:class:`~preform.drape.verdict.Coverage`), or it loses its intersection and the cells behind.
+Those cells drop out of Σ W·s·d², so an angle at which a fold zone appears looks cheap for that
+reason alone: on the bundled hat mould at α = 90° all four block corners fold and E was
+0.27 J, while at 88.74° two of them are draped instead, sheared to about 88° (past the law's
+jamming), and E was 13.87 J; the old search returned 88.74° as the optimum. The search
+therefore compares angles on **the same fabric**: the ply is laid out in fibre coordinates,
+so cell (i, j) is the same piece of fabric at every α; a cell that any feasible sample fails
+to drape (``Coverage.lost_cells``: its fold zones and the cells asked for and not covered) is
+left out of every sample's energy, as its ``excluded_energy_J``. ``SearchPoint.energy_J``,
+what the search ranks, is ``drape_energy_J + uncovered_charge_J − excluded_energy_J``; with no
+cell lost anywhere (a hemisphere, a smooth tool) it is the drape's energy to the last bit.
+Why this rule and not another: charging the lost fabric at some shear energy would price a
+fold (a bending event) as shear, at a shear the law can only continue past jamming; marking
+angles that lose fabric infeasible would leave no angle on a tool whose corners fold at every
+α. The rule costs range: the fabric compared is what every sampled angle drapes, so a wide
+range on a folding tool compares the angles on less of the ply (the excluded fabric area is
+reported, ``excluded_fabric_area_m2``, and the pipeline says it). The set grows as samples are
+added, and every sample is judged again on it.
+
+Discontinuities [D]
+-------------------
+E(α) jumps where a fold zone appears or disappears, or where the coverage or the fabric the
+net fails to drape changes abruptly. Between neighbouring feasible samples a **jump** is
+flagged (:func:`find_discontinuities`) when the number of fold zones changes, or when the
+covered part area or the lost fabric area changes by more than :data:`JUMP_AREA_SHARE` (1 %) of
+the reference area and faster than :data:`JUMP_RATE_PER_DEG` (5 % of it per degree); each is
+reported with its interval and causes (``AngleSearchResult.discontinuities``). The rate is
+what tells a jump from a smooth change (a ply running off a plate changes its covered area by
+up to about 1.2 %/° on the hemisphere's run-off): a jump's rate grows as the samples close in
+on it, so a small jump far from the optimum, between scan samples 5° apart, may go unflagged,
+while near the optimum, where the refinement samples densely, it shows. The cell count itself
+is not a criterion: sheared cells are smaller, so the count changes smoothly with α where
+nothing is lost.
+
 Refinement and symmetry
 -----------------------
 The scan grid is laid symmetrically about 90° (90° ± k·step, plus the range ends), so a
@@ -41,7 +78,18 @@ level: every sample set stays symmetric about a symmetric optimum, so the estima
 90° to rounding. A least-squares fit, not interpolation, so that what remains of the discrete
 E(α)'s roughness (clipped cells are smooth in α, but folds or the ply's end still add or drop
 whole cells) is averaged rather than chased; when a window's fit is no longer convex the
-refinement stops there and says it is noise-limited.
+refinement stops there and says it is noise-limited. A fit uses only the samples on the
+estimate's side of every jump (:func:`continuous_span`), and its vertex stays on that side;
+where a jump leaves too few samples for a fit the refinement goes on by bisection, keeping the
+cheapest sample within the window.
+
+Never dearer than a sample [D]
+------------------------------
+The optimum's energy is at most the lowest energy of any feasible sample, always: when the
+drape at the fit's vertex costs more than the best sample (judged on the same fabric, its own
+lost cells included), or when jumps on both sides of the best sample leave no fit, the optimum
+is that sample, ``optimum_from`` says "best sample" and ``optimum_note`` why; the bracket is
+then its feasible neighbours.
 
 Uncertainty of the optimum [D]
 ------------------------------
@@ -323,9 +371,14 @@ class SearchPoint:
 
 #: A jump of E(α)'s accounting between two neighbouring samples: a change of the covered part
 #: area, or of the fabric the net fails to drape, by more than this share of the reference
-#: area [-] (module docstring, "Discontinuities"); a change of the number of fold zones is a
-#: jump whatever its size.
+#: area [-] and faster than :data:`JUMP_RATE_PER_DEG` (module docstring, "Discontinuities");
+#: a change of the number of fold zones is a jump whatever its size.
 JUMP_AREA_SHARE = 0.01
+#: ... and faster than this share of the reference area per degree of α [1/deg]: a jump has
+#: no finite rate, so it shows once the samples are close enough; a smooth change of coverage
+#: (a ply running off a plate: up to about 1.2 %/° measured on the hemisphere's run-off) does
+#: not.
+JUMP_RATE_PER_DEG = 0.05
 
 
 @dataclass(frozen=True)
@@ -352,19 +405,24 @@ class Discontinuity:
 
 
 def find_discontinuities(
-    points: Sequence[SearchPoint], reference_area_m2: float, share: float = JUMP_AREA_SHARE
+    points: Sequence[SearchPoint],
+    reference_area_m2: float,
+    share: float = JUMP_AREA_SHARE,
+    rate_per_deg: float = JUMP_RATE_PER_DEG,
 ) -> tuple[Discontinuity, ...]:
     """The jumps of E(α)'s accounting between neighbouring feasible samples (module docstring,
     "Discontinuities"): the number of fold zones changes, or the covered part area [m²] or the
-    fabric area the net fails to drape [m²] changes by more than ``share`` × the reference area
+    fabric area the net fails to drape [m²] changes by more than max(``share``,
+    ``rate_per_deg`` × the samples' distance in degrees) × the reference area
     ``reference_area_m2`` [m²]. Sorted by angle."""
     usable = sorted(
         (p for p in points if p.feasible and math.isfinite(p.energy_J)),
         key=lambda p: p.generator_angle_rad,
     )
-    step = share * reference_area_m2
     jumps = []
     for a, b in itertools.pairwise(usable):
+        width_deg = math.degrees(b.generator_angle_rad - a.generator_angle_rad)
+        step = max(share, rate_per_deg * width_deg) * reference_area_m2
         causes = []
         if a.fold_zones != b.fold_zones:
             causes.append(
@@ -689,8 +747,8 @@ def search_generator_angle(
         x, y = feasible_samples()
         if x.size == 0:
             raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
-        k = int(np.argmin(y))
-        ties = np.flatnonzero(y <= y[k] * (1 + 1e-12) + 1e-300)
+        # Exact ties only: the optimum's energy may not exceed the lowest by even a rounding.
+        ties = np.flatnonzero(y == y.min())
         k = int(ties[np.argmin(np.abs(x[ties] - 0.5 * (lo + hi)))])
         return float(x[k]), float(y[k])
 
@@ -701,17 +759,32 @@ def search_generator_angle(
     vertex_std: float | None = None
     noise_limited = False
 
-    def refit(centre: float, window: float) -> tuple[_Fit | None, float, float]:
+    def refit(centre: float, window: float) -> tuple[_Fit | None, float, float, bool]:
         """The parabola over the samples within ``window`` of ``centre`` and on its side of
-        every jump, and the span [rad] its vertex may move in."""
+        every jump, the span [rad] its vertex may move in, and whether a jump cuts the
+        window."""
         x, y = feasible_samples(centre)
         low, high = continuous_span(centre, accounting.jumps(reference), lo, hi)
         # A relative slack keeps a mirror pair together at the window's edge.
         inside = np.abs(x - centre) <= window * (1 + 1e-6)
         span = (max(low, centre - window), min(high, centre + window))
-        return _parabola(x[inside], y[inside], centre), span[0], span[1]
+        eps = 1e-9 * window
+        cut = span[0] > max(lo, centre - window) + eps or span[1] < min(hi, centre + window) - eps
+        return _parabola(x[inside], y[inside], centre), span[0], span[1], cut
 
-    fit, low, high = refit(estimate, half_window)
+    def cheapest_near(centre: float, window: float) -> float:
+        """The feasible sample of least energy within ``window`` of ``centre`` [rad]."""
+        x, y = feasible_samples()
+        near = np.abs(x - centre) <= window * (1 + 1e-6)
+        return float(x[near][np.argmin(y[near])]) if near.any() else centre
+
+    def recentre(centre: float, window: float) -> float:
+        # Where a jump cuts the window the minimum may lie on its other side: the fit is made
+        # about the cheapest sample of the window, on that sample's side.
+        return cheapest_near(centre, window) if refit(centre, window)[3] else centre
+
+    estimate = recentre(estimate, half_window)
+    fit, low, high, _ = refit(estimate, half_window)
     if fit is not None and fit.curvature > 0:
         estimate = float(np.clip(fit.vertex, low, high))
         vertex_std = fit.std
@@ -725,15 +798,11 @@ def search_generator_angle(
         for alpha in new:
             evaluated[alpha] = (objective.evaluate(alpha), "refine")
         window = 2.0 * delta
-        fit, low, high = refit(estimate, window)
-        if fit is None and high - low < window:
-            # A jump within the window leaves too few samples on the estimate's side for a
-            # fit: go on by bisection on the samples (the cheapest one within the window),
-            # which also narrows where the jump lies.
-            x, y = feasible_samples()
-            near = np.abs(x - estimate) <= window * (1 + 1e-6)
-            if near.any():
-                estimate = float(x[near][np.argmin(y[near])])
+        estimate = recentre(estimate, window)
+        fit, low, high, cut = refit(estimate, window)
+        if fit is None and cut:
+            # A jump leaves too few samples on the estimate's side for a fit: go on by
+            # bisection about the cheapest sample, which also narrows where the jump lies.
             vertex_std = None
             half_window = delta
             delta *= 0.5
