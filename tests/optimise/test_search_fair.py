@@ -55,9 +55,12 @@ class PlainWeaveLike:
 # -- the hat mould ---------------------------------------------------------------------------
 
 
-def _hat_search(feature_angle_deg: float, spacing: float, start: tuple[float, float]):
+def _hat_search(
+    feature_angle_deg: float, spacing: float, start: tuple[float, float], law: object = None
+):
     hat = read_obj(HAT, feature_angle_deg=feature_angle_deg)
-    objective = DrapeObjective(hat, PlainWeaveLike(), node_spacing_m=spacing, ply=PLY)
+    law = PlainWeaveLike() if law is None else law
+    objective = DrapeObjective(hat, law, node_spacing_m=spacing, ply=PLY)  # type: ignore[arg-type]
     objective.drape_kwargs["start_xy_m"] = start
     return search_generator_angle(objective)
 
@@ -92,13 +95,17 @@ def test_the_hat_mould_started_on_its_centre_has_its_least_energy_at_90(feature_
     assert all(folds[j.lo_rad] != folds[j.hi_rad] for j in counted)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("feature_angle_deg", [30.0, 180.0])
 def test_the_benchmarks_hat_mould_study_returns_90(feature_angle_deg):
-    """``benchmarks/bench_mesh.py``'s study: d = 2.5 mm, start (4, 3) mm. The start is off
-    the centre lines, so the set-up is only nearly symmetric; on the same fabric 90° is the
-    cheapest sample (was 88.74° at 13.87 J with creases on, against 0.27 J at 90°)."""
-    result = _hat_search(feature_angle_deg, 0.0025, (0.004, 0.003))
+    """``benchmarks/bench_mesh.py``'s study: plain-weave-600, d = 2.5 mm, start (4, 3) mm
+    (was 88.74° at 13.87 J with creases on, against 0.27 J at 90°). The start is off the
+    block's centre lines, so the set-up is only nearly symmetric: with another law the
+    same-fabric comparison may pick another angle (measured with the soft law above: 81.7°
+    creases on, 87.5° off), so this pins the benchmark's own case."""
+    from preform.library import load_library
+
+    law = load_library().shear_law("plain-weave-600")
+    result = _hat_search(feature_angle_deg, 0.0025, (0.004, 0.003), law)
     assert result.optimum_angle_deg == pytest.approx(90.0, abs=0.2)
     assert result.optimum_energy_J <= _lowest_feasible(result)
     assert len(result.optimum_fold_zones) == 4
