@@ -59,6 +59,18 @@ def sandbox(preform_plugins):
     return preform_plugins
 
 
+def run_scene(sandbox, path: Path, materials: str, out: Path):
+    """Run the scene at ``path`` over the bundled fabrics matching ``materials``, serially."""
+    scene = load_scene(path, sandbox.registry)
+    lib = sandbox.library(bundled=True)
+    return run_cases(
+        make_cases(lib, [scene], out, sandbox.host, materials_glob=materials),
+        out,
+        sandbox.host,
+        engine="serial",
+    )
+
+
 def coarse_scene(tmp_path: Path, **search: Any) -> Path:
     data = yaml.safe_load(ISSUE_SCENE)
     data["ply"]["node_spacing_mm"] = 10
@@ -111,19 +123,12 @@ def test_knob_defaults_and_overrides():
 
 
 def test_run_writes_curves_optima_and_the_library_figure(sandbox, tmp_path):
-    lib = sandbox.library(bundled=True)
     path = coarse_scene(tmp_path)
     data = yaml.safe_load(path.read_text())
     data["outputs"].append("energy_plot_png")
     path.write_text(yaml.safe_dump(data))
-    scene = load_scene(path, sandbox.registry)
     out = tmp_path / "out"
-    report = run_cases(
-        make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-*"),
-        out,
-        sandbox.host,
-        engine="serial",
-    )
+    report = run_scene(sandbox, path, "plain-weave-*", out)
     assert len(report.results) == 2
     assert [r.status for r in report.results] == ["ok", "ok"], [r.error for r in report.results]
     folder = out / "hemisphere-min-energy"
@@ -291,17 +296,10 @@ outputs: [energy_vs_angle, optimum]
 def test_a_folding_tool_says_how_its_angles_were_compared(sandbox, tmp_path):
     """The hat mould folds at its block corners: the case says what fabric was left out of
     the comparison, where E(α) jumps, that the optimum is a sample, and its fold zones."""
-    lib = sandbox.library(bundled=True)
     path = tmp_path / "hat.yaml"
     path.write_text(HAT_SCENE)
-    scene = load_scene(path, sandbox.registry)
     out = tmp_path / "out"
-    report = run_cases(
-        make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-600"),
-        out,
-        sandbox.host,
-        engine="serial",
-    )
+    report = run_scene(sandbox, path, "plain-weave-600", out)
     (result,) = report.results
     summary = json.loads((out / "hat-search" / result.material / "summary.json").read_text())
     assert summary["optimum_generator_angle_deg"] == pytest.approx(90.0, abs=0.2)
