@@ -218,6 +218,12 @@ class Coverage:
     #: shadow), also where that fabric would hang past the tool's plan, as (undeformed plan
     #: centre (x, y) [m], fabric area [m²]), largest first.
     fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
+    #: The ply cells the net failed to drape (ni−1, nj−1): the cells asked for and not
+    #: covered, and the fold zones' cells (also those past the tool's plan). Cell (i, j) is the
+    #: same piece of fabric at every generator angle (the ply is laid out in fibre
+    #: coordinates), which is what lets the angle search leave a cell lost at one angle out of
+    #: every angle's sum (``preform.optimise.search``). None when not computed.
+    lost_cells: BoolArray | None = dataclasses.field(default=None, repr=False, compare=False)
 
     @property
     def covered_fraction(self) -> float:
@@ -390,7 +396,10 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
     # vertex's shadow on a tool with vertical walls lies wholly there).
     cell_status = np.ascontiguousarray(result.cell_status, dtype=np.int8)
     fold_cells = np.empty(cell_status.shape, dtype=bool)
-    asked, covered, lost_cells = verdict_kernels.coverage_cells(cell_status, bits, fold_cells)
+    lost_mask = np.empty(cell_status.shape, dtype=bool)
+    asked, covered, lost_cells = verdict_kernels.coverage_cells(
+        cell_status, bits, fold_cells, lost_mask
+    )
     d2 = result.node_spacing**2
     uncovered = {name: float(lost_cells[k]) * d2 for k, name in enumerate(verdict_kernels.CAUSES)}
     if lost_cells[5]:
@@ -416,6 +425,7 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         node_spacing_m=result.node_spacing,
         uncovered_area_m2=uncovered,
         fold_zones=zones,
+        lost_cells=lost_mask,
     )
 
 

@@ -133,11 +133,17 @@ def coverage_nodes(
 
 
 @_jit
-def coverage_cells(cell_status: StatusArray, bits: NDArray[np.uint8], fold_cells: BoolArray):
+def coverage_cells(
+    cell_status: StatusArray,
+    bits: NDArray[np.uint8],
+    fold_cells: BoolArray,
+    lost_cells: BoolArray,
+):
     """The coverage's cell counts from the corners' bits (:func:`coverage_nodes`): (cells
     asked, cells covered (valid), the asked cells not covered by the first cause among their
-    corners (``CAUSES`` order, then none: 6 counts)); and ``fold_cells`` (ni−1, nj−1): the
-    cells in the ply, not valid, with no corner past the edge and one lost behind a fold.
+    corners (``CAUSES`` order, then none: 6 counts)); ``fold_cells`` (ni−1, nj−1): the
+    cells in the ply, not valid, with no corner past the edge and one lost behind a fold; and
+    ``lost_cells`` (ni−1, nj−1): the asked cells not covered, and the fold cells.
 
     A cell is asked when valid, or in the ply with a missing corner and none past the edge."""
     asked = covered = 0
@@ -149,6 +155,7 @@ def coverage_cells(cell_status: StatusArray, bits: NDArray[np.uint8], fold_cells
             valid = st == _VALID
             usable = st != _CELL_OUTSIDE and not valid and not (corners & _PAST_EDGE)
             fold_cells[i, j] = usable and (corners & _FOLD_NODE) != 0
+            lost_cells[i, j] = fold_cells[i, j] or (usable and (corners & _MISSING) != 0)
             if valid:
                 asked += 1
                 covered += 1

@@ -47,6 +47,43 @@ wrinkle (least energy share past the limits, then least area share, then least e
 unrefined, with ``AngleSearchResult.makeable`` False; the pipeline then makes the case
 ``partial`` and says that no angle drapes without wrinkling.
 
+The same fabric at every angle [D]
+----------------------------------
+A drape can lose ply cells: behind a sharp convex vertex the net folds (its *fold zones*,
+:class:`~preform.drape.verdict.Coverage`), or it loses its intersection and the cells behind.
+Those cells drop out of Σ W·s·d², so an angle at which a fold zone appears looks cheap for that
+reason alone: on the bundled hat mould at α = 90° all four block corners fold and E was
+0.27 J, while at 88.74° two of them are draped instead, sheared to about 88° (past the law's
+jamming), and E was 13.87 J; the old search returned 88.74° as the optimum. The search
+therefore compares angles on **the same fabric**: the ply is laid out in fibre coordinates,
+so cell (i, j) is the same piece of fabric at every α; a cell that any feasible sample fails
+to drape (``Coverage.lost_cells``: its fold zones and the cells asked for and not covered) is
+left out of every sample's energy, as its ``excluded_energy_J``. ``SearchPoint.energy_J``,
+what the search ranks, is ``drape_energy_J + uncovered_charge_J − excluded_energy_J``; with no
+cell lost anywhere (a hemisphere, a smooth tool) it is the drape's energy to the last bit.
+Why this rule and not another: charging the lost fabric at some shear energy would price a
+fold (a bending event) as shear, at a shear the law can only continue past jamming; marking
+angles that lose fabric infeasible would leave no angle on a tool whose corners fold at every
+α. The rule costs range: the fabric compared is what every sampled angle drapes, so a wide
+range on a folding tool compares the angles on less of the ply (the excluded fabric area is
+reported, ``excluded_fabric_area_m2``, and the pipeline says it). The set grows as samples are
+added, and every sample is judged again on it.
+
+Discontinuities [D]
+-------------------
+E(α) jumps where a fold zone appears or disappears, or where the coverage or the fabric the
+net fails to drape changes abruptly. Between neighbouring feasible samples a **jump** is
+flagged (:func:`find_discontinuities`) when the number of fold zones changes, or when the
+covered part area or the lost fabric area changes by more than :data:`JUMP_AREA_SHARE` (1 %) of
+the reference area and faster than :data:`JUMP_RATE_PER_DEG` (5 % of it per degree); each is
+reported with its interval and causes (``AngleSearchResult.discontinuities``). The rate is
+what tells a jump from a smooth change (a ply running off a plate changes its covered area by
+up to about 1.2 %/° on the hemisphere's run-off): a jump's rate grows as the samples close in
+on it, so a small jump far from the optimum, between scan samples 5° apart, may go unflagged,
+while near the optimum, where the refinement samples densely, it shows. The cell count itself
+is not a criterion: sheared cells are smaller, so the count changes smoothly with α where
+nothing is lost.
+
 Refinement and symmetry
 -----------------------
 The scan grid is laid symmetrically about 90° (90° ± k·step, plus the range ends), so a
@@ -57,7 +94,18 @@ level: every sample set stays symmetric about a symmetric optimum, so the estima
 90° to rounding. A least-squares fit, not interpolation, so that what remains of the discrete
 E(α)'s roughness (clipped cells are smooth in α, but folds or the ply's end still add or drop
 whole cells) is averaged rather than chased; when a window's fit is no longer convex the
-refinement stops there and says it is noise-limited.
+refinement stops there and says it is noise-limited. A fit uses only the samples on the
+estimate's side of every jump (:func:`continuous_span`), and its vertex stays on that side;
+where a jump leaves too few samples for a fit the refinement goes on by bisection, keeping the
+cheapest sample within the window.
+
+Never dearer than a sample [D]
+------------------------------
+The optimum's energy is at most the lowest energy of any feasible sample, always: when the
+drape at the fit's vertex costs more than the best sample (judged on the same fabric, its own
+lost cells included), or when jumps on both sides of the best sample leave no fit, the optimum
+is that sample, ``optimum_from`` says "best sample" and ``optimum_note`` why; the bracket is
+then its feasible neighbours.
 
 Uncertainty of the optimum [D]
 ------------------------------
@@ -72,6 +120,8 @@ reported too (``residual_rms_rel``), a direct measure of E(α)'s roughness.
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -86,6 +136,7 @@ from preform.drape.surface import Surface
 from preform.drape.verdict import law_range
 from preform.drape.wrinkling import WrinkleLimit, makeable, past_any
 from preform.drape.wrinkling import wrinkle_limits as limits_of
+from preform.drape.verdict import coverage
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
@@ -146,6 +197,22 @@ class DrapeEvaluation:
         """Share of the covered part area past a wrinkle limit [-] (0 when nothing covered)."""
         area = self.covered_area_m2
         return self.wrinkle_area_m2 / area if area > 0 else 0.0
+
+    #: The drape's fold zones (``Coverage.fold_zones``: undeformed plan centre (x, y) [m],
+    #: fabric area [m²], largest first) and the fabric area [m²] of the ply cells the net
+    #: failed to drape (d² a cell: fold zones, and cells asked for and not covered).
+    fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
+    lost_area_m2: float = 0.0
+    #: Per cell (ni−1, nj−1): the energy it adds to ``drape_energy_J`` [J] (0 where not
+    #: counted), and whether the net failed to drape it (``Coverage.lost_cells``). Kept so
+    #: the angle search can leave out of every angle's sum a cell lost at any angle.
+    cell_energy_J: FloatArray | None = field(default=None, repr=False, compare=False)
+    lost_cells: BoolArray | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def fold_zone_area_m2(self) -> float:
+        """Fabric area of the fold zones [m²]."""
+        return float(sum(area for _, area in self.fold_zones))
 
 
 class DrapeObjective:
@@ -277,6 +344,17 @@ class DrapeObjective:
         energy = float((density * share).sum() * result.node_spacing**2)
         covered = result.area[mask] * share
         past = past_any(self.wrinkle_limits, gamma)
+        per_cell = np.zeros(mask.shape)
+        per_cell[mask] = density * share * result.node_spacing**2
+        # The flat ply is laid from the start's plan position: the given one, else the start
+        # node's own (a start given as a 3-D point).
+        if math.isfinite(start_xy_m[0]) and math.isfinite(start_xy_m[1]):
+            plan = start_xy_m
+        else:
+            i0, j0 = result.start_index
+            plan = (float(result.nodes[i0, j0, 0]), float(result.nodes[i0, j0, 1]))
+        cover = coverage(result, self.surface, plan)
+        lost = cover.lost_cells
         return DrapeEvaluation(
             generator_angle_rad=float(result.generator_angle),
             orientation_rad=float(result.orientation),
@@ -288,6 +366,12 @@ class DrapeObjective:
             result=result if keep_result else None,
             wrinkle_energy_J=float((density * share)[past].sum() * result.node_spacing**2),
             wrinkle_area_m2=float(covered[past].sum()),
+            fold_zones=cover.fold_zones,
+            lost_area_m2=(
+                0.0 if lost is None else float(np.count_nonzero(lost)) * result.node_spacing**2
+            ),
+            cell_energy_J=per_cell,
+            lost_cells=lost,
         )
 
     def charged(self, evaluation: DrapeEvaluation, reference_area_m2: float) -> float:
@@ -323,19 +407,126 @@ class SearchPoint:
     wrinkle_area_share: float = 0.0
     wrinkle_energy_share: float = 0.0
     makeable: bool = True
+    #: The energy [J] of this drape's cells that another compared angle fails to drape, left
+    #: out of ``energy_J`` so that every angle is judged on the same fabric (module docstring:
+    #: ``energy_J`` = ``drape_energy_J`` + ``uncovered_charge_J`` − ``excluded_energy_J``).
+    excluded_energy_J: float = 0.0
+    #: Cells counted, the drape's fold zones (number, fabric area [m²]) and the fabric area
+    #: [m²] of the ply cells the net failed to drape (fold zones and cells not covered).
+    cells_counted: int = 0
+    fold_zones: int = 0
+    fold_zone_area_m2: float = 0.0
+    lost_area_m2: float = 0.0
 
     @property
     def generator_angle_deg(self) -> float:
         return math.degrees(self.generator_angle_rad)
 
 
+#: A jump of E(α)'s accounting between two neighbouring samples: a change of the covered part
+#: area, or of the fabric the net fails to drape, by more than this share of the reference
+#: area [-] and faster than :data:`JUMP_RATE_PER_DEG` (module docstring, "Discontinuities");
+#: a change of the number of fold zones is a jump whatever its size.
+JUMP_AREA_SHARE = 0.01
+#: ... and faster than this share of the reference area per degree of α [1/deg]: a jump has
+#: no finite rate, so it shows once the samples are close enough; a smooth change of coverage
+#: (a ply running off a plate: up to about 1.2 %/° measured on the hemisphere's run-off) does
+#: not.
+JUMP_RATE_PER_DEG = 0.05
+
+
+@dataclass(frozen=True)
+class Discontinuity:
+    """A jump of E(α) between two neighbouring samples α_lo < α_hi [rad], with its causes in
+    words (fold zones appearing or disappearing, a jump of the coverage or of the fabric the
+    net fails to drape). The jump lies somewhere inside (α_lo, α_hi)."""
+
+    lo_rad: float
+    hi_rad: float
+    causes: tuple[str, ...]
+
+    def words(self) -> str:
+        return (
+            f"between {math.degrees(self.lo_rad):.4g}° and {math.degrees(self.hi_rad):.4g}°: "
+            + "; ".join(self.causes)
+        )
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "between_deg": [math.degrees(self.lo_rad), math.degrees(self.hi_rad)],
+            "causes": list(self.causes),
+        }
+
+
+def find_discontinuities(
+    points: Sequence[SearchPoint],
+    reference_area_m2: float,
+    share: float = JUMP_AREA_SHARE,
+    rate_per_deg: float = JUMP_RATE_PER_DEG,
+) -> tuple[Discontinuity, ...]:
+    """The jumps of E(α)'s accounting between neighbouring feasible samples (module docstring,
+    "Discontinuities"): the number of fold zones changes, or the covered part area [m²] or the
+    fabric area the net fails to drape [m²] changes by more than max(``share``,
+    ``rate_per_deg`` × the samples' distance in degrees) × the reference area
+    ``reference_area_m2`` [m²]. Sorted by angle."""
+    usable = sorted(
+        (p for p in points if p.feasible and math.isfinite(p.energy_J)),
+        key=lambda p: p.generator_angle_rad,
+    )
+    jumps = []
+    for a, b in itertools.pairwise(usable):
+        width_deg = math.degrees(b.generator_angle_rad - a.generator_angle_rad)
+        step = max(share, rate_per_deg * width_deg) * reference_area_m2
+        causes = []
+        if a.fold_zones != b.fold_zones:
+            causes.append(
+                f"fold zones {a.fold_zones} → {b.fold_zones} "
+                f"({1e6 * a.fold_zone_area_m2:.0f} → {1e6 * b.fold_zone_area_m2:.0f} mm² of "
+                "fabric)"
+            )
+        if abs(b.lost_area_m2 - a.lost_area_m2) > step:
+            causes.append(
+                f"fabric the net fails to drape {1e6 * a.lost_area_m2:.0f} → "
+                f"{1e6 * b.lost_area_m2:.0f} mm²"
+            )
+        if abs(b.covered_area_m2 - a.covered_area_m2) > step:
+            causes.append(
+                f"covered part area {1e6 * a.covered_area_m2:.0f} → "
+                f"{1e6 * b.covered_area_m2:.0f} mm² ({a.cells_counted} → {b.cells_counted} "
+                "cells counted)"
+            )
+        if causes:
+            jumps.append(Discontinuity(a.generator_angle_rad, b.generator_angle_rad, tuple(causes)))
+    return tuple(jumps)
+
+
+def continuous_span(
+    centre_rad: float, jumps: Sequence[Discontinuity], lo_rad: float, hi_rad: float
+) -> tuple[float, float]:
+    """The span [rad] of ``[lo_rad, hi_rad]`` around ``centre_rad`` that no jump crosses: from
+    the upper sample of the nearest jump below to the lower sample of the nearest jump above
+    (a single point when the centre is a sample with a jump on both sides). A centre inside an
+    unresolved jump (between its two samples) gets the centre alone: which side it belongs to
+    is not known until it is draped."""
+    low, high = lo_rad, hi_rad
+    eps = 1e-12
+    for jump in jumps:
+        if jump.hi_rad <= centre_rad + eps:
+            low = max(low, jump.hi_rad)
+        elif jump.lo_rad >= centre_rad - eps:
+            high = min(high, jump.lo_rad)
+        else:
+            return centre_rad, centre_rad
+    return low, high
+
+
 @dataclass(frozen=True)
 class AngleSearchResult:
     """The generator-angle search: the optimum, the whole curve, and how well it is resolved."""
 
-    #: The optimum generator angle α* [rad] and its comparable energy [J] (a drape at α*). α*
-    #: is the vertex of a least-squares fit, so with the energy's small staircase its energy
-    #: may exceed the lowest sampled one by that noise.
+    #: The optimum generator angle α* [rad] and its comparable energy [J] (a drape at α*): the
+    #: vertex of a least-squares fit, or the best feasible sample when the fit's drape is not
+    #: cheaper (``optimum_from``); never more than the lowest feasible sampled energy.
     optimum_angle_rad: float
     optimum_energy_J: float
     #: Every evaluated angle, sorted by angle (scan, refinement and the optimum).
@@ -363,6 +554,20 @@ class AngleSearchResult:
     #: False when no scanned angle can be made (module docstring, "What can be made"): the
     #: optimum is then the scan's angle of least wrinkle, not of least energy.
     makeable: bool = True
+    #: The jumps of E(α) found between neighbouring samples (module docstring); no fit
+    #: straddles one.
+    discontinuities: tuple[Discontinuity, ...] = ()
+    #: "fit" (α* is a fit's vertex, or a sample the fits confirmed) or "best sample" (the fit's
+    #: drape was dearer than the best sample, or no fit could be made: ``optimum_note`` says
+    #: why).
+    optimum_from: str = "fit"
+    optimum_note: str = ""
+    #: Fabric area [m²] (d² a cell) left out of every angle's energy because some compared
+    #: angle fails to drape it (module docstring), and its share of the counted fabric [-].
+    excluded_fabric_area_m2: float = 0.0
+    #: The fold zones of the drape at α* (undeformed plan centre (x, y) [m], fabric area
+    #: [m²], largest first).
+    optimum_fold_zones: tuple[tuple[tuple[float, float], float], ...] = ()
 
     @property
     def optimum_angle_deg(self) -> float:
@@ -397,6 +602,13 @@ class AngleSearchResult:
             "uncovered_energy_density_J_per_m2": self.uncovered_energy_density_J_per_m2,
             "min_coverage": min((p.coverage for p in self.points), default=1.0),
             "makeable": self.makeable,
+            "discontinuities": [jump.summary() for jump in self.discontinuities],
+            "optimum_from": self.optimum_from,
+            "optimum_note": self.optimum_note,
+            "excluded_fabric_area_m2": self.excluded_fabric_area_m2,
+            "optimum_fold_zones": len(self.optimum_fold_zones),
+            "optimum_fold_zone_area_m2": float(sum(a for _, a in self.optimum_fold_zones)),
+            "optimum_fold_zone_centres_m": [list(c) for c, _ in self.optimum_fold_zones],
             **self.settings,
         }
 
@@ -598,35 +810,68 @@ def search_generator_angle(
             can,
         )
 
-    def feasible_samples() -> tuple[FloatArray, FloatArray]:
-        pts = [point(a) for a in sorted(evaluated)]
+    accounting = _SameFabric(evaluated, point, float(objective.drape_kwargs["node_spacing_m"]))
+
+    def feasible_samples(centre: float | None = None) -> tuple[FloatArray, FloatArray]:
+        """Feasible samples (α, compared E), within the continuous span about ``centre``."""
+        pts = accounting.points()
         ok = [p for p in pts if p.feasible and math.isfinite(p.energy_J)]
+        if centre is not None:
+            low, high = continuous_span(centre, accounting.jumps(reference), lo, hi)
+            ok = [p for p in ok if low - 1e-12 <= p.generator_angle_rad <= high + 1e-12]
         return (np.array([p.generator_angle_rad for p in ok]), np.array([p.energy_J for p in ok]))
 
-    xs, ys = feasible_samples()
+    xs, _ = feasible_samples()
     if xs.size == 0:
         # No angle can be made: the one that wrinkles least, said so (module docstring).
         scanned = [point(a) for a in sorted(evaluated)]
         return _least_wrinkle(objective, scanned, first, reference, settings, min_coverage)
-    best = int(np.argmin(ys))
-    # Ties (a symmetric set-up) go to the angle nearest the middle of the range.
-    ties = np.flatnonzero(ys <= ys[best] * (1 + 1e-12) + 1e-300)
-    best = int(ties[np.argmin(np.abs(xs[ties] - 0.5 * (lo + hi)))])
-    estimate = float(xs[best])
-    at_boundary = best in (0, len(xs) - 1)
+
+    def best_sample() -> tuple[float, float]:
+        """The feasible sample of least compared energy (α, E); ties (a symmetric set-up) go
+        to the angle nearest the middle of the range."""
+        x, y = feasible_samples()
+        if x.size == 0:
+            raise SearchError(f"no generator angle in the scan reaches coverage {min_coverage}")
+        # Exact ties only: the optimum's energy may not exceed the lowest by even a rounding.
+        ties = np.flatnonzero(y == y.min())
+        k = int(ties[np.argmin(np.abs(x[ties] - 0.5 * (lo + hi)))])
+        return float(x[k]), float(y[k])
+
+    estimate, _ = best_sample()
+    at_boundary = estimate in (float(xs[0]), float(xs[-1]))
     half_window = scan_step_rad
     vertex_std: float | None = None
     noise_limited = False
 
-    def refit(centre: float, window: float) -> _Fit | None:
-        x, y = feasible_samples()
+    def refit(centre: float, window: float) -> tuple[_Fit | None, float, float, bool]:
+        """The parabola over the samples within ``window`` of ``centre`` and on its side of
+        every jump, the span [rad] its vertex may move in, and whether a jump cuts the
+        window."""
+        x, y = feasible_samples(centre)
+        low, high = continuous_span(centre, accounting.jumps(reference), lo, hi)
         # A relative slack keeps a mirror pair together at the window's edge.
         inside = np.abs(x - centre) <= window * (1 + 1e-6)
-        return _parabola(x[inside], y[inside], centre)
+        span = (max(low, centre - window), min(high, centre + window))
+        eps = 1e-9 * window
+        cut = span[0] > max(lo, centre - window) + eps or span[1] < min(hi, centre + window) - eps
+        return _parabola(x[inside], y[inside], centre), span[0], span[1], cut
 
-    fit = refit(estimate, half_window)
+    def cheapest_near(centre: float, window: float) -> float:
+        """The feasible sample of least energy within ``window`` of ``centre`` [rad]."""
+        x, y = feasible_samples()
+        near = np.abs(x - centre) <= window * (1 + 1e-6)
+        return float(x[near][np.argmin(y[near])]) if near.any() else centre
+
+    def recentre(centre: float, window: float) -> float:
+        # Where a jump cuts the window the minimum may lie on its other side: the fit is made
+        # about the cheapest sample of the window, on that sample's side.
+        return cheapest_near(centre, window) if refit(centre, window)[3] else centre
+
+    estimate = recentre(estimate, half_window)
+    fit, low, high, _ = refit(estimate, half_window)
     if fit is not None and fit.curvature > 0:
-        estimate = float(np.clip(fit.vertex, estimate - half_window, estimate + half_window))
+        estimate = float(np.clip(fit.vertex, low, high))
         vertex_std = fit.std
     delta = 0.5 * scan_step_rad
     while delta >= tolerance_rad:
@@ -638,45 +883,86 @@ def search_generator_angle(
         for alpha in new:
             evaluated[alpha] = (objective.evaluate(alpha), "refine")
         window = 2.0 * delta
-        fit = refit(estimate, window)
+        estimate = recentre(estimate, window)
+        fit, low, high, cut = refit(estimate, window)
+        if fit is None and cut:
+            # A jump leaves too few samples on the estimate's side for a fit: go on by
+            # bisection about the cheapest sample, which also narrows where the jump lies.
+            vertex_std = None
+            half_window = delta
+            delta *= 0.5
+            continue
         if fit is None or not fit.curvature > 0:
             noise_limited = fit is not None
             break
-        estimate = float(
-            np.clip(fit.vertex, max(lo, estimate - window), min(hi, estimate + window))
-        )
+        estimate = float(np.clip(fit.vertex, low, high))
         vertex_std = fit.std
         half_window = window
         delta *= 0.5
     estimate = float(np.clip(estimate, lo, hi))
-    at_boundary = at_boundary or min(estimate - lo, hi - estimate) < 0.5 * scan_step_rad
     known = np.array(list(evaluated))
     nearest = float(known[np.argmin(np.abs(known - estimate))])
     if abs(nearest - estimate) <= 1e-9 * tolerance_rad:
-        final = point(nearest)
+        estimate = nearest
     else:
         evaluated[estimate] = (objective.evaluate(estimate), "optimum")
-        final = point(estimate)
-    if not final.feasible:
-        # The refined angle left the feasible (covered, makeable) angles, between a feasible
-        # sample and an infeasible one: the best feasible sample is the answer.
-        xs, ys = feasible_samples()
-        estimate = float(xs[int(np.argmin(ys))])
-        final = point(estimate)
-    points = tuple(point(a) for a in sorted(evaluated))
-    ok = [p for p in points if p.feasible and math.isfinite(p.energy_J)]
+    # Judged on the fabric every compared angle drapes, the optimum's drape included (its
+    # lost cells leave the others' sums too), and never dearer than the best sample.
+    final = accounting.point(estimate)
+    sample_angle, sample_energy = best_sample()
+    optimum_from, note = "fit", ""
+    if not final.feasible or not final.energy_J <= sample_energy:
+        why = (
+            "is not feasible"
+            if not final.feasible
+            else f"costs {final.energy_J:.6g} J, more than the best sample's {sample_energy:.6g} J"
+        )
+        note = (
+            f"the refined estimate {math.degrees(estimate):.6g}° {why}; the optimum is the "
+            f"best sample, {math.degrees(sample_angle):.6g}°"
+        )
+        optimum_from, estimate = "best sample", sample_angle
+        final = accounting.point(estimate)
+        vertex_std = None
+    jumps = accounting.jumps(reference)
+    low, high = continuous_span(estimate, jumps, lo, hi)
+    if optimum_from == "fit" and low == high:
+        optimum_from = "best sample"
+        note = (
+            f"E(α) jumps on both sides of the sample {math.degrees(estimate):.6g}°, so no fit "
+            "can be made there; the optimum is that sample"
+        )
+        vertex_std = None
+    at_boundary = at_boundary or min(estimate - lo, hi - estimate) < 0.5 * scan_step_rad
+    points = accounting.points()
+    ok = [
+        p
+        for p in points
+        if p.feasible
+        and math.isfinite(p.energy_J)
+        and low - 1e-12 <= p.generator_angle_rad <= high + 1e-12
+    ]
     uncertainty, roughness = optimum_uncertainty(
         np.array([p.generator_angle_rad for p in ok]),
         np.array([p.energy_J for p in ok]),
         estimate,
         scan_step_rad,
     )
+    if optimum_from == "best sample":
+        # The minimum lies between the best sample's feasible neighbours, as far as the
+        # samples tell.
+        angles = sorted(p.generator_angle_rad for p in points if p.feasible)
+        k = angles.index(estimate)
+        bracket = (angles[max(k - 1, 0)], angles[min(k + 1, len(angles) - 1)])
+    else:
+        bracket = (max(lo, estimate - half_window), min(hi, estimate + half_window))
+    final_ev = evaluated[estimate][0]
     return AngleSearchResult(
         optimum_angle_rad=estimate,
         optimum_energy_J=final.energy_J,
         points=points,
         drapes=objective.drapes - first,
-        bracket_rad=(max(lo, estimate - half_window), min(hi, estimate + half_window)),
+        bracket_rad=bracket,
         vertex_std_rad=vertex_std,
         at_boundary=at_boundary,
         noise_limited=noise_limited,
@@ -685,6 +971,11 @@ def search_generator_angle(
         uncertainty_rad=uncertainty,
         residual_rms_rel=roughness,
         settings=settings,
+        discontinuities=jumps,
+        optimum_from=optimum_from,
+        optimum_note=note,
+        excluded_fabric_area_m2=accounting.excluded_area_m2(),
+        optimum_fold_zones=final_ev.fold_zones,
     )
 
 
@@ -730,6 +1021,83 @@ def _least_wrinkle(
         settings=settings,
         makeable=False,
     )
+
+
+class _SameFabric:
+    """The search's samples judged on the same fabric (module docstring, "The same fabric at
+    every angle"): a ply cell that a feasible sample fails to drape (a fold zone, or a cell
+    asked for and not covered) is left out of every sample's energy. Recomputed only when a
+    sample is added."""
+
+    def __init__(
+        self,
+        evaluated: dict[float, tuple[DrapeEvaluation, str]],
+        point: Callable[[float], SearchPoint],
+        node_spacing_m: float,
+    ) -> None:
+        self._evaluated = evaluated
+        self._point = point
+        self._spacing = float(node_spacing_m)
+        self._reference = math.nan
+        self._count = -1
+        self._points: dict[float, SearchPoint] = {}
+        self._excluded: BoolArray | None = None
+        self._jumps: tuple[Discontinuity, ...] = ()
+
+    def _update(self) -> None:
+        if self._count == len(self._evaluated):
+            return
+        base = {alpha: self._point(alpha) for alpha in self._evaluated}
+        masks = [
+            ev.lost_cells
+            for alpha, (ev, _) in self._evaluated.items()
+            if base[alpha].feasible and ev.lost_cells is not None
+        ]
+        shapes = {mask.shape for mask in masks}
+        excluded = None
+        if len(shapes) == 1 and any(mask.any() for mask in masks):
+            excluded = np.logical_or.reduce(masks)
+        self._excluded = excluded
+        self._points = {}
+        for alpha, p in base.items():
+            ev = self._evaluated[alpha][0]
+            removed = 0.0
+            cells = ev.cell_energy_J
+            if excluded is not None and cells is not None and cells.shape == excluded.shape:
+                removed = float(cells[excluded].sum())
+            self._points[alpha] = dataclasses.replace(
+                p,
+                energy_J=p.energy_J - removed,
+                excluded_energy_J=removed,
+                cells_counted=ev.cells_counted,
+                fold_zones=len(ev.fold_zones),
+                fold_zone_area_m2=ev.fold_zone_area_m2,
+                lost_area_m2=ev.lost_area_m2,
+            )
+        self._count = len(self._evaluated)
+        self._jumps = ()
+        self._reference = math.nan
+
+    def point(self, alpha: float) -> SearchPoint:
+        self._update()
+        return self._points[alpha]
+
+    def points(self) -> tuple[SearchPoint, ...]:
+        self._update()
+        return tuple(self._points[a] for a in sorted(self._points))
+
+    def jumps(self, reference_area_m2: float) -> tuple[Discontinuity, ...]:
+        self._update()
+        if self._reference != reference_area_m2:
+            self._jumps = find_discontinuities(self.points(), reference_area_m2)
+            self._reference = reference_area_m2
+        return self._jumps
+
+    def excluded_area_m2(self) -> float:
+        self._update()
+        if self._excluded is None:
+            return 0.0
+        return float(np.count_nonzero(self._excluded)) * self._spacing**2
 
 
 # --------------------------------------------------------------------------------------------

@@ -168,6 +168,16 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     ctx.summary["energy_vs_angle_table"] = trade_table(result)
     ctx.summary["search_makeable"] = result.makeable
     ctx.summary["search_angles_not_makeable"] = sum(not p.makeable for p in result.points)
+    # The curve above is what the search compares (the same fabric at every angle); this is
+    # each drape's whole energy of the part, fold zones' neighbours and all.
+    ctx.summary["energy_vs_angle_drape_J"] = [
+        [p.generator_angle_deg, p.drape_energy_J] for p in result.points
+    ]
+    ctx.summary["energy_vs_angle_fold_zones"] = [
+        [p.generator_angle_deg, p.fold_zones, p.fold_zone_area_m2] for p in result.points
+    ]
+    ctx.summary["search_discontinuities"] = [jump.summary() for jump in result.discontinuities]
+    ctx.summary["search_excluded_fabric_area_m2"] = result.excluded_fabric_area_m2
     ctx.summary["search_min_coverage"] = min(p.coverage for p in result.points)
     ctx.summary["search_reference_area_m2"] = result.reference_area_m2
     ctx.summary["search_uncovered_energy_density_J_per_m2"] = (
@@ -256,6 +266,24 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
             )
 
 
+def _warn_accounting(ctx: CaseContext, search: AngleSearchResult) -> None:
+    """Say how E(α) was compared and where it jumps (``preform.optimise.search``)."""
+    if search.excluded_fabric_area_m2 > 0:
+        ctx.warn(
+            f"{1e6 * search.excluded_fabric_area_m2:.0f} mm² of the ply's fabric is left out "
+            "of every angle's energy because the net fails to drape it (a fold zone, or fabric "
+            "not reached) at some compared angle: the angles are compared on the fabric they "
+            "all drape, so no angle looks cheap because part of the part dropped out of its sum"
+        )
+    jumps = search.discontinuities
+    if jumps:
+        shown = "; ".join(jump.words() for jump in jumps[:4])
+        more = f"; and {len(jumps) - 4} more" if len(jumps) > 4 else ""
+        ctx.warn(f"E(α) jumps at {len(jumps)} place(s) (no fit straddles one): {shown}{more}")
+    if search.optimum_from != "fit":
+        ctx.warn(f"the least-energy generator angle is a sample, not a fit: {search.optimum_note}")
+
+
 def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
     lo, hi = search.settings.get("range_deg", [None, None])
     if search.at_boundary:
@@ -328,6 +356,11 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
                 "residual_rms_rel",
                 "at_boundary",
                 "noise_limited",
+                "optimum_from",
+                "optimum_note",
+                "optimum_fold_zones",
+                "optimum_fold_zone_area_m2",
+                "optimum_fold_zone_centres_m",
             )
         }
     )
@@ -363,6 +396,7 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
     if relax:
         _run_relax(ctx, objective, optimum, relax if isinstance(relax, Mapping) else {})
     _warn_resolution(ctx, search)
+    _warn_accounting(ctx, search)
     from preform.pipeline.planner import plan
 
     if "drape" not in {step.name for step in plan(ctx.scene, ctx.registry)}:

@@ -59,6 +59,18 @@ def sandbox(preform_plugins):
     return preform_plugins
 
 
+def run_scene(sandbox, path: Path, materials: str, out: Path):
+    """Run the scene at ``path`` over the bundled fabrics matching ``materials``, serially."""
+    scene = load_scene(path, sandbox.registry)
+    lib = sandbox.library(bundled=True)
+    return run_cases(
+        make_cases(lib, [scene], out, sandbox.host, materials_glob=materials),
+        out,
+        sandbox.host,
+        engine="serial",
+    )
+
+
 def coarse_scene(tmp_path: Path, **search: Any) -> Path:
     data = yaml.safe_load(ISSUE_SCENE)
     data["ply"]["node_spacing_mm"] = 10
@@ -111,19 +123,12 @@ def test_knob_defaults_and_overrides():
 
 
 def test_run_writes_curves_optima_and_the_library_figure(sandbox, tmp_path):
-    lib = sandbox.library(bundled=True)
     path = coarse_scene(tmp_path)
     data = yaml.safe_load(path.read_text())
     data["outputs"].append("energy_plot_png")
     path.write_text(yaml.safe_dump(data))
-    scene = load_scene(path, sandbox.registry)
     out = tmp_path / "out"
-    report = run_cases(
-        make_cases(lib, [scene], out, sandbox.host, materials_glob="plain-weave-*"),
-        out,
-        sandbox.host,
-        engine="serial",
-    )
+    report = run_scene(sandbox, path, "plain-weave-*", out)
     assert len(report.results) == 2
     assert [r.status for r in report.results] == ["ok", "ok"], [r.error for r in report.results]
     folder = out / "hemisphere-min-energy"
@@ -276,3 +281,37 @@ def test_a_priced_bare_area_is_a_stated_choice_and_makes_the_case_partial(sandbo
     assert priced.summary["search_uncovered_energy_density_J_per_m2"] == pytest.approx(want)
     (reason,) = priced.partial_reasons
     assert "priced uncovered part area" in reason and "40°" in reason
+
+
+HAT_SCENE = """\
+name: hat-search
+tool: {surface: mesh, file: hat_mould.obj, feature_angle_deg: 30}
+ply: {node_spacing_mm: 10, size_mm: [360, 360]}
+start: {point_mm: [0, 0], orientation_deg: 0}
+search: {generator_angle_deg: {min: 30, max: 150}}
+outputs: [energy_vs_angle, optimum]
+"""
+
+
+def test_a_folding_tool_says_how_its_angles_were_compared(sandbox, tmp_path):
+    """The hat mould folds at its block corners: the case says what fabric was left out of
+    the comparison, where E(α) jumps, that the optimum is a sample, and its fold zones."""
+    path = tmp_path / "hat.yaml"
+    path.write_text(HAT_SCENE)
+    out = tmp_path / "out"
+    report = run_scene(sandbox, path, "plain-weave-600", out)
+    (result,) = report.results
+    summary = json.loads((out / "hat-search" / result.material / "summary.json").read_text())
+    assert summary["optimum_generator_angle_deg"] == pytest.approx(90.0, abs=0.2)
+    assert summary["optimum_energy_J"] <= min(e for _, e in summary["energy_vs_angle"])
+    assert summary["optimum_fold_zones"] == 4
+    assert summary["optimum_fold_zone_area_m2"] > 0
+    assert summary["search_excluded_fabric_area_m2"] > 0
+    assert summary["search_discontinuities"]
+    assert summary["optimum_from"] in ("fit", "best sample")
+    drape_energy = dict(map(tuple, summary["energy_vs_angle_drape_J"]))
+    compared = dict(map(tuple, summary["energy_vs_angle"]))
+    assert all(compared[a] <= drape_energy[a] + 1e-12 for a in compared)
+    warnings = " ".join(summary["warnings"])
+    assert "left out of every angle's energy" in warnings
+    assert "E(α) jumps at" in warnings
