@@ -133,10 +133,9 @@ from numpy.typing import NDArray
 from preform.drape.net import DrapeError, drape
 from preform.drape.result import DrapeResult
 from preform.drape.surface import Surface
-from preform.drape.verdict import law_range
+from preform.drape.verdict import coverage, law_range
 from preform.drape.wrinkling import WrinkleLimit, makeable, past_any
 from preform.drape.wrinkling import wrinkle_limits as limits_of
-from preform.drape.verdict import coverage
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
