@@ -54,6 +54,8 @@ SCENE_KEYWORDS: dict[str, tuple[str, ...]] = {
     "generators": ("start", "generators"),
     "fidelity": ("fidelity",),
     "outputs": ("outputs",),
+    "wrinkle_area_tolerance": ("search", "wrinkle_area_tolerance"),
+    "max_wrinkle_area_share": ("search", "max_wrinkle_area_share"),
 }
 
 #: The scenes the API starts from when given none (bundled; see ``preform scenes list``).
@@ -169,6 +171,8 @@ def scene(
     generator_angle_range_deg: tuple[float, float] | None = None,
     fidelity: str | None = None,
     outputs: Sequence[str] | None = None,
+    wrinkle_area_tolerance: float | None = None,
+    max_wrinkle_area_share: float | None = None,
 ) -> Scene:
     """A validated scene: ``spec`` (a bundled scene's name, a scene file, a mapping of scene
     data, or a ``Scene``) with the keyword arguments set.
@@ -178,7 +182,9 @@ def scene(
     the two fibre families), ``ply_outline_mm`` and ``start_point_mm`` (plan x, y) are in mm;
     ``orientation_deg`` (plan direction of the first generator), ``generator_angle_deg`` (angle
     between the generators) and ``generator_angle_range_deg`` (the least-energy search's range)
-    in degrees; ``fidelity`` is ``draft``, ``standard`` or ``fine``. Invalid values raise
+    in degrees; ``fidelity`` is ``draft``, ``standard`` or ``fine``; ``wrinkle_area_tolerance``
+    and ``max_wrinkle_area_share`` (shares 0..1 of the part area) are the search's rule of what
+    can be made (docs/physics.md, "Wrinkling and what can be made"). Invalid values raise
     ``preform.pipeline.scene.SceneError`` with located messages, as a scene file would.
     """
     given = locals()

@@ -50,6 +50,12 @@ FloatArray = NDArray[np.float64]
 #: wrinkle limit [-] (issue 24: "not mostly energy from cells past jamming or stitch failure").
 WRINKLE_ENERGY_SHARE_MAX = 0.5
 
+#: An angle of the least-energy search can be made when its wrinkled share of the covered part
+#: area is within this of the least share any evaluated angle reaches [-] (docs/physics.md,
+#: "Wrinkling and what can be made"; a stated tolerance, the scene knob
+#: ``search.wrinkle_area_tolerance``) [C].
+WRINKLE_AREA_TOLERANCE = 0.02
+
 PAST_JAMMING = "past_jamming"
 PAST_STITCH_FAILURE = "past_stitch_failure"
 
@@ -135,11 +141,18 @@ def past_any(limits: Iterable[WrinkleLimit], gamma: FloatArray) -> BoolArray:
     return out
 
 
-def makeable(energy_share: float, area_share: float, max_area_share: float | None = None) -> bool:
-    """Whether a drape can be made (the status rule, module docstring): at most
-    :data:`WRINKLE_ENERGY_SHARE_MAX` of its energy from cells past a wrinkle limit and, when
-    given, at most ``max_area_share`` of its draped part area there [-]."""
-    if not energy_share <= WRINKLE_ENERGY_SHARE_MAX:
+def makeable(
+    area_share: float,
+    least_area_share: float,
+    tolerance: float = WRINKLE_AREA_TOLERANCE,
+    max_area_share: float | None = None,
+) -> bool:
+    """Whether a drape of the least-energy search can be made (docs/physics.md, "Wrinkling
+    and what can be made"): its share of the covered part area past a wrinkle limit [-] is
+    within ``tolerance`` [-] of the least share any compared angle reaches and, when given,
+    at most ``max_area_share`` [-]. Feasibility first, by area: where the fabric wrinkles is
+    what cannot be made, whatever energy the law continues with there."""
+    if not area_share <= least_area_share + tolerance:
         return False
     return max_area_share is None or area_share <= max_area_share
 
@@ -249,10 +262,6 @@ class Wrinkling:
     def mostly_wrinkle(self) -> bool:
         """More than half the total energy comes from cells past a limit: not ``ok``."""
         return self.energy_share > WRINKLE_ENERGY_SHARE_MAX
-
-    def makeable(self, max_area_share: float | None = None) -> bool:
-        """:func:`makeable` of this drape."""
-        return makeable(self.energy_share, self.area_share, max_area_share)
 
     def reason(self) -> str:
         """Why the drape is not ``ok``, in words (empty when it is)."""

@@ -36,16 +36,22 @@ What can be made [D]
 Least energy is compared among drapes that can be made. A drape needing cells past jamming or
 stitch failure wrinkles there (``preform.drape.wrinkling``), and the law's energy for those
 cells is its continuation, not a physical energy; 4–7 % of a part sheared past jamming can
-carry 95 % of a satin's energy, so E(α) alone would compare continuations. The rule, the same
-for every architecture (it reads only the law's limits): an angle is **makeable** when its
-drape would be ``ok`` by the status rule, at most half its drape energy from cells past a
-wrinkle limit, and, when the scene sets ``search.max_wrinkle_area_share``, at most that share
-of its covered part area past one. An angle that is not makeable is infeasible, as one below
-``min_coverage`` is: sampled and reported (``SearchPoint.makeable``, its wrinkle shares), never
-chosen. When no scanned angle is makeable the search returns the scanned angle of least
-wrinkle (least energy share past the limits, then least area share, then least energy),
-unrefined, with ``AngleSearchResult.makeable`` False; the pipeline then makes the case
-``partial`` and says that no angle drapes without wrinkling.
+carry 95 % of a satin's energy, so E(α) alone would compare continuations. The rule,
+feasibility first and by area, the same for every architecture (it reads only the law's
+limits): an angle is **makeable** when the share of its covered part area past a wrinkle limit
+is within ``wrinkle_area_tolerance`` (scene ``search.wrinkle_area_tolerance``, default 0.02 of
+the area [C]) of the least share any evaluated angle reaches, and, when the scene sets
+``search.max_wrinkle_area_share``, at most that share. An angle that is not makeable is
+infeasible, as one below ``min_coverage`` is: sampled and reported (``SearchPoint.makeable``,
+its wrinkle shares), never chosen. Why area and not the energy share of the status rule: the
+energy share rewards an angle that shears the whole part more (its physical energy grows)
+over one that is nearly unsheared but for a few jammed cells; on the hat mould it made 90°
+(1.1 % of the area wrinkled, 0.03 J) unmakeable and chose 107.5° (4.9 %, 0.55 J). The status
+rule still says what a drape's energy means (the case is ``partial`` when it is mostly
+continuation). When no scanned angle is makeable (only with ``max_wrinkle_area_share``) the
+search returns the scanned angle of least wrinkle (least area share past the limits, then
+least energy share, then least energy), unrefined, with ``AngleSearchResult.makeable`` False;
+the pipeline then makes the case ``partial`` and says that no angle drapes within the cap.
 
 The same fabric at every angle [D]
 ----------------------------------
@@ -134,7 +140,7 @@ from preform.drape.net import DrapeError, drape
 from preform.drape.result import DrapeResult
 from preform.drape.surface import Surface
 from preform.drape.verdict import coverage, law_range
-from preform.drape.wrinkling import WrinkleLimit, makeable, past_any
+from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, WrinkleLimit, makeable, past_any
 from preform.drape.wrinkling import wrinkle_limits as limits_of
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
@@ -734,6 +740,7 @@ def search_generator_angle(
     min_coverage: float = 0.0,
     part_area_m2: float | None = None,
     max_wrinkle_area_share: float | None = None,
+    wrinkle_area_tolerance: float = WRINKLE_AREA_TOLERANCE,
 ) -> AngleSearchResult:
     """The generator angle α [rad] of least comparable energy over ``angle_range_rad`` [rad].
 
@@ -743,10 +750,12 @@ def search_generator_angle(
     drape at the optimum itself. ``part_area_m2`` [m²] fixes the reference area (default: the
     part's own area when it knows it, else the largest area covered in the scan);
     ``min_coverage`` [-] marks angles below it infeasible, and so does an angle that cannot be
-    made (module docstring, "What can be made"): more than half its energy from cells past a
-    wrinkle limit or, when given, more than ``max_wrinkle_area_share`` [-] of its covered area
-    there.
+    made (module docstring, "What can be made"): a share of its covered area past a wrinkle
+    limit more than ``wrinkle_area_tolerance`` [-] above the least share any evaluated angle
+    reaches or, when given, more than ``max_wrinkle_area_share`` [-].
     """
+    if not 0.0 <= wrinkle_area_tolerance <= 1.0:
+        raise SearchError(f"wrinkle_area_tolerance {wrinkle_area_tolerance!r} must lie in [0, 1]")
     lo, hi = (float(a) for a in angle_range_rad)
     if not (0.0 < lo < hi < math.pi):
         raise SearchError(
@@ -775,6 +784,7 @@ def search_generator_angle(
             else math.degrees(objective.uncovered_shear_rad)
         ),
         "max_wrinkle_area_share": max_wrinkle_area_share,
+        "wrinkle_area_tolerance": wrinkle_area_tolerance,
     }
     grid = scan_angles(lo, hi, scan_step_rad)
     evaluated: dict[float, tuple[DrapeEvaluation, str]] = {}
@@ -789,11 +799,25 @@ def search_generator_angle(
     if not reference > 0:
         raise SearchError("no drape of the scan covers any of the part")
 
+    def least_wrinkle_area_share() -> float:
+        """The least wrinkled area share of any evaluated angle that drapes and covers."""
+        shares = [
+            ev.wrinkle_area_share
+            for ev, _ in evaluated.values()
+            if ev.draped and min(1.0, ev.covered_area_m2 / reference) >= min_coverage
+        ]
+        return min(shares, default=0.0)
+
     def point(alpha: float) -> SearchPoint:
         ev, stage = evaluated[alpha]
         energy = objective.charged(ev, reference)
         coverage = min(1.0, ev.covered_area_m2 / reference)
-        can = makeable(ev.wrinkle_energy_share, ev.wrinkle_area_share, max_wrinkle_area_share)
+        can = makeable(
+            ev.wrinkle_area_share,
+            least_wrinkle_area_share(),
+            wrinkle_area_tolerance,
+            max_wrinkle_area_share,
+        )
         return SearchPoint(
             alpha,
             energy,
@@ -987,7 +1011,7 @@ def _least_wrinkle(
     min_coverage: float,
 ) -> AngleSearchResult:
     """The scan's angle of least wrinkle when none can be made (module docstring): least
-    energy share past the wrinkle limits, then least area share, then least energy, among the
+    area share past the wrinkle limits, then least energy share, then least energy, among the
     angles that drape and reach ``min_coverage``; ties to the middle of the range. Not
     refined: the wrinkle shares are no smooth objective, and the angle is a sampled one."""
     candidates = [p for p in scanned if p.coverage >= min_coverage and math.isfinite(p.energy_J)]
@@ -998,8 +1022,8 @@ def _least_wrinkle(
         candidates,
         # rounded, so that mirror angles of a symmetric set-up tie to the last bits
         key=lambda p: (
-            round(p.wrinkle_energy_share, 12),
             round(p.wrinkle_area_share, 12),
+            round(p.wrinkle_energy_share, 12),
             p.energy_J,
             abs(p.generator_angle_rad - 0.5 * (lo + hi)),
         ),

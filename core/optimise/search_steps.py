@@ -13,8 +13,9 @@ fidelity knobs (degrees, as in every scene; defaults in brackets):
       tolerance_deg: 1            # refinement stops below this step [1]
       max_drapes: 60              # budget of the angle search [60]
       min_coverage: 0.0           # angles covering less of the part are infeasible [0]
-      max_wrinkle_area_share: null   # angles with more of their area past jamming or
-                                  # stitch failure cannot be made [off: the status rule alone]
+      wrinkle_area_tolerance: 0.02   # an angle can be made when its share of area past
+                                  # jamming or stitch failure is within this of the least [0.02]
+      max_wrinkle_area_share: null   # and, when set, at most this share [off]
       part_area_mm2: null         # the part's area; default: the part's own (a bare
                                   # hemisphere: 2πR²), else the best coverage of the scan
       uncovered_shear_deg: null   # price bare part area at W(this shear) [off: no charge];
@@ -87,6 +88,7 @@ def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, An
         "energy_table_step_deg": knobs.energy_table_step_deg,
         "min_coverage": section.min_coverage,
         "max_wrinkle_area_share": section.max_wrinkle_area_share,
+        "wrinkle_area_tolerance": section.wrinkle_area_tolerance,
         "part_area_mm2": section.part_area_mm2,
         "uncovered_shear_deg": section.uncovered_shear_deg,
         "layout": section.layout,
@@ -142,6 +144,7 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
                 min_coverage=knobs["min_coverage"],
                 part_area_m2=None if area is None else float(area) * MM * MM,
                 max_wrinkle_area_share=knobs["max_wrinkle_area_share"],
+                wrinkle_area_tolerance=knobs["wrinkle_area_tolerance"],
             )
     except SearchError as error:
         broken = law_nonfinite_angle(objective.law)
@@ -409,13 +412,14 @@ def _no_makeable_angle(search: AngleSearchResult, at: Any) -> str:
     """Why a search that found no makeable angle is partial, in words."""
     lo, hi = search.settings.get("range_deg", [math.nan, math.nan])
     cap = search.settings.get("max_wrinkle_area_share")
-    rule = "more than half its energy comes from cells past jamming or stitch failure" + (
-        f", or more than {100 * cap:.3g} % of its area lies there (search.max_wrinkle_area_share)"
+    rule = (
+        f"more than {100 * cap:.3g} % of its covered area lies past jamming or stitch failure "
+        "(search.max_wrinkle_area_share)"
         if cap is not None
-        else ""
+        else "its area past jamming or stitch failure is more than the tolerance above the least"
     )
     return (
-        f"no generator angle in [{lo:.4g}°, {hi:.4g}°] drapes without wrinkling: at every "
+        f"no generator angle in [{lo:.4g}°, {hi:.4g}°] drapes within the wrinkling cap: at every "
         f"scanned angle {rule}; the search returns the angle of least wrinkle, "
         f"{search.optimum_angle_deg:.4g}°, where {100 * at.wrinkle_energy_share:.3g} % of the "
         f"energy comes from {100 * at.wrinkle_area_share:.3g} % of the covered area past those "

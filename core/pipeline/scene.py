@@ -183,8 +183,17 @@ class SearchSection(BaseModel):
         ge=0,
         le=1,
         description="An angle whose drape has more than this share of its covered part area "
-        "past jamming or stitch failure (where the fabric wrinkles) cannot be made, besides "
-        "more than half its energy there (the status rule). Default: the status rule alone.",
+        "past jamming or stitch failure (where the fabric wrinkles) cannot be made. Default: "
+        "no cap (wrinkle_area_tolerance alone).",
+    )
+    wrinkle_area_tolerance: float = Field(
+        default=0.02,
+        ge=0,
+        le=1,
+        description="An angle can be made when the share of its covered part area past "
+        "jamming or stitch failure is at most this above the least share any searched angle "
+        "reaches (feasibility first, by area; 0: least wrinkle, then least energy; 1: least "
+        "energy alone). Default 0.02 [C].",
     )
     uncovered_shear_deg: float | None = Field(
         default=None,

@@ -277,11 +277,11 @@ def test_the_span_between_jumps():
             True,
             "scan",
             0.0,
-            0.0,
-            1,
-            folds,
-            float(folds),
-            float(folds),
+            excluded_energy_J=0.0,
+            cells_counted=1,
+            fold_zones=folds,
+            fold_zone_area_m2=float(folds),
+            lost_area_m2=float(folds),
         )
 
     pts = [point(80, 0), point(85, 0), point(90, 1), point(95, 1), point(100, 2)]
