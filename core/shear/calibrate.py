@@ -117,9 +117,13 @@ def format_path(path: Path_) -> str:
 
 
 def get_path(data: Any, path: Path_) -> Any:
-    """The value at ``path``; KeyError naming the first step that does not exist."""
+    """The value at ``path``; KeyError naming the first step that does not exist. Inside an
+    optional block left empty (None, e.g. a tow's ``compaction``) every field is empty too:
+    None (the trial entry's validation then says whether the field exists)."""
     node = data
     for depth, step in enumerate(path):
+        if node is None and isinstance(step, str) and depth > 0:
+            return None
         if isinstance(node, dict) and isinstance(step, str) and step in node:
             node = node[step]
         elif isinstance(node, list) and isinstance(step, int) and step < len(node):
@@ -130,7 +134,13 @@ def get_path(data: Any, path: Path_) -> Any:
 
 
 def set_path(data: Any, path: Path_, value: Any) -> None:
-    """Set the value at ``path`` (its parent must exist; a missing last key is added)."""
+    """Set the value at ``path`` (its parent must exist, or be an empty optional block, which
+    is made; a missing last key is added)."""
+    node = data
+    for step in path[:-1]:  # make the empty optional blocks on the way
+        if isinstance(node, dict) and isinstance(step, str) and node.get(step) is None:
+            node[step] = {}
+        node = node[step] if isinstance(node, dict | list) else node
     parent = get_path(data, path[:-1])
     last = path[-1]
     if isinstance(parent, dict) and isinstance(last, str):
@@ -271,6 +281,21 @@ def resolve_constants(
     if twice:
         raise CalibrationError(f"constant named twice: {', '.join(twice)}")
     return out
+
+
+def check_constants_exist(
+    fabric: FabricBase, constants: Sequence[Constant], registry: Registry
+) -> None:
+    """Validate the entry with every constant at its start value, so that a path into an empty
+    optional block that names no field there is refused before the fit, in words."""
+    trial = TrialLaws(fabric, registry)
+    try:
+        trial.fabric_with(constants, [c.start for c in constants])
+    except CalibrationError as exc:
+        raise CalibrationError(
+            f"fabric {fabric.name!r}: the constants {', '.join(c.name for c in constants)} "
+            f"do not make a valid entry: {exc}"
+        ) from None
 
 
 def _law_name(entry: Mapping[str, Any]) -> str:
@@ -564,6 +589,7 @@ def calibrate_law(
 
     from preform.shear.law import force_per_length_N_per_mm
 
+    check_constants_exist(fabric, constants, registry)
     angle = np.asarray(angle_deg, dtype=float)
     force = np.asarray(force_N_per_mm, dtype=float)
     if angle.shape != force.shape or angle.ndim != 1:

@@ -720,9 +720,11 @@ def test_a_search_on_the_hat_mould_is_partial_without_a_drape_step(
     text = text.replace("outputs: [drape]", "outputs: [optimum]")
     text += "search: {generator_angle_deg: {min: 70, max: 110}, scan_step_deg: 10}\n"
     ctx = run(context(sandbox, bundled, "plain-weave-150", write(tmp_path / "hs.yaml", text)))
-    (reason,) = ctx.partial_reasons
+    reason, *others = ctx.partial_reasons
     assert reason.startswith("the net covers ") and "folded" in reason
-    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 0.8
+    # plain-weave-150's tows jam at 57° (issue 24): the block's corners shear past it
+    assert all(r.startswith("the drape would wrinkle: ") for r in others)
+    assert ctx.summary["covered_fraction"] == ctx.summary["optimum_covered_fraction"] < 1.0
 
 
 TABULATED = (

@@ -208,7 +208,11 @@ def run_calibrate(tmp_path: Path, *extra: str) -> object:
         (["--param", "shear_law.pretension_N=a:3"], "bounds must be LO:HI"),
         (["--param", "shear_law.pretension_N=5:1"], "LO < HI"),
         (["--param", "shear_law.pretension_N=-1:1e6"], "plausible range 0–10000 N"),
-        (["--param", "shear_law.tow_volume_fraction"], "give its bounds"),
+        (["--param", "tow_types.glass-1190.compaction.fibre_wave_ratio"], "give its bounds"),
+        (
+            ["--param", "tow_types.glass-1190.compaction.fibre_wave_ration=100:500"],
+            "do not make a valid entry",
+        ),
         (["--param", "shear_law.pretension_N", "--param", "shear_law.pretension_N"], "twice"),
         (["--max-angle-deg", "95"], "within (0°, 90°)"),
     ],
