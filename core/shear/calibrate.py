@@ -137,10 +137,17 @@ def set_path(data: Any, path: Path_, value: Any) -> None:
     """Set the value at ``path`` (its parent must exist, or be an empty optional block, which
     is made; a missing last key is added)."""
     node = data
-    for step in path[:-1]:  # make the empty optional blocks on the way
-        if isinstance(node, dict) and isinstance(step, str) and node.get(step) is None:
-            node[step] = {}
-        node = node[step] if isinstance(node, dict | list) else node
+    for step in path[:-1]:  # make the empty optional blocks on the way (resolve_constants
+        # checked the path against the whole entry, where such a block is None; a trial entry
+        # leaves it out)
+        if isinstance(node, dict) and isinstance(step, str):
+            if node.get(step) is None:
+                node[step] = {}
+            node = node[step]
+        elif isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node):
+            node = node[step]
+        else:
+            raise KeyError(format_path(path))
     parent = get_path(data, path[:-1])
     last = path[-1]
     if isinstance(parent, dict) and isinstance(last, str):
