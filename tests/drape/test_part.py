@@ -262,6 +262,7 @@ def test_cli_optimum_of_an_asymmetric_quadratic_law_matches_an_independent_sum(
             "pipeline",
             "run",
             str(library),
+            "--no-bundled",  # this fabric alone (LIBRARY adds to the bundled library)
             "--scene",
             str(tmp_path / "scene.yaml"),
             "--engine",
