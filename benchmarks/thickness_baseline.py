@@ -28,6 +28,7 @@ from preform.geometry.sheared_cell import MAX_SHEAR, check_shear
 from preform.plugins.warpknit import sheared_cell as warp_knit_module
 from preform.plugins.warpknit.geometry import WarpKnitGeometry
 from preform.plugins.woven import sheared_cell as woven_module
+from preform.plugins.woven import tow_jamming as tow_jamming_module
 from preform.plugins.woven.compaction import BundleCompaction
 from preform.plugins.woven.geometry import Family, TowKey, TowType, WovenUnitCell
 from preform.plugins.woven.tow_jamming import TowCompaction
@@ -67,13 +68,16 @@ def jamming_fraction(
 
 @contextlib.contextmanager
 def old_jamming() -> Iterator[None]:
-    """The old jamming fraction in both architectures' tow families for a ``with`` block."""
-    saved = woven_module.jamming_fraction, warp_knit_module.jamming_fraction
-    woven_module.jamming_fraction = warp_knit_module.jamming_fraction = jamming_fraction
+    """The old jamming fraction in both architectures' tow families for a ``with`` block (the
+    woven families reach it through ``tow_jamming.weave_jamming_fraction`` since issue 24,
+    which adds the weave's floats to the tow's own limit; the old bisection is the tow's own
+    limit)."""
+    saved = tow_jamming_module.jamming_fraction, warp_knit_module.jamming_fraction
+    tow_jamming_module.jamming_fraction = warp_knit_module.jamming_fraction = jamming_fraction
     try:
         yield
     finally:
-        woven_module.jamming_fraction, warp_knit_module.jamming_fraction = saved
+        tow_jamming_module.jamming_fraction, warp_knit_module.jamming_fraction = saved
 
 
 def _heights_z(cell: WovenUnitCell) -> dict[tuple[int, int, int], float]:
