@@ -167,9 +167,63 @@ def run_dataset(folder: Path, library: Any, out_dir: Path) -> tuple[list[Compari
     return rows_out, figure
 
 
+def measured_angles() -> list[dict[str, Any]]:
+    """The suite's measured angles (``angles.yaml``), each with its citation."""
+    import yaml
+
+    path = suite_dir() / "angles.yaml"
+    return list(yaml.safe_load(path.read_text(encoding="utf-8")) or [])
+
+
+def angle_rows(library: Any) -> list[dict[str, Any]]:
+    """Each measured angle beside the model's locking (tows meet) and jamming (tows at the
+    weave's jamming fraction, the law's ``packing_angle``) angles of the same fabric [deg], and
+    whether the measurement's interval holds either."""
+    import math
+
+    rows = []
+    for entry in measured_angles():
+        law = library.shear_law(entry["fabric"])
+        lock = math.degrees(law.locking_angle or 0.0)
+        jam = math.degrees(law.packing_angle) if law.packing_angle is not None else 90.0
+        lo = float(entry["value_deg"]) - float(entry["uncertainty_deg"])
+        hi = float(entry["value_deg"]) + float(entry["uncertainty_deg"])
+        rows.append(
+            {
+                "name": entry["name"],
+                "fabric": entry["fabric"],
+                "quantity": entry["quantity"],
+                "measured_deg": float(entry["value_deg"]),
+                "uncertainty_deg": float(entry["uncertainty_deg"]),
+                "model_locking_deg": lock,
+                "model_jamming_deg": jam,
+                "within": [
+                    label for label, a in (("locking", lock), ("jamming", jam)) if lo <= a <= hi
+                ],
+            }
+        )
+    return rows
+
+
+def angles_markdown(rows: list[dict[str, Any]]) -> str:
+    lines = [
+        "| measurement | fabric | measured [deg] | model locking [deg] | model jamming [deg] | "
+        "within the measurement's interval |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['name']} | {r['fabric']} | {r['measured_deg']:.0f} ± "
+            f"{r['uncertainty_deg']:.0f} | {r['model_locking_deg']:.1f} | "
+            f"{r['model_jamming_deg']:.1f} | {', '.join(r['within']) or 'neither'} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
 def run_validation(out_dir: str | Path, library: Any = None) -> dict[str, Any]:
     """Run every dataset; write ``OUT/<dataset>.png``, ``OUT/validation.csv`` and
-    ``OUT/validation.md``; return the table and the files."""
+    ``OUT/validation.md`` (the curves' table, then the measured angles'); return the tables
+    and the files."""
     import csv
 
     from preform.library import load_library
@@ -189,10 +243,12 @@ def run_validation(out_dir: str | Path, library: Any = None) -> dict[str, Any]:
         writer.writeheader()
         for row in rows:
             writer.writerow(row.as_json())
+    angles = angle_rows(lib)
     markdown = out / "validation.md"
-    markdown.write_text(markdown_table(rows), encoding="utf-8")
+    markdown.write_text(markdown_table(rows) + "\n" + angles_markdown(angles), encoding="utf-8")
     return {
         "rows": [r.as_json() for r in rows],
+        "angles": angles,
         "files": {"table": str(table), "markdown": str(markdown), "figures": figures},
     }
 
@@ -239,6 +295,7 @@ def validate_command(out_dir: str, as_json: bool) -> None:
         return
     rows = report["rows"]
     click.echo(markdown_table([Comparison(**r) for r in rows]), nl=False)
+    click.echo(angles_markdown(report["angles"]), nl=False)
     click.echo(f"wrote {report['files']['table']}, {report['files']['markdown']}")
     for figure in report["files"]["figures"]:
         click.echo(f"wrote {figure}")
