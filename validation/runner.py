@@ -70,6 +70,32 @@ def load_dataset(folder: Path) -> dict[str, Any]:
     return meta
 
 
+NORMALISED_COLUMNS = ("shear_angle_deg", "force_per_length_N_per_mm")
+
+
+def read_normalised_csv(path: Path) -> tuple[Any, Any]:
+    """A normalised curve: columns ``shear_angle_deg, force_per_length_N_per_mm`` (γ [deg],
+    F_s/L [N/mm]); ValueError naming the file and line of a bad row."""
+    import csv
+
+    import numpy as np
+
+    angles, forces = [], []
+    with path.open(newline="", encoding="utf-8") as handle:
+        reader = csv.reader(handle)
+        header = [h.strip() for h in next(reader, [])]
+        if tuple(header) != NORMALISED_COLUMNS:
+            raise ValueError(f"{path}:1: header must be {', '.join(NORMALISED_COLUMNS)}")
+        for line, row in enumerate(reader, start=2):
+            try:
+                a, f = (float(v) for v in row)
+            except ValueError:
+                raise ValueError(f"{path}:{line}: two numbers expected, got {row!r}") from None
+            angles.append(a)
+            forces.append(f)
+    return np.asarray(angles), np.asarray(forces)
+
+
 def run_dataset(folder: Path, library: Any, out_dir: Path) -> tuple[list[Comparison], Path]:
     """Compare the three laws with one dataset; write its figure; its table rows."""
     import numpy as np
@@ -81,20 +107,26 @@ def run_dataset(folder: Path, library: Any, out_dir: Path) -> tuple[list[Compari
     from preform.shear.law import force_per_length_N_per_mm
 
     meta = load_dataset(folder)
-    rows = read_test_csv(meta["points_path"])
-    if len(rows) != int(meta["point_count"]):
-        raise ValueError(
-            f"{meta['points_path']}: {len(rows)} points, dataset.yaml says {meta['point_count']}"
+    specimen = meta.get("specimen") or {}
+    if meta.get("normalised"):
+        # points already normalised by their authors (γ [deg], F_s/L [N/mm])
+        angle, force = read_normalised_csv(meta["points_path"])
+        count = len(angle)
+    else:
+        rows = read_test_csv(meta["points_path"])
+        count = len(rows)
+        angle, force = normalise_rows(
+            rows,
+            meta["test"],
+            side_mm=specimen.get("side_mm"),
+            fabric_side_mm=specimen.get("fabric_side_mm"),
+            height_mm=specimen.get("height_mm"),
+            width_mm=specimen.get("width_mm"),
         )
-    specimen = meta["specimen"]
-    angle, force = normalise_rows(
-        rows,
-        meta["test"],
-        side_mm=specimen.get("side_mm"),
-        fabric_side_mm=specimen.get("fabric_side_mm"),
-        height_mm=specimen.get("height_mm"),
-        width_mm=specimen.get("width_mm"),
-    )
+    if count != int(meta["point_count"]):
+        raise ValueError(
+            f"{meta['points_path']}: {count} points, dataset.yaml says {meta['point_count']}"
+        )
     benchmark = library.fabric(meta["fabric"])
     bundled = library.fabric(meta["closest_bundled"])
     locking = build_shear_law(benchmark, library.registry).locking_angle
