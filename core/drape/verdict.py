@@ -621,7 +621,8 @@ def shear_limit_warnings(
         if past.any():
             messages.append(
                 f"{_share(past, area, counted)} are sheared past the locking angle "
-                f"{math.degrees(limits.locking):.1f}°: the fabric would wrinkle there"
+                f"{math.degrees(limits.locking):.1f}°: its tows touch and compact there (stiffer; "
+                "it wrinkles only past jamming)"
             )
     # Jamming and stitch failure are where the fabric would wrinkle (preform.drape.wrinkling):
     # said with their energy share, where and how far; the same numbers as the wrinkling block.

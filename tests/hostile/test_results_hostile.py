@@ -569,8 +569,8 @@ def test_cells_past_locking_are_counted(
     assert count == want_count == ctx.summary["cells_past_locking"] and count > 0
     assert percent == pytest.approx(want_percent, abs=0.05)
     assert message.endswith(
-        f"past the locking angle {math.degrees(law.locking_angle):.1f}°: the fabric would "
-        "wrinkle there"
+        f"past the locking angle {math.degrees(law.locking_angle):.1f}°: its tows touch and "
+        "compact there (stiffer; it wrinkles only past jamming)"
     )
     # locking alone never makes a case partial; mostly energy past jamming does (issue 24)
     wrinkle = ["the drape would wrinkle"] if ctx.summary["wrinkling"]["mostly_wrinkle"] else []
