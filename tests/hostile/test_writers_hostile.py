@@ -153,8 +153,8 @@ def test_export_and_run_into_one_folder_lose_nothing(tmp_path):
         time.sleep(0.05 * (trial % 10))  # the export's writes land at different moments of the run
         export = _cli("export", "plain-weave-150", "flat-pattern", "--scene", str(scene),
                       "--out", str(out))  # fmt: skip
-        export_out, export_err = export.communicate(timeout=300)
-        run_out, run_err = run.communicate(timeout=300)
+        _, export_err = export.communicate(timeout=300)
+        _, run_err = run.communicate(timeout=300)
         assert export.returncode == 0, (trial, export_err)
         assert run.returncode == 0, (trial, run_err)
         assert "Traceback" not in export_err + run_err
