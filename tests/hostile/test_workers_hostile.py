@@ -76,7 +76,11 @@ def test_unguarded_call_inside_a_function_is_refused_at_its_top_level_line(runen
 
 @pytest.mark.parametrize(
     "guard",
-    ['if __name__ == "__main__":', "if '__main__' == __name__:", "if __name__ != '__mp_main__':"],
+    [
+        'if __name__ == "__main__":',
+        pytest.param("if '__main__' == __name__:", marks=pytest.mark.slow),
+        pytest.param("if __name__ != '__mp_main__':", marks=pytest.mark.slow),
+    ],
 )
 def test_guarded_script_runs(runenv, guard):
     body = "import preform\n\n{guard}\n    run = {{call}}\n    print(run.counts)\n"
@@ -162,17 +166,22 @@ def test_ctrl_c_while_the_fork_server_imports_is_quiet(tmp_path, trial):
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
     assert "Traceback" not in err, err
-    assert proc.returncode in (130, 0), err
+    # 130: preform stopped on the interrupt; 0: the run had finished; -SIGINT: it came while
+    # the interpreter was shutting down, outside preform's code (as in test_kill.py)
+    assert proc.returncode in (130, 0, -signal.SIGINT), err
     deadline = time.monotonic() + 10
     while any(_alive(p) for p in below) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not [p for p in below if _alive(p)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fate", ["hang", "spin"])
 def test_cases_past_their_time_limit_on_the_process_engine_are_quiet(runenv, fate):
     """Cases stopped at their time limit by killing their worker: the run says TIMED OUT, and
-    no traceback of a worker or of the fork server reaches stderr."""
+    no traceback of a worker or of the fork server reaches stderr. (The traceback came in 1
+    of 6 trials of the default study under load; the default tier tests its cause below,
+    ``test_a_worker_that_cannot_take_its_process_object_dies_quietly``.)"""
     lib = runenv.library(*(fabric(f"s{i}", fate=fate) for i in range(4)), fabric("quick"))
     proc = runenv.run(lib, runenv.scene(), "--workers", "2", "--case-timeout", "0.3")
     assert proc.returncode == 1
