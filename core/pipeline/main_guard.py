@@ -64,29 +64,34 @@ def _tests_name(node: ast.AST) -> bool:
     return any(isinstance(n, ast.Name) and n.id == "__name__" for n in ast.walk(node))
 
 
+def _inner_statements(holder: ast.stmt) -> list[ast.stmt]:
+    """The statements a compound statement holds (its bodies, its handlers' and cases')."""
+    inner: list[ast.stmt] = []
+    for child in ast.iter_child_nodes(holder):
+        if isinstance(child, ast.stmt):
+            inner.append(child)
+        elif isinstance(child, ast.ExceptHandler | ast.match_case):
+            inner.extend(child.body)
+    return inner
+
+
 def _guarded(tree: ast.Module, line: int) -> bool | None:
-    """Whether ``line`` of the module sits under a test of ``__name__`` (None: no top-level
-    statement holds it)."""
-    body: list[ast.stmt] = tree.body
-    guarded = False
-    found = False
-    while True:
-        holder = next((s for s in body if s.lineno <= line <= (s.end_lineno or s.lineno)), None)
+    """Whether ``line`` of the module sits in a statement under an ``if``, ``while`` or
+    ``match`` that tests ``__name__`` (None: no statement of the module holds the line)."""
+    statements: list[ast.stmt] = tree.body
+    guarded: bool | None = None
+    while statements:
+        holder = next(
+            (s for s in statements if s.lineno <= line <= (s.end_lineno or s.lineno)), None
+        )
         if holder is None:
-            return guarded if found else None
-        found = True
-        if isinstance(holder, ast.If | ast.While) and _tests_name(holder.test):
-            guarded = True
-        inner = [
-            child
-            for field in ("body", "orelse", "finalbody", "handlers")
-            for child in getattr(holder, field, []) or []
-        ]
-        body = [s for s in inner if isinstance(s, ast.stmt)]
-        for handler in getattr(holder, "handlers", []) or []:
-            body.extend(handler.body)
-        if not body:
-            return guarded
+            break
+        tests = (isinstance(holder, ast.If | ast.While) and _tests_name(holder.test)) or (
+            isinstance(holder, ast.Match) and _tests_name(holder.subject)
+        )
+        guarded = bool(guarded) or tests
+        statements = _inner_statements(holder)
+    return guarded
 
 
 def unguarded_main_call() -> str | None:

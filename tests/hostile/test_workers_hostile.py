@@ -217,3 +217,30 @@ def test_a_worker_that_cannot_take_its_process_object_dies_quietly():
     )
     assert "exit code 1" in proc.stdout, proc.stdout + proc.stderr
     assert "Traceback" not in proc.stderr, proc.stderr
+
+
+GUARDS = [
+    ("import preform\npreform.run()\n", 2, False),
+    ("import preform\nif True:\n    preform.run()\n", 3, False),
+    ("with open('x') as f:\n    for _ in f:\n        main()\n", 3, False),
+    ("def main():\n    run()\n\ntry:\n    main()\nexcept OSError:\n    pass\n", 5, False),
+    ("try:\n    pass\nexcept OSError:\n    main()\n", 4, False),
+    ("if __name__ == '__main__':\n    main()\n", 2, True),
+    (
+        "if x:\n    pass\nelif __name__ == '__main__':\n    try:\n        main()\n    finally:\n"
+        "        pass\n",
+        5,
+        True,
+    ),
+    ("match __name__:\n    case '__main__':\n        main()\n", 3, True),
+    ("import sys\n", 7, None),
+]
+
+
+@pytest.mark.parametrize(("source", "line", "guarded"), GUARDS)
+def test_the_guard_is_read_from_the_statements_that_hold_the_line(source, line, guarded):
+    import ast
+
+    from preform.pipeline.main_guard import _guarded
+
+    assert _guarded(ast.parse(source), line) is guarded
