@@ -1,6 +1,7 @@
 """Where cases run: an executor per engine, nothing home-made.
 
-``serial`` runs each case in this process when it is submitted (debugging, exact tracebacks);
+``serial`` runs each case in this process when it is submitted (debugging, exact tracebacks;
+a case that crashes the interpreter ends the run there, which docs/engines.md says);
 ``process`` is a local pool of worker processes (the default), built on ``pebble`` because it
 does what ``concurrent.futures.ProcessPoolExecutor`` cannot: a worker that dies (segfault,
 ``os._exit``, the OOM killer) fails only its own case and is replaced, and a case past its time
