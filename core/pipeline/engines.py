@@ -1,6 +1,7 @@
 """Where cases run: an executor per engine, nothing home-made.
 
-``serial`` runs each case in this process when it is submitted (debugging, exact tracebacks);
+``serial`` runs each case in this process when it is submitted (debugging, exact tracebacks;
+a case that crashes the interpreter ends the run there, which docs/engines.md says);
 ``process`` is a local pool of worker processes (the default), built on ``pebble`` because it
 does what ``concurrent.futures.ProcessPoolExecutor`` cannot: a worker that dies (segfault,
 ``os._exit``, the OOM killer) fails only its own case and is replaced, and a case past its time
@@ -236,7 +237,66 @@ def start_fork_server(preload: tuple[str, ...]) -> None:
     from multiprocessing import forkserver
 
     pool_context(preload)
-    forkserver.ensure_running()
+    with _server_deaf_to_interrupts():
+        forkserver.ensure_running()
+
+
+#: Set in the fork server's environment when it starts with SIGINT ignored only for its
+#: imports: ``preload_end`` then gives it Python's usual handler back.
+SIGINT_AFTER_PRELOAD = "PREFORM_PRELOAD_RESTORES_SIGINT"
+
+
+def prepare_fork_server() -> None:
+    """In the fork server, after its imports (``preload_end``): give SIGINT Python's usual
+    handler back if it was started deaf to it (``_server_deaf_to_interrupts``; the server
+    ignores SIGINT by itself from here on, and its workers take this handler), and quiet the
+    start of a worker whose pool gave up on it.
+
+    A worker forked from the server first reads its process object from the pool. When the
+    pool is closing meanwhile (the run's last case passed its time limit and its worker was
+    replaced just as the run ended), that read fails (the pipe hung up, the pool's semaphores
+    are gone: an ``OSError`` or ``EOFError``) and the fork server's child printed the
+    traceback, often cut short by the pool's SIGTERM (issue 25, item 8). Nothing waits for
+    that worker; the pool that still wanted it sees it die either way.
+    """
+    import sys
+
+    if os.environ.pop(SIGINT_AFTER_PRELOAD, None) == "1":
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    server = os.getpid()
+    python_hook = sys.excepthook
+
+    def quiet_abandoned_start(kind: type[BaseException], exc: BaseException, tb: Any) -> None:
+        if os.getpid() != server and issubclass(kind, OSError | EOFError):
+            return  # a forked worker that could not take its process object from its pool
+        python_hook(kind, exc, tb)
+
+    sys.excepthook = quiet_abandoned_start
+
+
+@contextlib.contextmanager
+def _server_deaf_to_interrupts() -> Iterator[None]:
+    """Start the fork server with SIGINT ignored until its imports are done.
+
+    A Ctrl-C reaches every process of the terminal's process group; the server ignores it
+    only once its preload is imported, so one during its start-up printed a KeyboardInterrupt
+    traceback of its imports beside the run's own message (issue 25, item 8). An ignored
+    signal stays ignored through exec, and Python then installs no KeyboardInterrupt handler;
+    ``preload_end`` installs it again, so the workers it forks take interrupts as before.
+    This process ignores SIGINT only while the server is launched (a fork and exec)."""
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+    ):
+        yield  # a thread cannot set handlers; a process ignoring SIGINT passes that on anyway
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.environ[SIGINT_AFTER_PRELOAD] = "1"
+    try:
+        yield
+    finally:
+        os.environ.pop(SIGINT_AFTER_PRELOAD, None)
+        signal.signal(signal.SIGINT, previous)
 
 
 def stop_fork_server() -> None:
@@ -278,6 +338,9 @@ class ProcessEngine(Engine):
 
         n = workers or max(1, os.cpu_count() or 1)
         self.workers = n
+        # here, not in the pool's first start of a worker (maybe in its thread): started here it
+        # is deaf to a Ctrl-C during its imports (a no-op when it runs already)
+        start_fork_server(preload)
         self.capacity = 2 * n  # one running and one queued per worker keeps them busy
         self._pool = ProcessPool(
             max_workers=n,

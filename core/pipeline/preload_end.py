@@ -1,8 +1,12 @@
 """Imported last by a process pool's fork server (``preform.pipeline.engines.pool_context``):
 freezes what the server's imports made and resumes the garbage collector
 :mod:`preform.pipeline.preload_begin` paused, so every worker is forked with it on
-(:mod:`preform.collector`)."""
+(:mod:`preform.collector`); gives SIGINT its usual handler back where the server was started
+deaf to it for its imports, and quiets the start of a worker its pool gave up on
+(``preform.pipeline.engines.prepare_fork_server``)."""
 
 from preform.collector import end_startup
+from preform.pipeline.engines import prepare_fork_server
 
 end_startup()
+prepare_fork_server()

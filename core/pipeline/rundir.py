@@ -183,7 +183,8 @@ class RunDirectory:
     """Hold a results directory for one run: lock, stale temporaries, manifest and tables.
 
     Use as a context manager; entering refuses a path that is a file or a directory another
-    run holds, and removes the temporary files that killed writers left (only preform's own).
+    run holds, and removes the temporary files that killed writers left (only preform's own,
+    and only those no live process holds, whether it took the run lock or not).
     """
 
     def __init__(self, path: Path) -> None:
@@ -219,8 +220,9 @@ class RunDirectory:
 
     def __exit__(self, *exc: object) -> None:
         try:
-            # a worker stopped mid-write (interrupt, time limit) leaves its temporary file;
-            # every worker of this run is gone by now, and the lock keeps others out
+            # a worker stopped mid-write (interrupt, time limit) leaves its temporary file; a
+            # live writer's (a `preform export` beside the run, which takes no run lock) is
+            # locked by it and kept (preform.export.atomic)
             remove_stale_temporaries(self.path)
         finally:
             self._unlock()

@@ -520,6 +520,10 @@ def run_cases(
     chooses; 1: none). A batch whose worker dies or overruns keeps the cases it finished; the
     others are run again, each on its own. The run-level outputs run on the engine too.
     """
+    from preform.pipeline.main_guard import refuse_unguarded_run
+
+    # before anything starts: a worker re-running an unguarded script must not run it again
+    refuse_unguarded_run(starts_workers=engine == "process" or (engine == "dask" and not scheduler))
     # workers start now (a fork server imports what they need) while this process reads the
     # directory and imports its table writers; a pre-lock look, so a run with nothing to do
     # starts none (the list that counts is taken under the lock below)
