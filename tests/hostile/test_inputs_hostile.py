@@ -269,24 +269,12 @@ def test_an_fe_mesh_far_from_the_drape_fails_naming_the_offset(tmp_path) -> None
 
 def test_a_bad_export_prefix_is_refused_at_scene_validation(tmp_path) -> None:
     scene = tmp_path / "cap.yaml"
-    scene.write_text(CAP.format(mesh=SKIN) + "pipeline_note: 0\n")
     text = CAP.format(mesh=SKIN).replace("export: {", "export: {prefix: 9bad, ")
     scene.write_text(text)
     with pytest.raises(SceneError, match=r"cap\.yaml:5:\d+: export\.prefix: prefix must be"):
         preform.scene(str(scene))
-    result = CliRunner().invoke(
-        cli,
-        [
-            "pipeline",
-            "run",
-            "--scene",
-            str(scene),
-            "--out",
-            str(tmp_path / "run"),
-            "--materials",
-            "plain-weave-150",
-        ],
-    )
+    run = f"pipeline run --materials plain-weave-150 --out {tmp_path / 'run'} --scene"
+    result = CliRunner().invoke(cli, [*run.split(), str(scene)])
     assert result.exit_code == 2, result.output
     assert "export.prefix" in result.output and "nothing was run" in result.output
 

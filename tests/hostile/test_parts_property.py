@@ -92,6 +92,18 @@ def fabric() -> Any:
     return preform.fabric("plain-weave-150")
 
 
+def _scene(tool: str, part: dict[str, Any]) -> dict[str, Any]:
+    """A fixed-angle drape on a coarse net over ``tool``, made on ``part``."""
+    return {
+        "name": f"parts-{tool}",
+        "tool": TOOLS[tool],
+        "ply": {"node_spacing_mm": SPACING_MM, "size_mm": [300, 300]},
+        "start": {"point_mm": [0, 0], "generator_angle_deg": 90},
+        "part": part,
+        "outputs": ["drape"],
+    }
+
+
 def _outline_is_region(outline: list[list[float]]) -> bool:
     polygon = shapely.Polygon(outline)
     return bool(polygon.is_valid and polygon.area > 0)
@@ -119,14 +131,7 @@ def _node_in_part(nodes: np.ndarray, part: dict[str, Any]) -> bool:
 def test_never_ok_with_an_empty_or_ill_defined_part(
     tool: str, part: dict[str, Any], dome_dir: Path, fabric: Any
 ) -> None:
-    scene = {
-        "name": f"parts-{tool}",
-        "tool": TOOLS[tool],
-        "ply": {"node_spacing_mm": SPACING_MM, "size_mm": [300, 300]},
-        "start": {"point_mm": [0, 0], "generator_angle_deg": 90},
-        "part": part,
-        "outputs": ["drape"],
-    }
+    scene = _scene(tool, part)
     outline = part.get("plan_outline_mm")
     try:
         # a mapping's relative paths resolve against the current directory
@@ -156,14 +161,7 @@ def test_a_part_off_every_tool_is_never_ok(
 ) -> None:
     """The empty parts of the issue on each tool: refused (analytic tools, at validation, at
     the field) or failed with the reason (a mesh tool, only known once read and draped)."""
-    scene = {
-        "name": f"off-{tool}",
-        "tool": TOOLS[tool],
-        "ply": {"node_spacing_mm": SPACING_MM, "size_mm": [300, 300]},
-        "start": {"point_mm": [0, 0], "generator_angle_deg": 90},
-        "part": part,
-        "outputs": ["drape"],
-    }
+    scene = _scene(tool, part)
     with pytest.MonkeyPatch.context() as mp:
         mp.chdir(dome_dir)
         if tool == "mesh":
