@@ -503,7 +503,7 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
 
 def _empty_part_problems(scene: Scene, surface: Any, err: Any) -> list[SourceError]:
     """A ``part`` section that selects nothing of a built (analytic) tool, known from the
-    tool's bounds [m]: a height cut at or above its top, a plan outline wholly beside its plan.
+    tool's bounds [m]: a height cut above its top, a plan outline wholly beside its plan.
     What only the drape can tell (a cut and an outline that miss each other on the tool, a
     mesh tool's part) fails the case after draping (``preform.drape.steps.judge_drape``)."""
     section = scene.part
@@ -511,12 +511,14 @@ def _empty_part_problems(scene: Scene, surface: Any, err: Any) -> list[SourceErr
         return []
     (x0, y0, _), (x1, y1, z1) = (tuple(float(c) for c in corner) for corner in surface.bounds)
     errors = []
-    if section.z_min_mm is not None and section.z_min_mm * 1e-3 >= z1:
+    # strictly above: a cut at the top of a flat or flat-topped tool (a plane, a frustum)
+    # selects its top face; at a dome's apex a point, which the drape then finds empty
+    if section.z_min_mm is not None and section.z_min_mm * 1e-3 > z1:
         errors.append(
             err(
                 ("part", "z_min_mm"),
                 "part.z_min_mm",
-                f"the height cut z ≥ {section.z_min_mm:g} mm lies at or above the tool, whose "
+                f"the height cut z ≥ {section.z_min_mm:g} mm lies above the tool, whose "
                 f"top is at z = {z1 * 1e3:.6g} mm, so the part selects nothing; lower the cut",
             )
         )

@@ -102,7 +102,7 @@ def test_a_simple_outline_still_validates(tmp_path) -> None:
     ("tool", "part", "field"),
     [
         ({"surface": "hemisphere", "radius_mm": 100}, {"z_min_mm": 500}, "z_min_mm"),
-        ({"surface": "hemisphere", "radius_mm": 100}, {"z_min_mm": 100}, "z_min_mm"),
+        ({"surface": "hemisphere", "radius_mm": 100}, {"z_min_mm": 100.001}, "z_min_mm"),
         (
             {"surface": "paraboloid", "radius_mm": 100, "height_mm": 60},
             {"z_min_mm": 61},
@@ -128,6 +128,31 @@ def test_a_part_off_an_analytic_tool_is_refused_at_validation(
     }
     with pytest.raises(SceneError, match=rf"part\.{field}: .*selects nothing"):
         preform.scene(scene)
+
+
+@pytest.mark.parametrize(
+    "tool",
+    [
+        {"surface": "plane", "size_mm": [200, 200]},
+        {"surface": "cone", "base_radius_mm": 100, "height_mm": 80, "top_radius_mm": 60},
+    ],
+)
+def test_a_cut_at_the_top_of_a_flat_topped_tool_is_its_top_face(tool: dict[str, Any]) -> None:
+    """z ≥ top selects the plane, or the frustum's top disc: not refused, and ok."""
+    top = 80 if tool["surface"] == "cone" else 0
+    run = preform.drape(
+        "plain-weave-150",
+        {
+            "name": "top",
+            "tool": tool,
+            "ply": {"node_spacing_mm": 10, "size_mm": [100, 100]},
+            "start": {"point_mm": [0, 0], "generator_angle_deg": 90},
+            "part": {"z_min_mm": top},
+            "outputs": ["drape"],
+        },
+    )
+    assert run.status == "ok", (run.error, run.reasons)
+    assert run.summary["part_draped_area_m2"] > 0
 
 
 def test_a_cut_and_an_outline_that_miss_each_other_fail_with_the_reason() -> None:
