@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import preform
@@ -123,7 +123,7 @@ def _node_in_part(nodes: np.ndarray, part: dict[str, Any]) -> bool:
 
 @pytest.mark.parametrize("tool", sorted(TOOLS))
 @settings(
-    max_examples=6,
+    max_examples=10,
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
@@ -139,10 +139,12 @@ def test_never_ok_with_an_empty_or_ill_defined_part(
             mp.chdir(dome_dir)
             run = preform.drape(fabric, scene)
     except SceneError as error:
+        event("refused at validation")
         if outline is not None and not _outline_is_region(outline):
             assert "plan_outline_mm" in str(error)
         return
     assert outline is None or _outline_is_region(outline), "an ill-defined outline was draped"
+    event(run.status)
     if run.status == "ok":
         nodes = run.products["drape"].result.nodes
         assert _node_in_part(nodes, part), f"ok with an empty part: {run.summary.get('part')}"
