@@ -111,7 +111,23 @@ def fabric(name: str, library: Library | None = None) -> FabricBase:
 
 
 def _fabric(spec: Any, library: Library | None) -> FabricBase:
-    return fabric(spec, library) if isinstance(spec, str) else spec
+    """The fabric ``spec`` names or is; a TypeError naming the argument for anything else."""
+    from preform.library import Library
+    from preform.material import FabricBase
+
+    if library is not None and not isinstance(library, Library):
+        raise TypeError(
+            "library must be a loaded library (preform.load_library()) or None, got "
+            f"{type(library).__name__} {library!r}"
+        )
+    if isinstance(spec, str):
+        return fabric(spec, library)
+    if isinstance(spec, FabricBase):
+        return spec
+    raise TypeError(
+        "fabric must be a fabric's name (str) or a fabric (preform.fabric(name)), got "
+        f"{type(spec).__name__} {spec!r}"
+    )
 
 
 # -- scenes -------------------------------------------------------------------------------------
@@ -147,6 +163,11 @@ def _scene_and_data(
         )
     if isinstance(spec, Mapping):
         return scene_from_mapping(changed_data(_plain(spec), changes), registry)
+    if not isinstance(spec, str | os.PathLike):
+        raise TypeError(
+            "scene must be a bundled scene's name, a scene file (str or path), a mapping of "
+            f"scene data or a Scene, got {type(spec).__name__} {spec!r}"
+        )
     path = resolve_scene_path(os.fspath(spec))
     if not path.is_file():
         raise FileNotFoundError(
@@ -620,11 +641,15 @@ def run(
     only them). ``scenes``: names, files, mappings or ``Scene`` objects. ``materials``: a glob
     of fabric names. ``fidelity`` replaces every scene's preset (recorded, and part of the
     cases' input hash). ``case_timeout_s`` [s] as ``--case-timeout``. Cases already done with
-    the same inputs are kept unless ``force``. Raises ``preform.pipeline.scene.SceneError`` or
-    ``preform.library.LibraryError`` for invalid input, before anything runs.
+    the same inputs are kept unless ``force``. Every argument is checked as its command-line
+    twin is (``preform.pipeline.run_arguments``): ``TypeError`` or ``ValueError`` naming it
+    (``workers=0``, ``case_timeout_s=nan``, an unknown ``engine``). Raises
+    ``preform.pipeline.scene.SceneError`` or ``preform.library.LibraryError`` for invalid
+    input, before anything runs.
     """
     from preform.library import Library
     from preform.pipeline.overrides import with_fidelity
+    from preform.pipeline.run_arguments import check_run_arguments
     from preform.pipeline.runner import (
         DEFAULT_CASE_TIMEOUT_S,
         input_files_record,
@@ -632,6 +657,20 @@ def run(
         run_cases,
     )
 
+    # checked as `preform pipeline run` checks its options, before anything is loaded or run
+    check_run_arguments(
+        engine=engine,
+        workers=workers,
+        case_timeout_s=case_timeout_s,
+        fidelity=fidelity,
+        materials=materials,
+        force=force,
+    )
+    if isinstance(scenes, str | os.PathLike | Mapping) or not isinstance(scenes, Sequence):
+        raise TypeError(
+            "scenes must be a list of scenes (names, files, mappings or Scene objects), got "
+            f"{type(scenes).__name__} {scenes!r}"
+        )
     lib = (
         library
         if isinstance(library, Library)

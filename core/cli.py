@@ -363,6 +363,16 @@ def _repeats(_ctx: Any, _param: Any, value: str) -> tuple[int, int]:
     return n1, n2
 
 
+def _case_timeout(_ctx: Any, _param: Any, value: float | None) -> float | None:
+    # NaN passes any range (it compares false with every bound): the same check as preform.run
+    from preform.pipeline.run_arguments import case_timeout_problem
+
+    problem = None if value is None else case_timeout_problem(value)
+    if problem is not None:
+        raise click.BadParameter(problem)
+    return value
+
+
 @cli.command()
 @click.argument("name")
 @click.option(
@@ -538,6 +548,7 @@ def pipeline() -> None:
     "case_timeout_s",
     type=click.FloatRange(min=0, min_open=True),
     default=None,
+    callback=_case_timeout,
     help="Wall-time limit of one case [s] (default 3600; a scene's limits.case_timeout_s "
     "wins). A case past it is stopped and recorded timed_out.",
 )

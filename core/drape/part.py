@@ -95,6 +95,12 @@ class PlanPolygon(Part):
             raise ValueError("a plan polygon needs at least 3 (x, y) vertices [m]")
         if not np.all(np.isfinite(v)):
             raise ValueError("plan polygon vertices must be finite")
+        from preform.drape.polygon import outline_problem
+
+        # the even-odd rule would give a bow tie an inside nobody meant (preform.drape.polygon)
+        problem = outline_problem(v * 1e3, "mm")
+        if problem is not None:
+            raise ValueError(f"plan polygon: {problem}")
         object.__setattr__(self, "vertices_m", v)
 
     def level(self, points: FloatArray) -> FloatArray:

@@ -244,9 +244,10 @@ def judge_drape(
     energy: EnergyField,
     surface: Any,
     start_xy_m: tuple[float, float],
+    part: Part | None = None,
 ) -> None:
     """Say what a finished drape is worth through the case context (module docstring):
-    ``CaseFailure`` for no cell or a non-finite energy, ``partial`` for missing coverage or
+    ``CaseFailure`` for no cell, no cell in the ``part``, or a non-finite energy, ``partial`` for missing coverage or
     for energy mostly from cells where the fabric would wrinkle, warnings for cells past the
     law's limits."""
     if not result.valid.any():
@@ -257,6 +258,8 @@ def judge_drape(
             f"{float(surface.size) / MM:.4g} mm); use a node spacing well below the tool's "
             "size, or check that the ply and start point lie over the tool"
         )
+    if not np.any(result.part_weight > 0.0):
+        raise CaseFailure(empty_part_reason(result, part))
     why = first_nonfinite_energy(result, energy)
     if why is not None:
         raise CaseFailure(why)
@@ -280,6 +283,22 @@ def judge_drape(
         ctx.warn(message)
     wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
     judge_wrinkling(ctx, wrinkles, cover.covered_fraction)
+
+
+def empty_part_reason(result: DrapeResult, part: Part | None) -> str:
+    """Why a drape with cells has none in its part, in words with where the net lies [mm]: a
+    part that selects nothing has no energy, extremes or coverage to report (0 J and a
+    coverage of 1 would be a wrong ``ok``)."""
+    placed = result.nodes[np.all(np.isfinite(result.nodes), axis=-1)] / MM
+    lo, hi = placed.min(axis=0), placed.max(axis=0)
+    what = part.describe() if part is not None else "the tool's own part"
+    return (
+        f"the part ({what}) selects nothing of the drape: none of its "
+        f"{int(np.count_nonzero(result.valid))} draped cells lies in it (the net spans "
+        f"x {lo[0]:.6g} … {hi[0]:.6g} mm, y {lo[1]:.6g} … {hi[1]:.6g} mm, "
+        f"z {lo[2]:.6g} … {hi[2]:.6g} mm); check that the part's fields meet each other and "
+        "the tool where the ply lies"
+    )
 
 
 def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: float) -> None:
@@ -366,7 +385,7 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     if part is not None:
         ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
-    judge_drape(ctx, result, energy, surface, settings["start_xy_m"])
+    judge_drape(ctx, result, energy, surface, settings["start_xy_m"], part)
     area = getattr(part, "area_m2", None)
     if area is not None:
         # Part area the net does not cover, and how much of it the missing cells explain (by

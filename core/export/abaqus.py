@@ -53,11 +53,12 @@ def abaqus_include_text(
     mapping: MeshMapping, *, prefix: str = "PREFORM", title: str | None = None
 ) -> str:
     """The include file's text (module docstring)."""
+    from preform.pipeline.export_section import prefix_problem
+
+    problem = prefix_problem(prefix)
+    if problem is not None:
+        raise ValueError(problem)
     name = prefix.upper()
-    if not name or not name[0].isalpha() or len(name) > 60 or not name.replace("_", "").isalnum():
-        raise ValueError(
-            f"prefix must be a letter then letters, digits or _ (≤ 60), got {prefix!r}"
-        )
     cov = mapping.covered
     ids = mapping.mesh.element_ids
     summary = mapping.summary()

@@ -13,13 +13,17 @@ cutting pattern. Outputs a scene can ask for:
 
 Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
 elements covered is the covered fraction) and are listed in every file; elements above the
-compaction cap are a warning. A mesh that cannot be read fails the case with the file's error.
+compaction cap are a warning. A mesh that cannot be read fails the case with the file's error
+(located to its line: a duplicate node or element label, a non-finite coordinate); a mesh none
+of whose elements the drape covers fails it with how far the mesh lies from the drape.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from preform.pipeline.export_section import ExportSection
 from preform.pipeline.status import CaseFailure
@@ -29,6 +33,34 @@ from preform.step import CaseContext, Step
 def export_options(ctx: CaseContext) -> ExportSection:
     section = getattr(ctx.scene, "export", None)
     return section if section is not None else ExportSection()
+
+
+def no_element_covered(result: Any, mesh: Any, name: str) -> str:
+    """Why a mapping covers none of the mesh's elements, in words: how far apart the FE mesh's
+    and the draped net's bounding boxes are [mm] (0 when they overlap: the mesh then lies
+    inside the drape's box but off its surface, e.g. in another unit). Every value of such a
+    mapping would be missing: a failure, not a partial export."""
+    nodes = np.asarray(result.nodes, dtype=float)
+    placed = nodes[np.all(np.isfinite(nodes), axis=-1)] * 1e3
+    points = np.asarray(mesh.points, dtype=float)
+    net_lo, net_hi = placed.min(axis=0), placed.max(axis=0)
+    mesh_lo, mesh_hi = points.min(axis=0), points.max(axis=0)
+    gap = np.maximum(0.0, np.maximum(mesh_lo - net_hi, net_lo - mesh_hi))
+    offset = float(np.linalg.norm(gap))
+
+    def box(lo: Any, hi: Any) -> str:
+        return ", ".join(f"{c} {a:.6g} … {b:.6g}" for c, a, b in zip("xyz", lo, hi, strict=True))
+
+    where = (
+        f"the boxes are {offset:.6g} mm apart"
+        if offset > 0
+        else "the boxes overlap, but no element lies on the draped surface"
+    )
+    return (
+        f"the drape covers none of the {mesh.n_elements} elements of {name}: {where} (mesh "
+        f"{box(mesh_lo, mesh_hi)} mm; drape {box(net_lo, net_hi)} mm); check the mesh's "
+        "position and export.mesh_unit_mm"
+    )
 
 
 def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
@@ -69,6 +101,8 @@ def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
         if key in summary:
             ctx.summary[f"mesh_{key}"] = summary[key]
     uncovered = summary["elements_uncovered"]
+    if summary["elements"] and not summary["elements_covered"]:
+        raise CaseFailure(no_element_covered(ply.result, mesh, str(options.mesh)))
     if uncovered:
         first = ", ".join(str(e) for e in summary["uncovered_element_ids"][:10])
         more = " ..." if uncovered > 10 else ""

@@ -174,6 +174,14 @@ def shell_mesh(
     if used.size and (used.max() >= len(points) or table[:, :3].min() < 0):
         raise ValueError("element corners refer to nodes that do not exist")
     m = len(table)
+    for what, ids in (("element", element_ids), ("node", node_ids)):
+        if ids is not None:
+            labels, counts = np.unique(np.asarray(ids, dtype=np.int64), return_counts=True)
+            if np.any(counts > 1):
+                raise ValueError(
+                    f"{what} label {int(labels[np.argmax(counts > 1)])} is given "
+                    f"{int(counts.max())} times; a solver needs each label once"
+                )
     return ShellMesh(
         points=points,
         node_ids=np.arange(1, len(points) + 1)
@@ -236,7 +244,14 @@ def _read_meshio(file: Path) -> ShellMesh:
         if keep is not None:
             blocks.append(np.asarray(block.data)[:, :keep])
     corners = [row for b in blocks for row in b.tolist()]
-    return shell_mesh(np.asarray(mesh.points, dtype=float)[:, :3], corners, source=str(file))
+    points = np.asarray(mesh.points, dtype=float)[:, :3]
+    bad = np.flatnonzero(~np.all(np.isfinite(points), axis=1))
+    if bad.size:
+        raise ValueError(
+            f"{file}: {bad.size} node(s) with a coordinate that is not a finite number (the "
+            f"first is node {bad[0] + 1} in the file's order: {points[bad[0]].tolist()})"
+        )
+    return shell_mesh(points, corners, source=str(file))
 
 
 def _keyword(line: str) -> tuple[str, dict[str, str]]:
@@ -252,11 +267,46 @@ def _keyword(line: str) -> tuple[str, dict[str, str]]:
 _ABAQUS_SHELL_CORNERS = {3: 3, 4: 4, 6: 3, 8: 4, 9: 4}
 
 
+def _node(
+    nodes: dict[int, tuple[float, float, float]],
+    lines: dict[int, int],
+    label: int,
+    xyz: list[float],
+    lineno: int,
+) -> None:
+    """Record node ``label`` at ``xyz`` read on line ``lineno``: refused when defined before
+    (a second definition would silently move every element on it) or not finite."""
+    if label in lines:
+        raise ValueError(f"node {label} is defined twice (first on line {lines[label]})")
+    if not all(np.isfinite(xyz)):
+        raise ValueError(f"node {label} has a coordinate that is not a finite number: {xyz}")
+    nodes[label] = (xyz[0], xyz[1], xyz[2])
+    lines[label] = lineno
+
+
+def _element(
+    elements: list[tuple[int, list[int]]],
+    lines: dict[int, int],
+    label: int,
+    corners: list[int],
+    lineno: int,
+) -> None:
+    """Record element ``label`` read on line ``lineno``: refused when defined before (both
+    would be written, one label with two orientations, which a solver rejects)."""
+    if label in lines:
+        raise ValueError(f"element {label} is defined twice (first on line {lines[label]})")
+    elements.append((label, corners))
+    lines[label] = lineno
+
+
 def _read_abaqus(file: Path) -> ShellMesh:
     nodes: dict[int, tuple[float, float, float]] = {}
     elements: list[tuple[int, list[int]]] = []
+    node_lines: dict[int, int] = {}
+    element_lines: dict[int, int] = {}
     section = ""
     pending: list[str] = []
+    first_line = 0
     with open(file, encoding="utf-8", errors="replace") as handle:
         for lineno, raw in enumerate(handle, start=1):
             line = raw.strip()
@@ -277,8 +327,10 @@ def _read_abaqus(file: Path) -> ShellMesh:
                 if section == "node":
                     fields = [f for f in line.split(",") if f.strip()]
                     xyz = [float(f) for f in fields[1:4]] + [0.0] * (4 - len(fields))
-                    nodes[int(fields[0])] = (xyz[0], xyz[1], xyz[2])
+                    _node(nodes, node_lines, int(fields[0]), xyz, lineno)
                 elif section == "element":
+                    if not pending:
+                        first_line = lineno
                     pending.extend(f for f in line.split(",") if f.strip())
                     if line.endswith(","):
                         continue  # the element continues on the next line
@@ -287,7 +339,7 @@ def _read_abaqus(file: Path) -> ShellMesh:
                     n_corner = _ABAQUS_SHELL_CORNERS.get(len(conn))
                     if n_corner is None:
                         raise ValueError(f"a shell element with {len(conn)} nodes")
-                    elements.append((label, conn[:n_corner]))
+                    _element(elements, element_lines, label, conn[:n_corner], first_line)
             except ValueError as error:
                 raise ValueError(f"{file}:{lineno}: {error}") from None
     return _labelled(file, nodes, elements, [0] * len(elements))
@@ -318,12 +370,15 @@ def _read_nastran(file: Path) -> ShellMesh:
     nodes: dict[int, tuple[float, float, float]] = {}
     elements: list[tuple[int, list[int]]] = []
     pids: list[int] = []
+    node_lines: dict[int, int] = {}
+    element_lines: dict[int, int] = {}
     corner_count = {"CTRIA3": 3, "CTRIA6": 3, "CTRIAR": 3, "CQUAD4": 4, "CQUAD8": 4, "CQUADR": 4}
     lines = Path(file).read_text(encoding="utf-8", errors="replace").splitlines()
     k = 0
     while k < len(lines):
         raw = lines[k].rstrip("\n")
         k += 1
+        card_line = k
         if not raw.strip() or raw.lstrip().startswith("$"):
             continue
         fields = _nastran_fields(raw)
@@ -338,13 +393,14 @@ def _read_nastran(file: Path) -> ShellMesh:
                 xyz += [0.0] * (3 - len(xyz))
                 if fields[2].strip() not in ("", "0"):
                     raise ValueError("GRID in a local coordinate system (CP) is not supported")
-                nodes[int(fields[1])] = (xyz[0], xyz[1], xyz[2])
+                _node(nodes, node_lines, int(fields[1]), xyz, card_line)
             elif card in corner_count:
                 n = corner_count[card]
-                elements.append((int(fields[1]), [int(f) for f in fields[3 : 3 + n]]))
+                conn = [int(f) for f in fields[3 : 3 + n]]
+                _element(elements, element_lines, int(fields[1]), conn, card_line)
                 pids.append(int(fields[2]) if fields[2] else 0)
         except (ValueError, IndexError) as error:
-            raise ValueError(f"{file}:{k}: {card}: {error}") from None
+            raise ValueError(f"{file}:{card_line}: {card}: {error}") from None
     return _labelled(file, nodes, elements, pids)
 
 

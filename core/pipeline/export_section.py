@@ -8,6 +8,18 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 
+def prefix_problem(prefix: str) -> str | None:
+    """Why ``prefix`` cannot start the names of the exporters' sets, distributions and
+    orientations (an Abaqus name: a letter, then letters, digits or _, at most 60 with the
+    suffixes the exporters add), or None."""
+    name = prefix.upper()
+    if not name or not name[0].isalpha() or len(name) > 60 or not name.replace("_", "").isalnum():
+        return f"prefix must be a letter then letters, digits or _ (≤ 60), got {prefix!r}"
+    if not name.isascii():
+        return f"prefix must be ASCII letters, digits or _, got {prefix!r}"
+    return None
+
+
 class DartSpec(BaseModel):
     """A V-shaped dart cut out of the pattern: the triangle apex, mouth_mm[0], mouth_mm[1]
     in the flat [mm] (u fibres along x, v along y, the start node at the origin)."""
@@ -107,6 +119,15 @@ class ExportSection(BaseModel):
     part_id: int = Field(
         default=1, ge=1, description="LS-DYNA PID of elements whose mesh gives none."
     )
+
+    @field_validator("prefix")
+    @classmethod
+    def _prefix(cls, v: str) -> str:
+        # refused here, when the scene is validated, not when the include is written
+        problem = prefix_problem(v)
+        if problem is not None:
+            raise ValueError(problem)
+        return v
 
     @field_validator("layer_materials")
     @classmethod

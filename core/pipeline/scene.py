@@ -8,6 +8,7 @@ registered surfaces, like a fabric's ``architecture``.
 from __future__ import annotations
 
 import difflib
+import os
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
@@ -28,6 +29,19 @@ MAX_POLYGON_VERTICES = 10_000
 #: Most angles of a tabulated shear curve (``shear.angles_deg``): far more than any plot shows,
 #: and a step of 1e-9° over 60° would otherwise ask for 6·10¹⁰ of them.
 MAX_CURVE_ANGLES = 100_000
+
+
+def _simple_outline(v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
+    """``v`` when it is a simple polygon of nonzero area, else a ValueError saying where it
+    crosses itself or that it encloses nothing (``preform.drape.polygon``)."""
+    if v is None:
+        return v
+    from preform.drape.polygon import outline_problem
+
+    problem = outline_problem(v, "mm")
+    if problem is not None:
+        raise ValueError(problem)
+    return v
 
 
 class PlySection(BaseModel):
@@ -66,7 +80,7 @@ class PlySection(BaseModel):
     def _polygon(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
         if v is not None and len(v) < 3:
             raise ValueError("a ply outline needs at least 3 vertices")
-        return v
+        return _simple_outline(v)
 
 
 class StartSection(BaseModel):
@@ -137,7 +151,7 @@ class PartSection(BaseModel):
     def _polygon(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
         if v is not None and len(v) < 3:
             raise ValueError("a part outline needs at least 3 vertices")
-        return v
+        return _simple_outline(v)
 
 
 class RangeDeg(BaseModel):
@@ -336,14 +350,22 @@ def default_scene_path() -> Path:
 
 
 def resolve_scene_path(spec: str) -> Path:
-    """A scene file path, or the name of a bundled scene (``hemisphere``; ``default``)."""
+    """A scene file path, or the name of a bundled scene (``hemisphere``; ``default``).
+
+    A bare name of a bundled scene (no directory part, no ``.yaml``/``.yml`` suffix) is the
+    bundled scene even when the current directory holds a file or folder of that name (a
+    results folder called ``unit-cell`` must not capture ``--scene unit-cell``); write a path
+    (``./unit-cell``, ``unit-cell.yaml``) for a file of your own."""
     if spec == "default":
         return default_scene_path()
     path = Path(spec)
-    if path.exists() or path.suffix in (".yaml", ".yml"):
-        return path
+    written_as_path = (
+        "/" in spec or os.sep in spec or spec.startswith(".") or path.suffix in (".yaml", ".yml")
+    )
     bundled = bundled_scene_dir() / f"{spec}.yaml"
-    return bundled if bundled.exists() else path
+    if not written_as_path and bundled.is_file():
+        return bundled
+    return path
 
 
 def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
@@ -430,6 +452,8 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
             errors.append(err(("tool", *where), label, message))
     ply = scene.ply
     errors += _section_problems(scene, err)
+    if surface is not None:
+        errors += _empty_part_problems(scene, surface, err)
     errors += _export_mesh_problems(scene, err)
     if ply is None:
         return errors
@@ -474,6 +498,44 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
         problem = start_problem(surface, (point[0] * 1e-3, point[1] * 1e-3))
         if problem is not None:
             errors.append(err(("start", "point_mm"), "start.point_mm", problem))
+    return errors
+
+
+def _empty_part_problems(scene: Scene, surface: Any, err: Any) -> list[SourceError]:
+    """A ``part`` section that selects nothing of a built (analytic) tool, known from the
+    tool's bounds [m]: a height cut above its top, a plan outline wholly beside its plan.
+    What only the drape can tell (a cut and an outline that miss each other on the tool, a
+    mesh tool's part) fails the case after draping (``preform.drape.steps.judge_drape``)."""
+    section = scene.part
+    if section is None:
+        return []
+    (x0, y0, _), (x1, y1, z1) = (tuple(float(c) for c in corner) for corner in surface.bounds)
+    errors = []
+    # strictly above: a cut at the top of a flat or flat-topped tool (a plane, a frustum)
+    # selects its top face; at a dome's apex a point, which the drape then finds empty
+    if section.z_min_mm is not None and section.z_min_mm * 1e-3 > z1:
+        errors.append(
+            err(
+                ("part", "z_min_mm"),
+                "part.z_min_mm",
+                f"the height cut z ≥ {section.z_min_mm:g} mm lies above the tool, whose "
+                f"top is at z = {z1 * 1e3:.6g} mm, so the part selects nothing; lower the cut",
+            )
+        )
+    if section.plan_outline_mm is not None:
+        xy = np.asarray(section.plan_outline_mm, dtype=float) * 1e-3
+        (px0, py0), (px1, py1) = xy.min(axis=0), xy.max(axis=0)
+        if px1 <= x0 or px0 >= x1 or py1 <= y0 or py0 >= y1:
+            errors.append(
+                err(
+                    ("part", "plan_outline_mm"),
+                    "part.plan_outline_mm",
+                    f"the part's plan outline (x {px0 * 1e3:.6g} … {px1 * 1e3:.6g} mm, "
+                    f"y {py0 * 1e3:.6g} … {py1 * 1e3:.6g} mm) lies beside the tool, whose plan "
+                    f"extent is x {x0 * 1e3:.6g} … {x1 * 1e3:.6g} mm, y {y0 * 1e3:.6g} … "
+                    f"{y1 * 1e3:.6g} mm, so the part selects nothing",
+                )
+            )
     return errors
 
 
