@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 from preform.drape.generators import GeneratorNodes
 from preform.drape.result import NodeStatus
 from preform.drape.surface import Surface
+from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE
 from preform.optimise.search import COVERAGE_SLACK, DrapeObjective, SearchError, with_generators
 
 FloatArray = NDArray[np.float64]
@@ -273,6 +274,7 @@ def optimise_curved_generators(
     tolerance: float = 0.05,
     max_drapes: int = 120,
     length_m: float | None = None,
+    wrinkle_area_tolerance: float = WRINKLE_AREA_TOLERANCE,
 ) -> CurvedResult:
     """Curvature coefficients (``terms`` per family) and, with ``vary_angle``, the generator
     angle [rad] of least comparable energy, by Nelder–Mead from straight generators at
@@ -288,7 +290,9 @@ def optimise_curved_generators(
     after ``max_drapes`` drapes. ``reference_area_m2`` [m²] fixes the part's reference area for
     a priced uncovered area (default: what the straight generators cover). A trial covering
     less of the part than the straight generators (by more than ``COVERAGE_SLACK``) is
-    infeasible.
+    infeasible, and so is one with a share of its covered part past a wrinkle limit more than
+    ``wrinkle_area_tolerance`` [-] above the straight generators' (what can be made,
+    ``preform.optimise.search``).
     """
     from scipy.optimize import minimize
 
@@ -302,6 +306,7 @@ def optimise_curved_generators(
     reference = first.covered_area_m2 if reference_area_m2 is None else float(reference_area_m2)
     straight_energy = base.charged(first, reference)
     must_cover = (1.0 - COVERAGE_SLACK) * min(first.covered_area_m2, reference)
+    most_wrinkle = first.wrinkle_area_share + wrinkle_area_tolerance
     drapes = base.drapes
     n_coef = terms if mirror_families else 2 * terms
     steps = np.r_[[angle_step_rad] if vary_angle else [], [coefficient_step] * n_coef]
@@ -328,6 +333,8 @@ def optimise_curved_generators(
             # Bare part area is not priced, so a net that leaves more of the part bare than
             # the straight generators is infeasible rather than cheap.
             return math.inf
+        if evaluation.wrinkle_area_share > most_wrinkle:
+            return math.inf  # wrinkles more than the straight generators: cannot be made
         return trial.charged(evaluation, reference)
 
     z0 = np.r_[[generator_angle_rad / angle_step_rad] if vary_angle else [], np.zeros(n_coef)]

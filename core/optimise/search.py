@@ -1159,6 +1159,7 @@ def search_layout(
     start_step_m: float | None = None,
     tolerance_rad: float = math.radians(0.5),
     max_drapes: int = 80,
+    wrinkle_area_tolerance: float = WRINKLE_AREA_TOLERANCE,
 ) -> LayoutResult:
     """Nelder–Mead over the generator angle α [rad], orientation θ [rad] and start (x, y) [m].
 
@@ -1170,7 +1171,10 @@ def search_layout(
     in scaled angle units or after ``max_drapes`` drapes. The reference area (for a priced
     uncovered area) is fixed for the whole search (default: the starting layout's coverage),
     so every layout is judged on the same part; a layout that covers less of the part than the
-    starting one (by more than :data:`COVERAGE_SLACK`) is infeasible.
+    starting one (by more than :data:`COVERAGE_SLACK`) is infeasible, and so is one with a
+    share of its covered part past a wrinkle limit more than ``wrinkle_area_tolerance`` [-]
+    above the starting layout's (module docstring, "What can be made": the start is the angle
+    search's makeable optimum).
     """
     from scipy.optimize import minimize
 
@@ -1208,6 +1212,7 @@ def search_layout(
     initial_energy = objective.charged(initial, reference)
 
     must_cover = (1.0 - COVERAGE_SLACK) * min(initial.covered_area_m2, reference)
+    most_wrinkle = initial.wrinkle_area_share + wrinkle_area_tolerance
 
     def energy(z: FloatArray) -> float:
         alpha, theta, xy = unpack(z)
@@ -1216,6 +1221,8 @@ def search_layout(
         ev = objective.evaluate(alpha, orientation_rad=theta, start_xy_m=xy)
         if ev.covered_area_m2 < must_cover:
             return math.inf  # leaves the part barer than the start: infeasible, not priced
+        if ev.wrinkle_area_share > most_wrinkle:
+            return math.inf  # wrinkles more than the start: cannot be made, not cheap
         return objective.charged(ev, reference)
 
     z0 = np.array(x0) / steps

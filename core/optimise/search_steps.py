@@ -47,7 +47,7 @@ import numpy as np
 
 from preform.drape.steps import drape_settings, judge_wrinkling, record_knobs, start_problem
 from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
-from preform.drape.wrinkling import wrinkling
+from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.optimise.search import (
     AngleSearchResult,
     DrapeObjective,
@@ -445,6 +445,9 @@ def _run_layout(
         vary=vary,
         reference_area_m2=search.reference_area_m2,
         max_drapes=int(layout.get("max_drapes", 60)),
+        wrinkle_area_tolerance=float(
+            search.settings.get("wrinkle_area_tolerance", WRINKLE_AREA_TOLERANCE)
+        ),
     )
     optimum.update(
         generator_angle_rad=found.generator_angle_rad,
@@ -482,6 +485,9 @@ def _run_curved(
         mirror_families=bool(options.get("mirror_families", False)),
         reference_area_m2=search.reference_area_m2,
         max_drapes=int(options.get("max_drapes", 120)),
+        wrinkle_area_tolerance=float(
+            search.settings.get("wrinkle_area_tolerance", WRINKLE_AREA_TOLERANCE)
+        ),
     )
     ctx.summary.update(result.summary())
     _flag_curved_range(ctx, objective, result)

@@ -116,3 +116,28 @@ def test_no_makeable_angle_returns_the_least_wrinkle_and_says_so() -> None:
     assert all(p.stage == "scan" for p in found.points)  # a sampled angle, unrefined
     shares = np.array([p.wrinkle_area_share for p in found.points])
     assert found.points[int(np.argmin(shares))].generator_angle_deg == found.optimum_angle_deg
+
+
+class LayoutStub(StubObjective):
+    """The stub, with the keyword arguments the layout search passes."""
+
+    def evaluate(self, alpha: float, **kwargs: Any) -> DrapeEvaluation:
+        return super().evaluate(alpha)
+
+
+def test_the_layout_search_keeps_to_what_can_be_made() -> None:
+    """From 100°, energy falls towards 60°, but below 90° 20 % of the area wrinkles: the
+    Nelder–Mead layout search (the generator angle alone here) stops at the makeable side, as
+    the angle search does; with a tolerance that accepts everything it reaches 60°."""
+    from preform.optimise.search import search_layout
+
+    stub = LayoutStub(lambda a: 0.1, _wrinkled_below(90.0))
+    kept = search_layout(stub, generator_angle_rad=math.radians(100.0), vary=("generator_angle",))
+    assert 90.0 <= math.degrees(kept.generator_angle_rad) < 100.0
+    free = search_layout(
+        stub,
+        generator_angle_rad=math.radians(100.0),
+        vary=("generator_angle",),
+        wrinkle_area_tolerance=1.0,
+    )
+    assert math.degrees(free.generator_angle_rad) == pytest.approx(60.0, abs=1.0)
