@@ -64,6 +64,7 @@ from preform.drape.wrinkling import (
     PAST_JAMMING,
     PAST_STITCH_FAILURE,
     WrinkleLimit,
+    connected_patches,
     wrinkle_limits,
     wrinkling,
 )
@@ -434,18 +435,8 @@ def _fold_zones(
 ) -> tuple[tuple[tuple[float, float], float], ...]:
     """Connected patches (edge or corner neighbours) of ``cells`` (ni−1, nj−1): undeformed
     plan centre [m] and fabric area (d² a cell) [m²] of each, largest first."""
-    if not cells.any():
-        return ()
-    from scipy import ndimage
-
-    labels, count = ndimage.label(cells, structure=np.ones((3, 3), dtype=int))
     centre = 0.25 * (plan[:-1, :-1] + plan[1:, :-1] + plan[:-1, 1:] + plan[1:, 1:])
-    zones = []
-    for k in range(1, count + 1):
-        mine = labels == k
-        x, y = centre[mine].mean(axis=0)
-        zones.append(((float(x), float(y)), float(np.count_nonzero(mine)) * spacing**2))
-    return tuple(sorted(zones, key=lambda zone: -zone[1]))
+    return tuple(connected_patches(cells, centre, np.full(cells.shape, spacing**2)))
 
 
 # --------------------------------------------------------------------------------------------

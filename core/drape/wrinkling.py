@@ -320,22 +320,46 @@ def _centre(xy: FloatArray, weight: FloatArray) -> tuple[float, float]:
     return (float(mid[0]), float(mid[1]))
 
 
+def connected_patches(
+    cells: BoolArray, centres: FloatArray, weights: FloatArray
+) -> list[tuple[tuple[float, float], float]]:
+    """Connected patches of ``cells`` (ni−1, nj−1; edge or corner neighbours): each patch's
+    ``weights``-averaged centre (the mean where its weights sum to 0) and total weight, largest
+    first. ``centres`` (ni−1, nj−1, 2) and ``weights`` (ni−1, nj−1) are per cell, in any units.
+    Shared by the fold zones (``preform.drape.verdict``) and the wrinkle patches."""
+    if not cells.any():
+        return []
+    from scipy import ndimage
+
+    labels, count = ndimage.label(cells, structure=np.ones((3, 3), dtype=int))
+    label = labels[cells]
+    w = np.asarray(weights, dtype=float)[cells]
+    xy = np.asarray(centres, dtype=float)[cells]
+
+    def per_patch(values: FloatArray) -> FloatArray:
+        return np.bincount(label, weights=values, minlength=count + 1)[1:]
+
+    total, n = per_patch(w), per_patch(np.ones_like(w))
+    weighted = total > 0
+    mid = np.stack(
+        [
+            np.where(weighted, per_patch(xy[:, a] * w), per_patch(xy[:, a]))
+            / np.where(weighted, total, n)
+            for a in (0, 1)
+        ],
+        axis=1,
+    )
+    found = [((float(x), float(y)), float(t)) for (x, y), t in zip(mid, total, strict=True)]
+    found.sort(key=lambda patch: -patch[1])
+    return found
+
+
 def _patches(
     past: BoolArray, plan_mm: FloatArray, area_mm2: FloatArray
 ) -> tuple[tuple[tuple[float, float], float], ...]:
-    """Connected patches of ``past`` (edge or corner neighbours): area-weighted plan centroid
-    [mm] and area [mm²] of each, largest first, at most :data:`PATCHES_KEPT`."""
-    if not past.any():
-        return ()
-    from scipy import ndimage
-
-    labels, count = ndimage.label(past, structure=np.ones((3, 3), dtype=int))
-    found = []
-    for k in range(1, count + 1):
-        mine = labels == k
-        found.append((_centre(plan_mm[mine], area_mm2[mine]), float(area_mm2[mine].sum())))
-    found.sort(key=lambda patch: -patch[1])
-    return tuple(found[:PATCHES_KEPT])
+    """Connected patches of ``past``: area-weighted plan centroid [mm] and area [mm²] of
+    each, largest first, at most :data:`PATCHES_KEPT`."""
+    return tuple(connected_patches(past, plan_mm, area_mm2)[:PATCHES_KEPT])
 
 
 def wrinkling(

@@ -8,6 +8,8 @@ from typing import Any, Literal
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from pydantic import BaseModel, ConfigDict
 
 from preform import hookimpl
@@ -291,3 +293,48 @@ def test_the_search_is_partial_when_no_angle_can_be_made(jam_library: Any, tmp_p
     for row, (_, want) in zip(rows, table.iterrows(), strict=True):
         assert float(row["wrinkle_energy_share"]) == pytest.approx(want["wrinkle_energy_share"])
         assert row["makeable"] == str(bool(want["makeable"]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    cells=st.lists(st.lists(st.booleans(), min_size=6, max_size=6), min_size=5, max_size=5),
+    seed=st.integers(0, 1000),
+)
+def test_connected_patches_match_a_flood_fill(cells: list[list[bool]], seed: int) -> None:
+    """The shared patch finder against a flood fill written here (8-neighbours), with random
+    centres and weights (some zero: such a patch's centre is the plain mean)."""
+    from preform.drape.wrinkling import connected_patches
+
+    mask = np.array(cells, dtype=bool)
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-50, 50, size=(*mask.shape, 2))
+    weights = rng.choice([0.0, 0.5, 2.0], size=mask.shape)
+    seen = np.zeros_like(mask)
+    want = []
+    for start in zip(*np.nonzero(mask), strict=True):
+        if seen[start]:
+            continue
+        stack, members = [start], []
+        seen[start] = True
+        while stack:
+            i, j = stack.pop()
+            members.append((i, j))
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    a, b = i + di, j + dj
+                    if 0 <= a < mask.shape[0] and 0 <= b < mask.shape[1] and mask[a, b]:
+                        if not seen[a, b]:
+                            seen[a, b] = True
+                            stack.append((a, b))
+        w = np.array([weights[m] for m in members])
+        xy = np.array([centres[m] for m in members])
+        mid = (xy * w[:, None]).sum(axis=0) / w.sum() if w.sum() > 0 else xy.mean(axis=0)
+        want.append((tuple(mid), float(w.sum())))
+    got = connected_patches(mask, centres, weights)
+    assert len(got) == len(want)
+    key = lambda p: (round(p[1], 9), round(p[0][0], 6), round(p[0][1], 6))  # noqa: E731
+    for (c_got, t_got), (c_want, t_want) in zip(
+        sorted(got, key=key), sorted(want, key=key), strict=True
+    ):
+        assert t_got == pytest.approx(t_want) and c_got == pytest.approx(c_want)
+    assert [t for _, t in got] == sorted((t for _, t in got), reverse=True)
