@@ -71,9 +71,10 @@ class TowCompaction:
     coupling_compliance: float = 0.0
 
 
-#: Compaction constants by fibre family, each with its source. Gutowski, Morigaki & Cai (1987,
-#: J. Compos. Mater. 21:172 and 21:650) fitted β ≈ 350, V_a ≈ 0.8 (quoted here as square packing
-#: π/4 ≈ 0.785, the ceiling for round fibres without nesting) to AS4 carbon fibre beds [L]; no
+#: Compaction constants by fibre family, each with its source. Gutowski et al. (1987, J. Compos.
+#: Mater. 21:650, as PHYSICS.md §3 quotes it [L, constants to verify against the original])
+#: fitted β ≈ 350, V_a ≈ 0.8 (taken here as square packing π/4 ≈ 0.785, the ceiling for round
+#: fibres without nesting) to AS4 carbon fibre beds; no
 #: published set for glass or aramid tows was available to us, so they take the same β and V_a,
 #: marked illustrative [C]. The fibre modulus enters A_s through the fibre (E-glass 72 GPa, so a
 #: glass tow is ~3× softer laterally than carbon at the same fractions).
