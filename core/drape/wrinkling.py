@@ -337,7 +337,7 @@ def connected_patches(
     xy = np.asarray(centres, dtype=float)[cells]
 
     def per_patch(values: FloatArray) -> FloatArray:
-        return np.bincount(label, weights=values, minlength=count + 1)[1:]
+        return np.asarray(np.bincount(label, weights=values, minlength=count + 1)[1:], dtype=float)
 
     total, n = per_patch(w), per_patch(np.ones_like(w))
     weighted = total > 0
