@@ -9,11 +9,13 @@ the bias-extension kinematics both stop being what is compared):
 1. ``bundled``: the bundled fabric closest to the tested one, as it ships (uncalibrated);
 2. ``benchmark``: the tested fabric from its paper's table (``fabrics.yaml``), its unknown law
    constants at the bundled fabric's illustrative values (uncalibrated);
-3. ``calibrated``: the benchmark fabric with its pre-tension fitted to the points up to its
-   locking angle (``preform.shear.calibrate``). Before locking the law's force is
-   μ·(pre-tension force)·(geometry), so only the product of friction and pre-tension is
-   identifiable there: friction stays at its value and pre-tension carries the product. The
-   residuals are absolute (N/mm): the fit minimises the rms the table reports.
+3. ``calibrated``: the benchmark fabric with its pre-tension and its friction mobilisation
+   angle fitted to the points up to its locking angle (``preform.shear.calibrate``). Before
+   locking the law's force is μ·(pre-tension force)·(geometry)·(1 − exp(−γ/γ_m)), so only the
+   product of friction and pre-tension is identifiable there: friction stays at its value and
+   pre-tension carries the product; γ_m sets how the force rises from zero (measured curves
+   do, a Coulomb crossover would not). The residuals are absolute (N/mm): the fit minimises
+   the rms the table reports.
 
 Errors are rms [N/mm] and rms relative to the data's rms, R².
 """
@@ -21,7 +23,7 @@ Errors are rms [N/mm] and rms relative to the data's rms, R².
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -30,8 +32,14 @@ import click
 
 from preform.commands.options import InputError, echo_json, json_option
 
-#: The constants the suite fits, per law; see the module docstring for why only one.
-SUITE_CONSTANTS = {"friction_compaction": ("shear_law.pretension_N",)}
+#: The constants the suite fits (PATH=LO:HI), per law; see the module docstring for why these.
+#: The bounds are the fields' plausible ranges (docs/ranges.md), pre-tension from 1 N.
+SUITE_CONSTANTS = {
+    "friction_compaction": (
+        "shear_law.pretension_N=1:10000",
+        "shear_law.friction_mobilisation_deg=0:90",
+    )
+}
 
 
 def suite_dir() -> Path:
@@ -56,6 +64,8 @@ class Comparison:
     points: int
     up_to_deg: float
     constants: str
+    #: The fitted constants (``FittedConstant.as_json``), for the calibrated row; else empty.
+    fitted: list[dict[str, Any]] = field(default_factory=list)
 
     def as_json(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -155,9 +165,9 @@ def run_dataset(folder: Path, library: Any, out_dir: Path) -> tuple[list[Compari
             benchmark.name,
             None,
             ", ".join(
-                f"{c.name.split('.')[-1]} = {c.value:.3g} ± {c.sigma:.2g}"
-                if c.sigma is not None
-                else f"{c.name.split('.')[-1]} = {c.value:.3g}"
+                f"{c.name.split('.')[-1]} = {c.value:.3g}"
+                + (f" ± {c.sigma:.2g}" if c.sigma is not None else "")
+                + (" (at its bound)" if c.at_bound else "")
                 for c in calibration.constants
             ),
         ),
@@ -183,6 +193,7 @@ def run_dataset(folder: Path, library: Any, out_dir: Path) -> tuple[list[Compari
                 q.points,
                 up_to,
                 fitted,
+                [c.as_json() for c in calibration.constants] if law is None else [],
             )
         )
         curves.append((grid, curve, f"{label} ({fabric_name}): {100 * q.relative_rms:.0f} % rms"))
@@ -271,7 +282,9 @@ def run_validation(out_dir: str | Path, library: Any = None) -> dict[str, Any]:
         figures.append(str(figure))
     table = out / "validation.csv"
     with table.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0].as_json()))
+        # the table keeps the constants in words; the structured ones are in the JSON report
+        columns = [k for k in rows[0].as_json() if k != "fitted"]
+        writer = csv.DictWriter(handle, fieldnames=columns, extrasaction="ignore")
         writer.writeheader()
         for row in rows:
             writer.writerow(row.as_json())

@@ -41,6 +41,13 @@ Modelling choices [C] (the paper does not pin these down; every one is a paramet
   following the compaction pole, whose energies (1e7–1e9 J/m²) are no fabric's;
   ``packing_angle`` reports the jamming angle and drape results count the cells past it as
   wrinkled, not as a physical energy.
+* Friction mobilisation (``friction_mobilisation_deg``, γ_m, default 0): the paper's Coulomb
+  crossover slips with the full torque from the first degree; measured picture-frame curves of
+  dry weaves rise from zero instead (Cao et al. 2008, Figs 24-28). The law multiplies the
+  crossover torque by Dahl's mobilisation 1 − exp(−|γ|/γ_m) (P.R. Dahl, "A solid friction
+  model", Aerospace Corp. TOR-0158(3107-18)-1, 1968): a crossover turns first by the tows' own
+  compliance and slides fully only after a few γ_m. γ_m is a fitted constant, not a
+  prediction: no published value exists for any fabric; ``preform calibrate`` fits it.
 * Angles are clamped to |γ| ≤ 90° − 1e-9 rad (the picture frame and the parallelogram are
   singular at 90°).
 
@@ -169,6 +176,13 @@ FABRIC_THICKNESS = Plausible(
     "spread-tow fabrics ≈ 0.03 mm thick, thick 3D weaves ≈ 50 mm",
 )
 FRAME_WIDTH = Plausible(1.0, 5000.0, "mm", "a frame width", "picture frames are 100–300 mm a side")
+MOBILISATION = Plausible(
+    0.0,
+    90.0,
+    "deg",
+    "a friction mobilisation angle",
+    "0 is Coulomb's sudden slip; 90° means the crossovers never reach full slip in any test",
+)
 
 
 class FrictionCompactionParams(ParamsModel):
@@ -200,6 +214,17 @@ class FrictionCompactionParams(ParamsModel):
         default=150.0,
         gt=0.0,
         description="Fabric width [mm] sharing pretension_N (the frame side) [C].",
+    )
+    friction_mobilisation_deg: Annotated[float, MOBILISATION] = Field(
+        default=0.0,
+        ge=0.0,
+        description=(
+            "Friction mobilisation angle γ_m [deg]: the crossovers' friction torque builds up "
+            "as 1 − exp(−|γ|/γ_m) (Dahl's friction model) while the tows' own compliance lets "
+            "a crossover turn before it slips [C]. 0 (default): Coulomb's model, the full "
+            "friction torque from the first degree. Not predicted: fit it to a measured curve "
+            "(preform calibrate)."
+        ),
     )
 
     @model_validator(mode="before")
@@ -273,7 +298,12 @@ class FrictionCompactionLaw(SignedShearLaw):
         self.kink_angles: tuple[float, ...] = tuple(
             sorted({a for a in limits if 0.0 < a < self._jam})
         )
-        breaks = sorted({a for a in (*locks, *limits) if 0.0 < a < self._jam})
+        #: Friction mobilisation angle γ_m [rad] (0: Coulomb).
+        self.mobilisation_angle = math.radians(params.friction_mobilisation_deg)
+        # The mobilisation's boundary layer is resolved by panels ending at γ_m and 4·γ_m
+        # (smooth there, but the quadrature's panels are 0.5° wide).
+        layer = [k * self.mobilisation_angle for k in (1.0, 4.0)] if self.mobilisation_angle else []
+        breaks = sorted({a for a in (*locks, *limits, *layer) if 0.0 < a < self._jam})
         if self.packing_angle is not None:
             breaks.append(self.packing_angle)
         branch = QuadratureBranch(self.torque_magnitude, breakpoints=breaks)
@@ -287,11 +317,24 @@ class FrictionCompactionLaw(SignedShearLaw):
             total = total + part.torque_per_area(u)
         return total
 
-    def torque_magnitude(self, u: FloatArray) -> FloatArray:
-        """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]; held past jamming."""
+    def mobilisation(self, u: ArrayLike) -> FloatArray:
+        """Share of the full (sliding) friction torque mobilised at |γ| = u [rad]: Dahl's
+        1 − exp(−u/γ_m) (Dahl 1968, a friction force reaching its Coulomb value over a
+        characteristic displacement), 1 everywhere when γ_m = 0 (Coulomb) [-]."""
         import numpy as np
 
-        return self._free_torque(np.minimum(np.asarray(u, dtype=float), self._jam))
+        v = np.abs(np.asarray(u, dtype=float))
+        if self.mobilisation_angle <= 0.0:
+            return np.ones_like(v)
+        return np.asarray(-np.expm1(-v / self.mobilisation_angle), dtype=float)
+
+    def torque_magnitude(self, u: FloatArray) -> FloatArray:
+        """Torque per area |C| [N·m/m²] at shear-angle magnitudes u [rad]: the crossovers'
+        friction torque times its mobilised share; held past jamming."""
+        import numpy as np
+
+        held = np.minimum(np.asarray(u, dtype=float), self._jam)
+        return np.asarray(self._free_torque(held) * self.mobilisation(held), dtype=float)
 
     def tow_volume_fractions(self, gamma: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Fibre fraction inside the warp-wise and weft-wise tows [-] of the first geometry at

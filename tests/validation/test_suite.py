@@ -70,28 +70,69 @@ def test_calibration_brings_the_law_closer_to_the_measured_curves(report: dict) 
             assert row["relative_rms"] < 0.2 * before[dataset]["relative_rms"], dataset
 
 
-def test_one_fabric_gives_one_pretension_whatever_the_specimen_size(report: dict) -> None:
-    """Two specimen sizes of the same fabric (the normalisation removes the size): the fitted
+def test_one_fabric_gives_one_set_of_constants_whatever_the_specimen_size(report: dict) -> None:
+    """Two specimen sizes of the same fabric (the normalisation removes the size): each fitted
     constant must agree within the two fits' combined uncertainty (3σ)."""
     after = rows(report, "calibrated")
-    values = []
-    for row in (r for d, r in after.items() if "-bias-" in d):
-        value, sigma = row["constants"].split("=")[1].split("±")
-        values.append((float(value), float(sigma)))
-    (a, sa), (b, sb) = values
-    assert abs(a - b) <= 3 * (sa**2 + sb**2) ** 0.5
+    fits = [
+        {c["path"]: (c["value"], c["sigma"]) for c in row["fitted"]}
+        for dataset, row in after.items()
+        if "-bias-" in dataset
+    ]
+    assert len(fits) == 2 and fits[0].keys() == fits[1].keys()
+    assert set(fits[0]) == {"shear_law.pretension_N", "shear_law.friction_mobilisation_deg"}
+    for path in fits[0]:
+        (a, sa), (b, sb) = fits[0][path], fits[1][path]
+        assert sa is not None and sb is not None, path
+        assert abs(a - b) <= 3 * (sa**2 + sb**2) ** 0.5, path
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the friction_compaction law holds a constant Coulomb force before locking while the "
-    "measured curves rise from zero: calibrated, it is 34 % (115 x 230) and 38 % (150 x 450) "
-    "rms of the bias-extension data up to locking, 27-51 % of the four picture-frame curves, "
-    "not 15 % (docs/validation.md)",
-)
 def test_the_calibrated_law_reproduces_the_benchmark_within_15_percent(report: dict) -> None:
+    """Issue 24's criterion: pre-tension and friction mobilisation fitted up to the locking
+    angle, every measured curve (two bias-extension, four picture-frame laboratories) is met
+    within 15 % rms. (Coulomb's crossover, γ_m = 0, is 27-51 %: the next test.)"""
     for dataset, row in rows(report, "calibrated").items():
         assert row["relative_rms"] <= 0.15, (dataset, row["relative_rms"])
+
+
+def test_a_coulomb_crossover_cannot_meet_the_measured_rise() -> None:
+    """The reason for the mobilisation: the same fit with γ_m held at 0 (Coulomb's sudden
+    slip, the paper's law) leaves at least one picture-frame curve above 25 % rms, since it
+    starts every curve at its full friction force while the measured ones rise from zero."""
+    import math
+
+    from preform.library import load_library
+    from preform.shear.calibrate import calibrate_law, resolve_constants
+    from preform.validation_suite.runner import suite_dir
+
+    lib = load_library([suite_dir() / "fabrics.yaml"])
+    fabric = lib.fabric("twintex-plain-cao2008")
+    assert fabric.shear_law.friction_mobilisation_deg == 0.0
+    worst = 0.0
+    for folder in dataset_dirs():
+        meta = load_dataset(folder)
+        if not meta.get("normalised"):
+            continue
+        angle, force = read_normalised_csv(meta["points_path"])
+        fit = calibrate_law(
+            fabric,
+            lib.registry,
+            angle,
+            force,
+            resolve_constants(fabric, ["shear_law.pretension_N=1:10000"]),
+            max_angle_deg=math.degrees(math.acos(4.22 / 5.18)),
+            test=meta["test"],
+            weights="absolute",
+        )
+        worst = max(worst, fit.fit.relative_rms)
+    assert worst > 0.25
+
+
+def test_a_constant_at_its_bound_is_said(report: dict) -> None:
+    """A fit that stops at a bound says so in the table's words, and only then."""
+    for row in rows(report, "calibrated").values():
+        at_bound = [c for c in row["fitted"] if c["at_bound"]]
+        assert row["constants"].count("(at its bound)") == len(at_bound), row["constants"]
 
 
 def test_measured_angles_say_where_they_come_from_and_meet_the_model(report: dict) -> None:
