@@ -102,8 +102,10 @@ def test_refitting_recovers_a_friction_mobilisation_angle(library) -> None:
         data,
         test="picture-frame",
         side_mm=SIDE_MM,
-        constants={"shear_law.pretension_N": (5.0, 1000.0),
-                   "shear_law.friction_mobilisation_deg": (0.0, 90.0)},  # fmt: skip
+        constants={
+            "shear_law.pretension_N": (5.0, 1000.0),
+            "shear_law.friction_mobilisation_deg": (0.0, 90.0),
+        },
         max_angle_deg=39.0,
         library=library,
     )

@@ -86,5 +86,5 @@ def test_the_angle_is_a_checked_parameter(library) -> None:
     with pytest.raises(ValueError, match="friction_mobilisation_deg"):
         validated_fabric(entry, library.registry)
     entry["shear_law"]["friction_mobilisation_deg"] = 120.0
-    with pytest.raises(ValueError, match="friction_mobilisation_deg.*plausible"):
+    with pytest.raises(ValueError, match=r"friction_mobilisation_deg.*plausible"):
         validated_fabric(entry, library.registry)
