@@ -135,6 +135,12 @@ class TabulatedSurrogate:
             count = math.ceil(width / (step_rad / 8.0))
             fine = end - step_rad / 8.0 * np.arange(1, count + 1)
             special.extend(float(a) for a in fine if a > 0)
+        # A friction law whose torque is mobilised over γ_m (``mobilisation_angle`` [rad],
+        # the woven law's Dahl ramp) rises from zero within a few γ_m: nodes every γ_m/4 to
+        # 6·γ_m when that layer is thinner than a few table steps.
+        layer = float(getattr(law, "mobilisation_angle", 0.0) or 0.0)
+        if 0.0 < layer < 4.0 * step_rad:
+            special.extend(float(a) for a in np.linspace(0.0, 6.0 * layer, 25)[1:])
         nodes = np.unique(np.concatenate([grid, special]))
         # a special angle right next to a grid node would make a needle-thin interval
         keep = np.concatenate([[True], np.diff(nodes) > 1e-3 * step_rad])
