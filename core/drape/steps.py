@@ -453,23 +453,6 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
     return {"fibre_pattern_png": "fibre_pattern.png"}
 
 
-def write_flat_pattern(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.flat_pattern import (
-        flat_pattern,
-        write_flat_pattern_csv,
-        write_flat_pattern_dxf,
-        write_flat_pattern_svg,
-    )
-
-    ply: DrapedPly = ctx.products["drape"]
-    pattern = flat_pattern(ply.result)
-    write_flat_pattern_csv(pattern, ctx.case_dir / "flat_pattern.csv")
-    write_flat_pattern_dxf(pattern, ctx.case_dir / "flat_pattern.dxf")
-    write_flat_pattern_svg(pattern, ctx.case_dir / "flat_pattern.svg", title=ctx.fabric.name)
-    ctx.summary["flat_pattern_area_mm2"] = pattern.area_mm2
-    return {"flat_pattern": ["flat_pattern.csv", "flat_pattern.dxf", "flat_pattern.svg"]}
-
-
 STEPS = [
     Step(
         "surface",
@@ -521,15 +504,6 @@ EXPORTERS = [
         "1",
         write_fibre_pattern_png,
         "fibre_pattern.png: top view with tows, 3D view by shear",
-        writes_files=True,
-    ),
-    Step(
-        "flat_pattern",
-        ("flat_pattern",),
-        ("drape",),
-        "1",
-        write_flat_pattern,
-        "flat_pattern.csv/.dxf/.svg: the ply outline in the flat",
         writes_files=True,
     ),
 ]
