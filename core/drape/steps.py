@@ -446,9 +446,10 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
         ply.result,
         ply.energy,
         ctx.case_dir / "fibre_pattern.png",
-        title=ctx.fabric.name,  # the figure adds the angle, nodes and energy
+        title=ctx.fabric.name,  # the figure adds the angle, coverage and energy
         tow_every=every,
         part=scene_part(ctx.scene, surface) if surface is not None else None,
+        covered_fraction=ctx.summary.get("covered_fraction"),
     )
     return {"fibre_pattern_png": "fibre_pattern.png"}
 
