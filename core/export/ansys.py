@@ -100,11 +100,7 @@ def ansys_macro_text(
         f"! Covered elements: {summary['elements_covered']} of {summary['elements']}; "
         f"uncovered: {summary['elements_uncovered']}"
         # the component is named only when it is written
-        + (
-            f" (component {name}_UNCOVERED, no system)."
-            if summary["elements_uncovered"]
-            else "."
-        ),
+        + (f" (component {name}_UNCOVERED, no system)." if summary["elements_uncovered"] else "."),
         (
             f"! Thickness and both fibre families: a two-layer shell section per element, "
             f"u layer {u_fraction:g} of t at THETA 0, v layer {1 - u_fraction:g} of t at THETA "

@@ -29,7 +29,7 @@ TARGETS: dict[str, str] = {
 NEEDS_MESH = frozenset({"abaqus", "lsdyna", "ansys", "table", "vtu"})
 
 
-class TargetChoice(click.Choice):  # type: ignore[type-arg]
+class TargetChoice(click.Choice):
     """The targets, and a target that was replaced refused with what replaced it (not only
     "invalid choice")."""
 

@@ -19,33 +19,28 @@ from preform.export.cut_pattern import cut_pattern, write_cut_pattern_dxf, write
 from preform.plugins.surfaces.basic import Hemisphere, Plane
 
 
-def plate(width_m: float, height_m: float, alpha_deg: float = 90.0):
+def net(surface, ply_mm: tuple[float, float], alpha_deg: float):
+    """A drape at d = 5 mm from the origin, the ply ``ply_mm`` [mm] a rectangle."""
     return drape(
-        Plane((1.0, 1.0)),
+        surface,
         start_xy_m=(0.0, 0.0),
         node_spacing_m=0.005,
-        ply=PlyOutline.rectangle((width_m, height_m)),
+        ply=PlyOutline.rectangle((1e-3 * ply_mm[0], 1e-3 * ply_mm[1])),
         generator_angle_rad=np.radians(alpha_deg),
     )
 
 
-def hemisphere():
-    return drape(
-        Hemisphere(0.1),
-        start_xy_m=(0.0, 0.0),
-        node_spacing_m=0.005,
-        ply=PlyOutline.rectangle((0.4, 0.4)),
-        generator_angle_rad=np.radians(80.0),
-    )
-
-
+PLATE = Plane((1.0, 1.0))
 CASES = {
-    "hemisphere": (hemisphere, {}),
-    "square plate": (lambda: plate(0.2, 0.2), {}),
+    "hemisphere": (lambda: net(Hemisphere(0.1), (400, 400), 80.0), {}),
+    "square plate": (lambda: net(PLATE, (200, 200), 90.0), {}),
     # a strip 400 mm by 30 mm: the old label (one line, height size/80) ran far past it
-    "narrow strip": (lambda: plate(0.4, 0.03, 70.0), {}),
+    "narrow strip": (lambda: net(PLATE, (400, 30), 70.0), {}),
     # split by a cut into a 100 mm and a 300 mm wide piece: the label goes in the larger
-    "split plate": (lambda: plate(0.4, 0.1), {"cuts_mm": [((-100.0, -80.0), (-100.0, 80.0))]}),
+    "split plate": (
+        lambda: net(PLATE, (400, 100), 90.0),
+        {"cuts_mm": [((-100.0, -80.0), (-100.0, 80.0))]},
+    ),
 }
 
 
