@@ -410,7 +410,7 @@ def cut_pattern(
     past locking, drawn in the flat where they lie in the pattern's region; ``part`` the
     scene's part, whose region in the flat becomes the outline (module docstring)."""
     shapely = _require_shapely()
-    from shapely.geometry import Polygon
+    from shapely.geometry import LineString, Polygon
 
     if not np.isfinite(seam_allowance_mm) or seam_allowance_mm < 0:
         raise ValueError(f"seam_allowance_mm must be ≥ 0, got {seam_allowance_mm!r}")
@@ -458,6 +458,9 @@ def cut_pattern(
         f"d = {d_mm:g} mm; units mm",
     )
     label_at, height = label_place(outline, lines)
+    # fibre marks through the label would strike its text out: the label's block keeps clear
+    block = _label_block(label_at, height, lines, margin=0.5 * height)
+    marks = [m for m in marks if not block.intersects(LineString([m.start, m.end]))]
     return CutPattern(
         outline=outline,
         allowance=allowance,
@@ -478,6 +481,16 @@ def cut_pattern(
     )
 
 
+def _label_block(at: Point2, height: float, lines: Sequence[str], margin: float = 0.0) -> Any:
+    """The box [mm] a label of ``lines`` at text height ``height`` centred at ``at`` takes
+    (``LABEL_CHAR_WIDTH``, ``LABEL_LINE_PITCH``), grown by ``margin`` [mm]."""
+    from shapely.geometry import box
+
+    half_w = 0.5 * height * LABEL_CHAR_WIDTH * max(len(line) for line in lines) + margin
+    half_h = 0.5 * height * LABEL_LINE_PITCH * len(lines) + margin
+    return box(at[0] - half_w, at[1] - half_h, at[0] + half_w, at[1] + half_h)
+
+
 def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, float]:
     """Where the label block goes and its text height [mm]: the block, ``LABEL_CHAR_WIDTH``
     text heights a character wide and ``LABEL_LINE_PITCH`` a line tall, at the largest
@@ -487,7 +500,7 @@ def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, fl
     place is anywhere along its middle); the height at each by bisection. A label that ran
     past the piece would be cut through or printed on the scrap."""
     import shapely
-    from shapely.geometry import Point, box
+    from shapely.geometry import Point
     from shapely.ops import polylabel
 
     if outline.is_empty:
@@ -506,16 +519,7 @@ def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, fl
     most = min(LABEL_MAX_HEIGHT_MM, (x1 - x0) / width, (y1 - y0) / height)
 
     def fits(c: Any, h: float) -> bool:
-        return bool(
-            piece.contains(
-                box(
-                    c.x - 0.5 * h * width,
-                    c.y - 0.5 * h * height,
-                    c.x + 0.5 * h * width,
-                    c.y + 0.5 * h * height,
-                )
-            )
-        )
+        return bool(piece.contains(_label_block((c.x, c.y), h, lines)))
 
     best, best_h = pole, 0.0
     for centre in [pole, *(p for p in grid if piece.contains(p))]:

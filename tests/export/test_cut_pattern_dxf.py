@@ -11,7 +11,7 @@ import ezdxf
 import ezdxf.bbox
 import numpy as np
 import pytest
-from shapely.geometry import Polygon, box
+from shapely.geometry import LineString, Polygon, box
 
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
@@ -92,10 +92,17 @@ def test_the_label_lies_inside_its_piece(written) -> None:
     assert [t.dxf.text for t in texts] == list(pattern.label_lines)
     assert "E-BX-318, ply 2 of 6" in texts[0].dxf.text
     piece = max(pattern.outline.geoms, key=lambda g: g.area)
+    marks = [
+        LineString([m.dxf.start.vec2, m.dxf.end.vec2])
+        for m in msp.query("LINE")
+        if m.dxf.layer == "FIBRE_MARKS"
+    ]
+    assert marks
     for text in texts:
         extents = ezdxf.bbox.extents([text])
         drawn = box(extents.extmin.x, extents.extmin.y, extents.extmax.x, extents.extmax.y)
         assert piece.contains(drawn), (text.dxf.text, drawn.bounds, piece.bounds)
+        assert not any(drawn.intersects(mark) for mark in marks), text.dxf.text  # not struck out
         # a monospaced CAD font (a character and its spacing one text height wide) fits too
         h = text.dxf.height
         x, y = text.dxf.align_point.x, text.dxf.align_point.y
