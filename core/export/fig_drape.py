@@ -103,10 +103,11 @@ FOLD_COLOUR = "#e08a00"
 FAILURE_COLOUR = "#d01c8b"
 #: The shear colour scale of every fibre-pattern figure spans ±SHEAR_SCALE_DEG [deg], whatever
 #: the fabric, so two fabrics' figures (a run's sweep) compare colour for colour: a scale per
-#: figure made the same colour mean 20° in one and 45° in the next. 60° lies past the locking
-#: angle of the fabrics preform ships (their cells beyond it are outlined as past locking
-#: anyway); shear beyond it takes the end colours and the panel says how many cells do. A
-#: drawing choice, not a modelling one: ``shear_scale_deg=None`` scales one figure to itself.
+#: figure made the same colour mean 20° in one and 45° in the next. 60° lies past the limits
+#: of the bundled fabrics that have one (locking 22–53°, E-BX-318's stitch failure 35°), so
+#: cells beyond it are outlined anyway; they take the end colours and the panel says how many
+#: cells do. A drawing choice, not a modelling one: ``shear_scale_deg=None`` scales one figure
+#: to itself.
 SHEAR_SCALE_DEG = 60.0
 
 
