@@ -1,4 +1,5 @@
-"""Old import paths of moved modules: each stays one release as an alias that warns."""
+"""Old names: moved modules stay one release as an alias that warns; retired outputs and
+their writers are refused with a message naming what replaced them."""
 
 import importlib
 import sys
@@ -12,3 +13,31 @@ def alias_moved_module(old: str, new: str) -> None:
     # 1: here, 2: the alias module's body, 3+: the import machinery, then the importer
     warnings.warn(f"{old} is deprecated: import {new}", DeprecationWarning, stacklevel=3)
     sys.modules[old] = moved
+
+
+#: Scene outputs (and ``preform export`` targets) that were replaced: old name -> the message
+#: that refuses it, naming what replaced it. Refused rather than aliased: the old output wrote
+#: other files under other names, so running the new one silently would surprise a script.
+RETIRED_OUTPUTS: dict[str, str] = {
+    "flat_pattern": (
+        "the output 'flat_pattern' (the cells' staircase in the flat) was replaced by "
+        "'cut_pattern': the part clipped in the flat, smooth, with seam allowance, darts and "
+        "cuts (cut_pattern.dxf/.svg/.csv; docs/exports.md). Ask for 'cut_pattern' instead"
+    ),
+}
+#: ``preform export`` targets, likewise.
+RETIRED_TARGETS: dict[str, str] = {
+    "flat-pattern": (
+        "'flat-pattern' is now 'cut-pattern' (the part clipped in the flat: "
+        "cut_pattern.dxf/.svg/.csv; docs/exports.md)"
+    ),
+}
+#: Names of ``preform.export`` that were removed with the retired outputs: name -> message.
+RETIRED_NAMES: dict[str, str] = {
+    f"write_flat_pattern_{kind}": (
+        f"preform.export.write_flat_pattern_{kind} was removed with the 'flat_pattern' output: "
+        f"use write_cut_pattern_{kind}(cut_pattern(result)); cut_pattern(result, smoothing=0) "
+        "is the cells' exact staircase"
+    )
+    for kind in ("csv", "dxf", "svg")
+}

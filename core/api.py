@@ -378,7 +378,12 @@ class Drape(CaseRun):
         draped = self._product("drape")
         every = max(1, round(5e-3 / draped.result.node_spacing))  # a tow line every ~5 mm
         return fibre_pattern_figure(
-            draped.result, draped.energy, path, title=self.fabric.name, tow_every=every
+            draped.result,
+            draped.energy,
+            path,
+            title=self.fabric.name,
+            tow_every=every,
+            covered_fraction=self.summary.get("covered_fraction"),
         )
 
     def to_vtu(self, path: PathLike) -> Path:

@@ -36,7 +36,6 @@ EXPORTERS: tuple[tuple[str, str], ...] = (
     ("cells_csv", "preform.drape.steps:EXPORTERS"),
     ("vtu", "preform.drape.steps:EXPORTERS"),
     ("fibre_pattern_png", "preform.drape.steps:EXPORTERS"),
-    ("flat_pattern", "preform.drape.steps:EXPORTERS"),
     ("energy_plot_png", "preform.optimise.search_steps:EXPORTERS"),
     ("energy_vs_angle_csv", "preform.optimise.search_steps:EXPORTERS"),
     ("library_energy_png", "preform.optimise.search_steps:EXPORTERS"),

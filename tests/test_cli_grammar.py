@@ -55,7 +55,7 @@ COMMANDS: dict[str, dict[str, object]] = {
     },
     "export": {
         "json": [
-            "export", "plain-weave-150", "abaqus", "flat-pattern", "--scene",
+            "export", "plain-weave-150", "abaqus", "cut-pattern", "--scene",
             "hemisphere-export", "--out", "{tmp}/export", "--json",
         ],
         "error": (["export", "nosuch", "abaqus"], 2, "no fabric named 'nosuch'"),

@@ -648,6 +648,16 @@ def error_floors(result: TradeoffResult) -> dict[str, float]:
     return {"angle_error_deg": float(angle), "energy_rel_error": float(energy)}
 
 
+#: Why ``--quick`` draws no figure: its settings and coarse reference exercise the study, they
+#: do not measure the trade (most errors fall below the reference's own resolution, and the
+#: few points left make no front).
+NO_QUICK_FIGURE = (
+    "no tradeoff.png with --quick: a coarse reference and a few settings cannot show the "
+    "trade (most errors lie below the reference's resolution); the table is for checking that "
+    "the study runs. Run without --quick for the figure"
+)
+
+
 def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
     """Error against wall time (log-log): optimum-angle error and relative energy error, one
     panel each, the Pareto front joined; errors below the reference's resolution (zero for the
@@ -788,7 +798,11 @@ bench = click.Group(
     metavar="DIR",
     help="Folder for tradeoff.csv and tradeoff.png.",
 )
-@click.option("--quick", is_flag=True, help="A few settings and a coarse reference (seconds).")
+@click.option(
+    "--quick",
+    is_flag=True,
+    help="A few settings and a coarse reference (seconds): the table only, no figure.",
+)
 @click.option(
     "--repeat",
     default=1,
@@ -836,7 +850,15 @@ def tradeoff_command(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(result, out / "tradeoff.csv")
-    plot_tradeoff(result, out / "tradeoff.png")
+    files = [str(out / "tradeoff.csv")]
+    if quick:
+        note = NO_QUICK_FIGURE
+        if (out / "tradeoff.png").exists():
+            note += f"; {out / 'tradeoff.png'} is an earlier run's"
+    else:
+        plot_tradeoff(result, out / "tradeoff.png")
+        files.append(str(out / "tradeoff.png"))
+        note = ""
     command = f"preform bench tradeoff --scene {scene_spec} --material {material}" + (
         " --quick" if quick else ""
     )
@@ -850,14 +872,17 @@ def tradeoff_command(
                 "baseline": result.baseline_label,
                 "reference_check": result.reference_check,
                 "rows": [row.as_dict() for row in result.rows],
-                "files": [str(out / "tradeoff.csv"), str(out / "tradeoff.png")],
+                "files": files,
+                "no_figure": note or None,
             }
         )
         return
     click.echo(f"command: {command}")
     click.echo(format_table(result))
     click.echo(describe_reference(result))
-    click.echo(f"wrote {out / 'tradeoff.csv'} and {out / 'tradeoff.png'}")
+    click.echo("wrote " + " and ".join(files))
+    if note:
+        click.echo(note)
 
 
 __all__ = [

@@ -446,28 +446,12 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
         ply.result,
         ply.energy,
         ctx.case_dir / "fibre_pattern.png",
-        title=ctx.fabric.name,  # the figure adds the angle, nodes and energy
+        title=ctx.fabric.name,  # the figure adds the angle, coverage and energy
         tow_every=every,
         part=scene_part(ctx.scene, surface) if surface is not None else None,
+        covered_fraction=ctx.summary.get("covered_fraction"),
     )
     return {"fibre_pattern_png": "fibre_pattern.png"}
-
-
-def write_flat_pattern(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.flat_pattern import (
-        flat_pattern,
-        write_flat_pattern_csv,
-        write_flat_pattern_dxf,
-        write_flat_pattern_svg,
-    )
-
-    ply: DrapedPly = ctx.products["drape"]
-    pattern = flat_pattern(ply.result)
-    write_flat_pattern_csv(pattern, ctx.case_dir / "flat_pattern.csv")
-    write_flat_pattern_dxf(pattern, ctx.case_dir / "flat_pattern.dxf")
-    write_flat_pattern_svg(pattern, ctx.case_dir / "flat_pattern.svg", title=ctx.fabric.name)
-    ctx.summary["flat_pattern_area_mm2"] = pattern.area_mm2
-    return {"flat_pattern": ["flat_pattern.csv", "flat_pattern.dxf", "flat_pattern.svg"]}
 
 
 STEPS = [
@@ -521,15 +505,6 @@ EXPORTERS = [
         "1",
         write_fibre_pattern_png,
         "fibre_pattern.png: top view with tows, 3D view by shear",
-        writes_files=True,
-    ),
-    Step(
-        "flat_pattern",
-        ("flat_pattern",),
-        ("drape",),
-        "1",
-        write_flat_pattern,
-        "flat_pattern.csv/.dxf/.svg: the ply outline in the flat",
         writes_files=True,
     ),
 ]

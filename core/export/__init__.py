@@ -1,4 +1,4 @@
-"""Exporters: VTK (.vtu), tables (CSV/Parquet/JSON), flat and cutting patterns (CSV/DXF/SVG),
+"""Exporters: VTK (.vtu), tables (CSV/Parquet/JSON), the cutting pattern (CSV/DXF/SVG),
 figures, and the drape mapped onto a user's FE mesh (Abaqus, LS-DYNA, per-element table, VTU).
 
 One format per module; matplotlib, meshio, shapely and ezdxf are optional extras imported when a
@@ -24,12 +24,7 @@ if TYPE_CHECKING:
     from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
     from preform.export.fig_drape import fibre_pattern_figure
     from preform.export.fig_unit_cell import unit_cell_figure
-    from preform.export.flat_pattern import (
-        flat_pattern,
-        write_flat_pattern_csv,
-        write_flat_pattern_dxf,
-        write_flat_pattern_svg,
-    )
+    from preform.export.flat_pattern import flat_pattern
     from preform.export.lsdyna import write_lsdyna_include
     from preform.export.mapped_vtu import write_mapped_vtu
     from preform.export.shell_mesh import ShellMesh, read_shell_mesh, shell_mesh
@@ -59,9 +54,6 @@ _HOME = {
     "write_cut_pattern_svg": "preform.export.cut_pattern",
     "write_drape_vtu": "preform.export.vtu",
     "write_element_table": "preform.export.element_table",
-    "write_flat_pattern_csv": "preform.export.flat_pattern",
-    "write_flat_pattern_dxf": "preform.export.flat_pattern",
-    "write_flat_pattern_svg": "preform.export.flat_pattern",
     "write_json": "preform.export.tables",
     "write_lsdyna_include": "preform.export.lsdyna",
     "write_mapped_vtu": "preform.export.mapped_vtu",
@@ -75,6 +67,10 @@ def __getattr__(name: str) -> Any:
         value = getattr(importlib.import_module(_HOME[name]), name)
         globals()[name] = value
         return value
+    from preform._moved import RETIRED_NAMES
+
+    if name in RETIRED_NAMES:
+        raise AttributeError(RETIRED_NAMES[name])
     raise AttributeError(f"module 'preform.export' has no attribute {name!r}")
 
 
@@ -99,9 +95,6 @@ __all__ = [
     "write_cut_pattern_svg",
     "write_drape_vtu",
     "write_element_table",
-    "write_flat_pattern_csv",
-    "write_flat_pattern_dxf",
-    "write_flat_pattern_svg",
     "write_json",
     "write_lsdyna_include",
     "write_mapped_vtu",

@@ -63,12 +63,14 @@ def abaqus_include_text(
     ids = mapping.mesh.element_ids
     summary = mapping.summary()
     out = [
-        f"** preform drape mapped onto {mapping.mesh.source or 'a shell mesh'}"
+        f"** preform drape mapped onto {mapping.mesh.source_name or 'a shell mesh'}"
         + (f": {title}" if title else ""),
         "** Units: lengths in mm, angles in degrees. Element labels from the "
         f"{mapping.mesh.labels_from}.",
         f"** Covered elements: {summary['elements_covered']} of {summary['elements']}; "
-        f"uncovered: {summary['elements_uncovered']} (ELSET={name}_UNCOVERED).",
+        f"uncovered: {summary['elements_uncovered']}"
+        # the set is named only when it is written (Abaqus refuses an empty *ELSET)
+        + (f" (ELSET={name}_UNCOVERED)." if summary["elements_uncovered"] else "."),
         f"** Thickness model: {mapping.thickness_words}.",
         f"** Node spacing of the drape: {mapping.node_spacing_mm:g} mm; mapping by closest "
         "point on the net, bilinear inside cells.",
@@ -87,7 +89,7 @@ def abaqus_include_text(
             out.append(f"*ELSET, ELSET={name}_{label}")
             out += _set_lines(members)
         else:
-            out.append(f"** ELSET {name}_{label} would be empty: no such element")
+            out.append(f"** No {label.lower()} element: no such set written.")
     for flag, label in (
         (mapping.past_locking, "PAST_LOCKING"),
         (mapping.past_failure, "PAST_FAILURE"),

@@ -95,10 +95,12 @@ def ansys_macro_text(
     sections = mapping.nominal_thickness_mm is not None
     theta_v = layer_angle_v_deg(mapping)
     lines = [
-        f"! preform drape mapped onto {mesh.source or 'a shell mesh'}",
+        f"! preform drape mapped onto {mesh.source_name or 'a shell mesh'}",
         "! Units: lengths in mm, angles in degrees. Element x axis = u fibre direction.",
         f"! Covered elements: {summary['elements_covered']} of {summary['elements']}; "
-        f"uncovered: {summary['elements_uncovered']} (component {name}_UNCOVERED, no system).",
+        f"uncovered: {summary['elements_uncovered']}"
+        # the component is named only when it is written
+        + (f" (component {name}_UNCOVERED, no system)." if summary["elements_uncovered"] else "."),
         (
             f"! Thickness and both fibre families: a two-layer shell section per element, "
             f"u layer {u_fraction:g} of t at THETA 0, v layer {1 - u_fraction:g} of t at THETA "
@@ -134,7 +136,7 @@ def ansys_macro_text(
     lines.append("CSYS,0")
     for label, members in (("COVERED", ids[cov]), ("UNCOVERED", ids[~cov])):
         if members.size == 0:
-            lines.append(f"! component {name}_{label} would be empty")
+            lines.append(f"! no {label.lower()} element: no such component written")
             continue
         lines.append("ESEL,NONE")
         lines += [f"ESEL,A,ELEM,,{int(e)}" for e in members.tolist()]

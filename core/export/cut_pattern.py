@@ -27,7 +27,8 @@ The outline is one of:
 
 The seam allowance is the outline offset outwards by ``seam_allowance_mm`` with round joins
 (area grows by a·perimeter + O(a²)). Fibre marks are short u (along x) and v (along y) lines
-on a grid inside the outline; the label names the ply and how it is laid on the tool.
+on a grid inside the outline; the label names the ply and how it is laid on the tool, in a few
+lines centred inside the largest piece, its text height fitted to the piece (``label_place``).
 
 Darts and cuts are where the scene puts them (``export.darts``, ``export.cuts``), in the flat
 coordinates above, because where a ply must be opened is the designer's decision (a dart
@@ -78,6 +79,14 @@ MM_PER_M = 1e3
 LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS", "DARTS", "CUTS", "PAST_LOCKING")
 #: A point in the flat [mm].
 Point2 = tuple[float, float]
+#: The label is fitted inside the piece by a box of (characters × LABEL_CHAR_WIDTH) by
+#: (lines × LABEL_LINE_PITCH) text heights: wider than a proportional font's average (about
+#: 0.6) and a monospaced CAD font's pitch (about 1.0 with its spacing), so the drawn text
+#: stays inside whichever font the cutter's software substitutes.
+LABEL_CHAR_WIDTH = 1.0
+LABEL_LINE_PITCH = 1.6
+#: Largest label text height [mm]: a large piece gets legible text, not a poster.
+LABEL_MAX_HEIGHT_MM = 10.0
 
 
 def _require_shapely() -> Any:
@@ -130,7 +139,9 @@ class CutPattern:
     seam_allowance_mm: float
     marks: tuple[FibreMark, ...]
     label: str
+    #: Centre of the label block [mm], inside the largest piece (its pole of inaccessibility).
     label_at: tuple[float, float]
+    #: Text height [mm], fitted so the label block lies inside that piece (``LABEL_*``).
     text_height_mm: float
     node_spacing_mm: float
     #: Net cells in the covered region, and the fabric area they stand for (cells · d²) [mm²].
@@ -144,6 +155,14 @@ class CutPattern:
     past_locking: MultiPolygon | None = None
     #: Darts or cuts that miss the pattern, said in words.
     problems: tuple[str, ...] = ()
+    #: The label as it is drawn: one line each, centred on ``label_at``, ``LABEL_LINE_PITCH``
+    #: text heights apart (empty: the label on one line).
+    label_lines: tuple[str, ...] = ()
+
+    @property
+    def drawn_label(self) -> tuple[str, ...]:
+        """The lines the DXF and SVG draw."""
+        return self.label_lines or (self.label,)
 
     @property
     def area_mm2(self) -> float:
@@ -391,7 +410,7 @@ def cut_pattern(
     past locking, drawn in the flat where they lie in the pattern's region; ``part`` the
     scene's part, whose region in the flat becomes the outline (module docstring)."""
     shapely = _require_shapely()
-    from shapely.geometry import Polygon
+    from shapely.geometry import LineString, Polygon
 
     if not np.isfinite(seam_allowance_mm) or seam_allowance_mm < 0:
         raise ValueError(f"seam_allowance_mm must be ≥ 0, got {seam_allowance_mm!r}")
@@ -421,12 +440,9 @@ def cut_pattern(
     )
     if outline.is_empty:
         size = d_mm
-        label_at = (0.0, 0.0)
     else:
         x0, y0, x1, y1 = outline.bounds
         size = max(x1 - x0, y1 - y0)
-        point = outline.representative_point()
-        label_at = (float(point.x), float(point.y))
     spacing = mark_spacing_mm if mark_spacing_mm is not None else max(d_mm, size / 5.0)
     marks = _marks(outline, spacing, 0.4 * spacing)
     orientation = float(np.degrees(result.orientation))
@@ -435,6 +451,16 @@ def cut_pattern(
         f"{ply_name}: u fibres along x here, laid at {orientation:.1f} deg to the tool x axis "
         f"(v at {alpha:.1f} deg from u at the start); d = {d_mm:g} mm; units mm"
     )
+    lines = (
+        f"{ply_name}",
+        f"u fibres along x, laid at {orientation:.1f} deg to the tool x axis",
+        f"v at {alpha:.1f} deg from u at the start",
+        f"d = {d_mm:g} mm; units mm",
+    )
+    label_at, height = label_place(outline, lines)
+    # fibre marks through the label would strike its text out: the label's block keeps clear
+    block = _label_block(label_at, height, lines, margin=0.5 * height)
+    marks = [m for m in marks if not block.intersects(LineString([m.start, m.end]))]
     return CutPattern(
         outline=outline,
         allowance=allowance,
@@ -442,7 +468,8 @@ def cut_pattern(
         marks=tuple(marks),
         label=label,
         label_at=label_at,
-        text_height_mm=max(2.0, size / 80.0),
+        text_height_mm=height,
+        label_lines=lines,
         node_spacing_mm=d_mm,
         cell_count=cell_count,
         cells_area_mm2=cell_count * d_mm * d_mm,
@@ -452,6 +479,66 @@ def cut_pattern(
         problems=tuple(problems),
         past_locking=locking,
     )
+
+
+def _label_block(at: Point2, height: float, lines: Sequence[str], margin: float = 0.0) -> Any:
+    """The box [mm] a label of ``lines`` at text height ``height`` centred at ``at`` takes
+    (``LABEL_CHAR_WIDTH``, ``LABEL_LINE_PITCH``), grown by ``margin`` [mm]."""
+    from shapely.geometry import box
+
+    half_w = 0.5 * height * LABEL_CHAR_WIDTH * max(len(line) for line in lines) + margin
+    half_h = 0.5 * height * LABEL_LINE_PITCH * len(lines) + margin
+    return box(at[0] - half_w, at[1] - half_h, at[0] + half_w, at[1] + half_h)
+
+
+def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, float]:
+    """Where the label block goes and its text height [mm]: the block, ``LABEL_CHAR_WIDTH``
+    text heights a character wide and ``LABEL_LINE_PITCH`` a line tall, at the largest
+    height (at most ``LABEL_MAX_HEIGHT_MM``) at which it lies inside the largest piece, its
+    holes kept out. Centres tried: the piece's pole of inaccessibility (the point farthest
+    from its edges: best on a round piece) and a 12 × 12 grid over it (a long strip's best
+    place is anywhere along its middle); the height at each by bisection. A label that ran
+    past the piece would be cut through or printed on the scrap."""
+    import shapely
+    from shapely.geometry import Point
+    from shapely.ops import polylabel
+
+    if outline.is_empty:
+        return (0.0, 0.0), 1.0
+    piece = max(outline.geoms, key=lambda g: g.area)
+    shapely.prepare(piece)
+    x0, y0, x1, y1 = piece.bounds
+    width = LABEL_CHAR_WIDTH * max(len(line) for line in lines)
+    height = LABEL_LINE_PITCH * len(lines)
+    pole = polylabel(piece, tolerance=1e-3 * max(x1 - x0, y1 - y0))
+    grid = [
+        Point(x, y)
+        for x in np.linspace(x0, x1, 14)[1:-1].tolist()
+        for y in np.linspace(y0, y1, 14)[1:-1].tolist()
+    ]
+    most = min(LABEL_MAX_HEIGHT_MM, (x1 - x0) / width, (y1 - y0) / height)
+
+    def fits(c: Any, h: float) -> bool:
+        return bool(piece.contains(_label_block((c.x, c.y), h, lines)))
+
+    best, best_h = pole, 0.0
+    for centre in [pole, *(p for p in grid if piece.contains(p))]:
+        # the circle the centre holds bounds the height from below: the block's half-diagonal
+        low = float(piece.boundary.distance(centre)) / (0.5 * float(np.hypot(width, height)))
+        low, high = min(low, most), most
+        if high <= best_h or not fits(centre, low):
+            continue
+        if fits(centre, high):
+            low = high
+        else:
+            for _ in range(30):
+                middle = 0.5 * (low + high)
+                low, high = (middle, high) if fits(centre, middle) else (low, middle)
+                if high - low < 1e-4 * high:
+                    break
+        if low > best_h:
+            best, best_h = centre, low
+    return (float(best.x), float(best.y)), best_h
 
 
 def _inside_of_triangle(corners: FloatArray, phi: FloatArray) -> FloatArray:
@@ -505,7 +592,7 @@ def part_region_in_flat(result: DrapeResult, part: Part) -> MultiPolygon:
 def _cells_in_flat(result: DrapeResult, mask: NDArray[np.bool_], d_mm: float) -> MultiPolygon:
     """The exact union of the masked cells of the pattern's region, in the flat [mm]: cell
     (i, j) is the square from ((i − i0)·d, (j − j0)·d) to one d further in x and y."""
-    from shapely.geometry import box
+    from shapely.geometry import Polygon, box
     from shapely.ops import unary_union
 
     region = np.asarray(result.valid & result.in_part, dtype=bool)
@@ -516,7 +603,8 @@ def _cells_in_flat(result: DrapeResult, mask: NDArray[np.bool_], d_mm: float) ->
         box((i - i0) * d_mm, (j - j0) * d_mm, (i - i0 + 1) * d_mm, (j - j0 + 1) * d_mm)
         for i, j in zip(*np.nonzero(mask & region), strict=True)
     ]
-    return _as_multi(unary_union(squares)) if squares else _as_multi(box(0, 0, 0, 0))
+    # none: an empty drawing (a zero-size box would be a stray polyline at the origin)
+    return _as_multi(unary_union(squares)) if squares else _as_multi(Polygon())
 
 
 def _rings(geom: MultiPolygon | None) -> list[tuple[int, int, FloatArray]]:
@@ -558,13 +646,24 @@ def _dart_polyline(dart: Dart) -> list[Point2]:
     return [dart.mouth[0], dart.apex, dart.mouth[1]]
 
 
+def _label_line_centres(pattern: CutPattern) -> list[Point2]:
+    """The middle of each drawn label line [mm], first line on top, the block centred."""
+    lines = pattern.drawn_label
+    cx, cy = pattern.label_at
+    pitch = LABEL_LINE_PITCH * pattern.text_height_mm
+    top = cy + 0.5 * pitch * (len(lines) - 1)
+    return [(cx, top - k * pitch) for k in range(len(lines))]
+
+
 def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
     """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS, LABELS, DARTS,
-    CUTS and PAST_LOCKING: closed LWPOLYLINEs for every ring, LINEs for the fibre marks, TEXT for the label, an
-    open LWPOLYLINE (mouth₁, apex, mouth₂) per dart and a LINE per cut."""
+    CUTS and PAST_LOCKING: closed LWPOLYLINEs for every ring (none on a layer with nothing to
+    draw), LINEs for the fibre marks, one TEXT per label line (centred, inside the largest
+    piece: :func:`label_place`), an open LWPOLYLINE (mouth₁, apex, mouth₂) per dart and a LINE per cut."""
     try:
         import ezdxf
         from ezdxf import units
+        from ezdxf.enums import TextEntityAlignment
     except ImportError as exc:  # pragma: no cover - exercised only without the extra
         raise ImportError('DXF output needs ezdxf: pip install "preform[cutting]"') from exc
     doc = ezdxf.new("R2010")
@@ -586,10 +685,9 @@ def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> 
         msp.add_lwpolyline(_dart_polyline(dart), close=False, dxfattribs={"layer": "DARTS"})
     for cut in pattern.cuts:
         msp.add_line(cut.start, cut.end, dxfattribs={"layer": "CUTS"})
-    text = msp.add_text(
-        pattern.label, height=pattern.text_height_mm, dxfattribs={"layer": "LABELS"}
-    )
-    text.set_placement(pattern.label_at)
+    for (x, y), line in zip(_label_line_centres(pattern), pattern.drawn_label, strict=True):
+        text = msp.add_text(line, height=pattern.text_height_mm, dxfattribs={"layer": "LABELS"})
+        text.set_placement((x, y), align=TextEntityAlignment.MIDDLE_CENTER)
     with atomic_path(path) as tmp:
         doc.saveas(tmp)
 
@@ -661,11 +759,12 @@ def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> 
             f'  <line class="cut" x1="{ax:.4f}" y1="{-ay:.4f}" x2="{bx:.4f}" y2="{-by:.4f}" '
             f'stroke="#b0179a" stroke-width="{2 * stroke:.4f}"/>'
         )
-    lx, ly = pattern.label_at
-    lines.append(
-        f'  <text x="{lx:.4f}" y="{-ly:.4f}" font-size="{pattern.text_height_mm:.3f}">'
-        f"{escape(pattern.label)}</text>"
-    )
+    for (lx, ly), line in zip(_label_line_centres(pattern), pattern.drawn_label, strict=True):
+        lines.append(
+            f'  <text class="label" x="{lx:.4f}" y="{-ly:.4f}" '
+            f'font-size="{pattern.text_height_mm:.3f}" text-anchor="middle" '
+            f'dominant-baseline="central">{escape(line)}</text>'
+        )
     lines.append("</svg>")
     with atomic_open(path, "w", encoding="utf-8") as handle:
         handle.write("\n".join(lines) + "\n")

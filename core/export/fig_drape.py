@@ -98,6 +98,17 @@ def _polyline_xy(result: DrapeResult, family: str, lines: list[int]) -> np.ndarr
 
 #: Colour of the cells where the net folded (turned over at a sharp vertex or edge).
 FOLD_COLOUR = "#e08a00"
+#: Outline of the cells past stitch failure (past locking: black): where a warp-knit's stitch
+#: breaks and the fabric no longer holds together as the law assumes.
+FAILURE_COLOUR = "#d01c8b"
+#: The shear colour scale of every fibre-pattern figure spans ±SHEAR_SCALE_DEG [deg], whatever
+#: the fabric, so two fabrics' figures (a run's sweep) compare colour for colour: a scale per
+#: figure made the same colour mean 20° in one and 45° in the next. 60° lies past the limits
+#: of the bundled fabrics that have one (locking 22–53°, E-BX-318's stitch failure 35°), so
+#: cells beyond it are outlined anyway; they take the end colours and the panel says how many
+#: cells do. A drawing choice, not a modelling one: ``shear_scale_deg=None`` scales one figure
+#: to itself.
+SHEAR_SCALE_DEG = 60.0
 
 
 def fold_triangles(result: DrapeResult) -> np.ndarray:
@@ -173,6 +184,8 @@ class ShearViewQuads:
     shear_deg: np.ndarray
     locked: np.ndarray | None
     block: int
+    #: Whether each quad is past stitch failure (n,) (None without an energy field).
+    failed: np.ndarray | None = None
 
 
 def shear_view_quads(
@@ -180,13 +193,14 @@ def shear_view_quads(
     drawn: np.ndarray,
     past_locking: np.ndarray | None,
     max_quads: int = SHEAR_VIEW_MAX_QUADS,
+    past_failure: np.ndarray | None = None,
 ) -> ShearViewQuads:
     """The quads of the 3D shear view for the cells ``drawn`` (ni-1, nj-1).
 
     With more drawn cells than ``max_quads``, every k × k block of cells whose cells are all
     drawn becomes one quad through the block's four corner nodes, coloured by the signed shear
-    of its cell of largest |γ| (so the extremes the colour bar spans stay visible) and past
-    locking when any of its cells is; cells of blocks only partly drawn (along the part's edge,
+    of its cell of largest |γ| (so the extremes the colour bar spans stay visible), past
+    locking when any of its cells is, past stitch failure likewise; cells of blocks only partly drawn (along the part's edge,
     next to unplaced nodes) are drawn one by one, so the drawn area keeps its outline.
     """
     nodes_mm = 1e3 * np.asarray(result.nodes, dtype=float)
@@ -197,6 +211,7 @@ def shear_view_quads(
     block_quads: list[np.ndarray] = []
     block_shear = np.empty(0)
     block_locked = np.empty(0, dtype=bool)
+    block_failed = np.empty(0, dtype=bool)
     if k > 1:
         ci_n, cj_n = drawn.shape
         bi_n, bj_n = ci_n // k, cj_n // k  # whole blocks only; the ragged rim goes cell by cell
@@ -215,6 +230,9 @@ def shear_view_quads(
         if past_locking is not None:
             locked_blocks = blocks(np.asarray(past_locking, dtype=bool))[bi, bj]
             block_locked = np.asarray(locked_blocks.any(axis=1), dtype=bool)
+        if past_failure is not None:
+            failed_blocks = blocks(np.asarray(past_failure, dtype=bool))[bi, bj]
+            block_failed = np.asarray(failed_blocks.any(axis=1), dtype=bool)
         i0, j0 = k * bi, k * bj
         block_quads = [nodes_mm[i0, j0], nodes_mm[i0 + k, j0], nodes_mm[i0 + k, j0 + k]]
         block_quads.append(nodes_mm[i0, j0 + k])
@@ -229,8 +247,11 @@ def shear_view_quads(
     locked = None
     if past_locking is not None:
         locked = np.concatenate([block_locked, np.asarray(past_locking, dtype=bool)[ci, cj]])
+    failed = None
+    if past_failure is not None:
+        failed = np.concatenate([block_failed, np.asarray(past_failure, dtype=bool)[ci, cj]])
     return ShearViewQuads(
-        quads.reshape(-1, 4, 3), np.concatenate([block_shear, shear[ci, cj]]), locked, k
+        quads.reshape(-1, 4, 3), np.concatenate([block_shear, shear[ci, cj]]), locked, k, failed
     )
 
 
@@ -465,10 +486,12 @@ def _shear_view(
     rect: tuple[float, float, float, float],
     result: DrapeResult,
     energy: EnergyField | None,
+    scale_deg: float | None = SHEAR_SCALE_DEG,
 ) -> None:
     """The net in 3D, coloured by signed shear, in ``rect`` [figure fraction]: an orthographic
     view projected here and drawn as one 2D collection of polygons in depth order (see
-    ``painter_order``), with the box's panes, ticks in mm and a colour scale (``_Panel``)."""
+    ``painter_order``), with the box's panes, ticks in mm and a colour scale (``_Panel``)
+    spanning ±``scale_deg`` [deg] (None: the largest |γ| drawn)."""
     from matplotlib import colormaps
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import CenteredNorm, to_rgba
@@ -479,10 +502,16 @@ def _shear_view(
         # Only the part: the net draped past its edge would hide it.
         valid &= np.asarray(result.part_weight) > 0
     locked_cells = None if energy is None else np.asarray(energy.past_locking, dtype=bool)
-    view = shear_view_quads(result, valid, locked_cells)
+    failed_cells = None if energy is None else np.asarray(energy.past_failure, dtype=bool)
+    view = shear_view_quads(result, valid, locked_cells, past_failure=failed_cells)
     quads, shear_deg = view.quads_mm, view.shear_deg
     # Symmetric colour range centred on zero so positive and negative shear read alike.
-    half_range = max(float(np.max(np.abs(shear_deg))) if shear_deg.size else 0.0, 1.0)
+    if scale_deg is None:
+        half_range = max(float(np.max(np.abs(shear_deg))) if shear_deg.size else 0.0, 1.0)
+    else:
+        half_range = float(scale_deg)
+    cell_shear = np.abs(np.degrees(np.asarray(result.shear, dtype=float)))
+    beyond = int(np.count_nonzero(valid & (cell_shear > half_range)))
     norm = CenteredNorm(vcenter=0.0, halfrange=half_range)
     cmap = colormaps["RdBu_r"]
     axes = view_axes(VIEW_ELEVATION_DEG, VIEW_AZIMUTH_DEG)
@@ -511,6 +540,11 @@ def _shear_view(
             # Cells past locking get a black outline: that is where wrinkles are expected.
             edge[: len(quads)][view.locked] = (0.0, 0.0, 0.0, 1.0)
             widths[: len(quads)][view.locked] = 0.8
+        if view.failed is not None:
+            # Past stitch failure (worse than past locking, which it usually is too): its own
+            # colour, drawn over the black.
+            edge[: len(quads)][view.failed] = to_rgba(FAILURE_COLOUR)
+            widths[: len(quads)][view.failed] = 1.2
         order = painter_order(polygons, axes[2])
         cells = PolyCollection(
             polygons[order] @ screen,
@@ -554,6 +588,11 @@ def _shear_view(
     )
     top = ax.fit(x0, x1 + 0.3 * width, y0, y1)
     title = "Shear angle" + (" (black outline: past locking)" if energy is not None else "")
+    failed = 0 if failed_cells is None else int(np.count_nonzero(failed_cells & valid))
+    if failed:
+        title += f"\n{failed} cell(s) past stitch failure (magenta outline)"
+    if beyond:
+        title += f"\n{beyond} cell(s) beyond ±{half_range:g}° (drawn in the end colours)"
     if view.block > 1:
         title += f"\none quad per {view.block} × {view.block} cells (their largest |γ|)"
     # centred over the panel, 6 points above the drawing, at an axes title's size
@@ -572,6 +611,24 @@ def _shear_view(
     )
 
 
+def percent(fraction: float) -> str:
+    """A share in per cent as a title says it: 100 % only when whole (99.96 % is not)."""
+    if fraction >= 1.0:
+        return "100 %"
+    return f"{min(100.0 * fraction, 99.9):.1f} %"
+
+
+def coverage_words(result: DrapeResult, covered_fraction: float | None) -> str:
+    """What the drape covers, for a title: the case's coverage when known, and the nodes on
+    the part (placed, a corner of a cell with area in it: the ones the figure draws)."""
+    on_part = int(np.count_nonzero(_part_nodes(result)))
+    nodes = f"{on_part} nodes on the part"
+    if covered_fraction is None:
+        return nodes
+    # the case's coverage is of the ply's fabric over the tool (preform.drape.verdict)
+    return f"covers {percent(float(covered_fraction))} of the ply over the tool, {nodes}"
+
+
 def fibre_pattern_figure(
     result: DrapeResult,
     energy: EnergyField | None,
@@ -581,6 +638,8 @@ def fibre_pattern_figure(
     tow_every: int = 1,
     size_px: tuple[int, int] = (1600, 800),
     part: Part | None = None,
+    covered_fraction: float | None = None,
+    shear_scale_deg: float | None = SHEAR_SCALE_DEG,
 ) -> Figure:
     """Draw a draped net and save it to ``path``: left, the fibres from above; right, the net
     in 3D with cells coloured by signed shear.
@@ -588,8 +647,12 @@ def fibre_pattern_figure(
     The top view draws every ``tow_every``-th line of nodes of both fibre families (the lines
     through the start node, the generators, always and in bold), broken wherever a node is not
     placed. The 3D view shows the VALID cells coloured on a diverging map centred at 0° with a
-    colour scale in degrees; with ``energy``, cells past locking are outlined and the total
-    energy [J] goes into the title. It is an orthographic view from ``VIEW_ELEVATION_DEG``,
+    colour scale of ±``shear_scale_deg`` [deg] (the same in every figure, ``SHEAR_SCALE_DEG``,
+    so figures of two fabrics compare; None: this drape's largest |γ|); with ``energy``, cells
+    past locking are outlined black, cells past stitch failure magenta, and the total energy
+    [J] goes into the title. The title says what the drape covers: ``covered_fraction`` (the
+    case's coverage, ``preform.drape.verdict``) when given, and the nodes drawn on the part
+    (not the nodes of the whole ply, most of which hang past a part's edge). It is an orthographic view from ``VIEW_ELEVATION_DEG``,
     ``VIEW_AZIMUTH_DEG`` projected here and drawn on the figure itself (no axes), the cells as one
     collection farthest first (``painter_order``), the box's back panes, ticks [mm] and the
     colour scale drawn with it: mplot3d's look at a fraction of its cost (benchmarks/README.md,
@@ -605,10 +668,9 @@ def fibre_pattern_figure(
     edge = part_edge_segments(result, part) if part is not None else None
     _top_view(fig.add_subplot(1, 2, 1), result, tow_every, edge)
     right = fig.add_gridspec(1, 2)[0, 1].get_position(fig)  # where add_subplot(1, 2, 2) goes
-    _shear_view(fig, tuple(right.bounds), result, energy)
-    summary = (
-        f"generator angle {np.degrees(result.generator_angle):.1f}°, "
-        f"{result.nodes_placed}/{result.nodes_total} nodes placed"
+    _shear_view(fig, tuple(right.bounds), result, energy, shear_scale_deg)
+    summary = f"generator angle {np.degrees(result.generator_angle):.1f}°, " + coverage_words(
+        result, covered_fraction
     )
     folded = int(np.count_nonzero(np.asarray(result.status) == NodeStatus.FOLDED))
     if folded:

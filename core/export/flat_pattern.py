@@ -1,27 +1,25 @@
-"""The flat pattern: the outline, in the undeformed fabric, of the ply that covers the part.
+"""The flat ply: where each net node lies in the undeformed fabric, and the exact outline (a
+staircase of whole cells) of the cells that cover the part.
 
 A pin-jointed net keeps its fibre segments at length d, so the fabric before draping is the same
 net unsheared: node (i, j) sits at ((i − i0)·d, (j − j0)·d) in the fabric's own frame, the u
 fibres along x and the v fibres along y (the fabric is 0/90 in its own frame), with the start
-node at the origin. The outline of the cells that are in the part, mapped there, is what a
-cutter needs. Coordinates in the pattern and in every file are millimetres.
+node at the origin. Coordinates in the pattern are millimetres.
 
-Files: CSV (one row per vertex), DXF R12 (closed POLYLINE entities, written here so there is no
-CAD dependency) and SVG (mm units).
+This is the geometry the cutting pattern (``preform.export.cut_pattern``) starts from; it
+writes no file of its own. The ``flat_pattern`` output that wrote this staircase was replaced
+by ``cut_pattern`` (the part clipped in the flat, smooth); ``cut_pattern(result,
+smoothing=0)`` draws the staircase itself.
 """
 
 from __future__ import annotations
 
-import csv
-import os
 from dataclasses import dataclass
-from xml.sax.saxutils import escape
 
 import numpy as np
 from numpy.typing import NDArray
 
 from preform.drape.result import CellStatus, DrapeResult
-from preform.export.atomic import atomic_open
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -164,100 +162,3 @@ def flat_pattern(result: DrapeResult, cells: BoolArray | None = None) -> FlatPat
         node_spacing_mm=1e3 * result.node_spacing,
         cell_count=int(np.count_nonzero(chosen)),
     )
-
-
-def write_flat_pattern_csv(pattern: FlatPattern, path: str | os.PathLike[str]) -> None:
-    """CSV with columns ``loop``, ``hole``, ``vertex``, ``x_mm``, ``y_mm``; one row per vertex."""
-    with atomic_open(path, "w", encoding="utf-8") as handle:
-        writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(["loop", "hole", "vertex", "x_mm", "y_mm"])
-        for k, (loop, hole) in enumerate(zip(pattern.loops, pattern.holes, strict=True)):
-            for v, (x, y) in enumerate(loop.tolist()):
-                writer.writerow([k, int(hole), v, f"{x:.6f}", f"{y:.6f}"])
-
-
-def write_flat_pattern_dxf(pattern: FlatPattern, path: str | os.PathLike[str]) -> None:
-    """ASCII DXF R12 (AC1009): one closed POLYLINE per loop, in mm.
-
-    Outer loops go on layer ``OUTLINE``, holes on layer ``HOLE``. ``$INSUNITS`` = 4 (mm) is set
-    for readers that honour it; R12 itself has no unit.
-    """
-    lines: list[str] = []
-
-    def group(code: int, value: object) -> None:
-        lines.append(f"{code:>3}")
-        lines.append(str(value))
-
-    header: tuple[tuple[int, object], ...] = (
-        (0, "SECTION"),
-        (2, "HEADER"),
-        (9, "$ACADVER"),
-        (1, "AC1009"),
-        (9, "$INSUNITS"),
-        (70, 4),
-        (0, "ENDSEC"),
-    )
-    for code, value in header:
-        group(code, value)
-    group(0, "SECTION")
-    group(2, "ENTITIES")
-    for loop, hole in zip(pattern.loops, pattern.holes, strict=True):
-        layer = "HOLE" if hole else "OUTLINE"
-        group(0, "POLYLINE")
-        group(8, layer)
-        group(66, 1)  # vertices follow
-        for code in (10, 20, 30):
-            group(code, "0.0")
-        group(70, 1)  # closed
-        for x, y in loop.tolist():
-            group(0, "VERTEX")
-            group(8, layer)
-            group(10, f"{x:.6f}")
-            group(20, f"{y:.6f}")
-            group(30, "0.0")
-        group(0, "SEQEND")
-        group(8, layer)
-    group(0, "ENDSEC")
-    group(0, "EOF")
-    with atomic_open(path, "w", encoding="ascii") as handle:
-        handle.write("\n".join(lines) + "\n")
-
-
-def write_flat_pattern_svg(
-    pattern: FlatPattern,
-    path: str | os.PathLike[str],
-    *,
-    margin_mm: float = 5.0,
-    title: str | None = None,
-) -> None:
-    """SVG of the flat pattern at 1:1 (width and height in mm, one user unit = 1 mm).
-
-    SVG's y axis points down, so y is negated: the drawing looks as the CSV and DXF plot.
-    All loops form one path filled with the even-odd rule, so holes show as holes.
-    """
-    if pattern.loops:
-        x_min, y_min, x_max, y_max = pattern.bounds_mm
-    else:
-        x_min = y_min = x_max = y_max = 0.0
-    width = x_max - x_min + 2 * margin_mm
-    height = y_max - y_min + 2 * margin_mm
-    view = f"{x_min - margin_mm:.4f} {-y_max - margin_mm:.4f} {width:.4f} {height:.4f}"
-    subpaths = []
-    for loop in pattern.loops:
-        coords = " L ".join(f"{x:.4f},{-y:.4f}" for x, y in loop.tolist())
-        subpaths.append(f"M {coords} Z")
-    stroke = max(0.1, 0.05 * pattern.node_spacing_mm)
-    text = [
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width:.4f}mm" '
-        f'height="{height:.4f}mm" viewBox="{view}">',
-    ]
-    if title:
-        text.append(f"  <title>{escape(title)}</title>")
-    text.append(
-        f'  <path d="{" ".join(subpaths)}" fill="#d9e6f2" fill-rule="evenodd" '
-        f'stroke="#1f3b57" stroke-width="{stroke:.4f}" stroke-linejoin="miter"/>'
-    )
-    text.append("</svg>")
-    with atomic_open(path, "w", encoding="utf-8") as handle:
-        handle.write("\n".join(text) + "\n")

@@ -12,7 +12,9 @@ Triangles repeat N3 as N4, as LS-DYNA expects.
 These cards *define* the elements, so they replace the user's own ``*ELEMENT_SHELL`` cards of
 the same elements (LS-DYNA stops on a duplicate element id rather than silently taking one).
 Uncovered elements are not written; they are listed in ``*SET_SHELL_LIST`` (SID
-``uncovered_set_id``) so the model can give them what it decides. The v family is not in this
+``uncovered_set_id``; no set when every element is covered) so the model can give them what
+it decides. Comment lines (``$``) are wrapped at 80 columns, as every card, and name the mesh
+by its file name only. The v family is not in this
 form: ``*ELEMENT_SHELL_BETA`` carries one angle; the per-element table has both. Lengths in mm
 (the user's model must use mm), angles in degrees.
 
@@ -29,6 +31,8 @@ layer thickness cannot be "the section's").
 from __future__ import annotations
 
 import os
+import textwrap
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -38,6 +42,43 @@ from preform.export.fe_mapping import MeshMapping
 
 #: Largest id an 8-character field holds.
 MAX_ID = 99_999_999
+#: Columns of an LS-DYNA card: keyword input is read 80 columns a line, comments included.
+CARD_COLUMNS = 80
+
+
+def _comments(sentences: Iterable[str]) -> list[str]:
+    """``$`` comment lines of at most ``CARD_COLUMNS`` columns, one sentence a paragraph
+    (a name longer than a line is broken: nothing may pass column 80)."""
+    lines: list[str] = []
+    for sentence in sentences:
+        lines += textwrap.wrap(
+            sentence,
+            CARD_COLUMNS,
+            initial_indent="$ ",
+            subsequent_indent="$   ",
+            break_on_hyphens=False,
+        )
+    return lines
+
+
+def _header(
+    mapping: MeshMapping, title: str | None, uncovered_set_id: int, *sentences: str
+) -> list[str]:
+    """The comment lines that open a deck: the mesh by its file name (nothing of the machine
+    it was written on), units, coverage (the uncovered set named only when it is written)."""
+    summary = mapping.summary()
+    uncovered = summary["elements_uncovered"]
+    return _comments(
+        [
+            "preform drape mapped onto "
+            + (mapping.mesh.source_name or "a shell mesh")
+            + (f": {title}" if title else ""),
+            *sentences,
+            f"Covered elements: {summary['elements_covered']} of {summary['elements']}; "
+            f"uncovered: {uncovered}"
+            + (f" (*SET_SHELL_LIST {uncovered_set_id})." if uncovered else "."),
+        ]
+    )
 
 
 def _angle_from_first_edge_deg(mapping: MeshMapping) -> np.ndarray:
@@ -74,8 +115,11 @@ def _element_cards(mapping: MeshMapping, part_id: int) -> tuple[Any, Any]:
 
 
 def _uncovered_set(element_ids: Any, set_id: int) -> list[str]:
-    """A ``*SET_SHELL_LIST`` of the elements the drape does not cover (8 ids a card)."""
+    """A ``*SET_SHELL_LIST`` of the elements the drape does not cover (8 ids a card); none
+    when every element is covered (an empty list is no set)."""
     ids = [int(e) for e in element_ids]
+    if not ids:
+        return []
     lines = ["*SET_SHELL_LIST", "$#     sid", f"{set_id:10d}"]
     for k in range(0, len(ids), 8):
         lines.append("".join(f"{e:10d}" for e in ids[k : k + 8]))
@@ -95,21 +139,28 @@ def lsdyna_include_text(
     cov = mapping.covered
     pids, node_labels = _element_cards(mapping, part_id)
     beta = _angle_from_first_edge_deg(mapping)
-    summary = mapping.summary()
     lines = [
         "*KEYWORD",
-        "$ preform drape mapped onto "
-        + (mesh.source or "a shell mesh")
-        + (f": {title}" if title else ""),
-        "$ Units: lengths in mm, angles in degrees. BETA from the N1->N2 edge to the u fibres.",
-        f"$ Covered elements: {summary['elements_covered']} of {summary['elements']}; "
-        f"uncovered: {summary['elements_uncovered']} (*SET_SHELL_LIST {uncovered_set_id}).",
-        f"$ Thickness model: {mapping.thickness_words}"
-        + ("" if mapping.nominal_thickness_mm is not None else "; t0 unknown: THIC = 0 (section)"),
-        "$ These cards replace your *ELEMENT_SHELL cards of the same elements.",
+        *_header(
+            mapping,
+            title,
+            uncovered_set_id,
+            "Units: lengths in mm, angles in degrees. BETA from the N1->N2 edge to the u fibres.",
+        ),
+        *_comments(
+            [
+                f"Thickness model: {mapping.thickness_words}"
+                + (
+                    ""
+                    if mapping.nominal_thickness_mm is not None
+                    else "; t0 unknown: THIC = 0 (section)"
+                ),
+                "These cards replace your *ELEMENT_SHELL cards of the same elements.",
+            ]
+        ),
         "*ELEMENT_SHELL_BETA",
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
-        "$#          thic1           thic2           thic3           thic4            beta",
+        "$#         thic1           thic2           thic3           thic4            beta",
     ]
     for k in np.nonzero(cov)[0].tolist():
         n1, n2, n3, n4 = (int(v) for v in node_labels[k])
@@ -179,19 +230,23 @@ def lsdyna_composite_text(
     pids, node_labels = _element_cards(mapping, part_id)
     beta_u = _angle_from_first_edge_to(mapping, mapping.fibre_u)
     beta_v = _angle_from_first_edge_to(mapping, mapping.fibre_v)
-    summary = mapping.summary()
     lines = [
         "*KEYWORD",
-        "$ preform drape mapped onto "
-        + (mesh.source or "a shell mesh")
-        + (f": {title}" if title else ""),
-        "$ Units: lengths in mm, angles in degrees. B1/B2 from the N1->N2 edge to the u/v fibres.",
-        f"$ Two layers: u (MID {materials[0]}, {u_fraction:g} of t), "
-        f"v (MID {materials[1]}, {1 - u_fraction:g} of t).",
-        f"$ Covered elements: {summary['elements_covered']} of {summary['elements']}; "
-        f"uncovered: {summary['elements_uncovered']} (*SET_SHELL_LIST {uncovered_set_id}).",
-        f"$ Thickness model: {mapping.thickness_words}",
-        "$ These cards replace your *ELEMENT_SHELL cards of the same elements.",
+        *_header(
+            mapping,
+            title,
+            uncovered_set_id,
+            "Units: lengths in mm, angles in degrees. B1/B2 from the N1->N2 edge to the u/v "
+            "fibres.",
+            f"Two layers: u (MID {materials[0]}, {u_fraction:g} of t), "
+            f"v (MID {materials[1]}, {1 - u_fraction:g} of t).",
+        ),
+        *_comments(
+            [
+                f"Thickness model: {mapping.thickness_words}",
+                "These cards replace your *ELEMENT_SHELL cards of the same elements.",
+            ]
+        ),
         "*ELEMENT_SHELL_COMPOSITE",
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
         "$#    mid1    thick1        b1              mid2    thick2        b2",

@@ -107,6 +107,12 @@ class ShellMesh:
         return len(self.element_ids)
 
     @property
+    def source_name(self) -> str:
+        """The mesh file's name without its folder, for the header of a deck: a deck goes to
+        another machine, where the folder it was written on means nothing ("" when no file)."""
+        return Path(self.source).name if self.source else ""
+
+    @property
     def is_triangle(self) -> NDArray[np.bool_]:
         return np.asarray(self.corners[:, 3] < 0)
 

@@ -23,10 +23,22 @@ TARGETS: dict[str, str] = {
     "ansys": "ansys_macro",
     "table": "element_table",
     "vtu": "element_vtu",
-    "flat-pattern": "cut_pattern",
+    "cut-pattern": "cut_pattern",
 }
 #: Targets that need the user's FE mesh.
 NEEDS_MESH = frozenset({"abaqus", "lsdyna", "ansys", "table", "vtu"})
+
+
+class TargetChoice(click.Choice):
+    """The targets, and a target that was replaced refused with what replaced it (not only
+    "invalid choice")."""
+
+    def convert(self, value: Any, param: Any, ctx: Any) -> Any:
+        from preform._moved import RETIRED_TARGETS
+
+        if value in RETIRED_TARGETS:
+            self.fail(RETIRED_TARGETS[value], param, ctx)
+        return super().convert(value, param, ctx)
 
 
 def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, float] | None:
@@ -43,7 +55,7 @@ def _vector(_ctx: Any, _param: Any, value: str | None) -> tuple[float, float, fl
 
 @click.command("export")
 @click.argument("name")
-@click.argument("targets", nargs=-1, required=True, type=click.Choice(sorted(TARGETS)))
+@click.argument("targets", nargs=-1, required=True, type=TargetChoice(sorted(TARGETS)))
 @click.option(
     "--scene",
     "scene_spec",
@@ -105,10 +117,10 @@ def export_command(
     as_json: bool,
 ) -> None:
     """Drape fabric NAME as the scene says and write TARGETS (abaqus, lsdyna, ansys, table,
-    vtu, flat-pattern).
+    vtu, cut-pattern).
 
     abaqus/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the scene's
-    export.mesh); flat-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
+    export.mesh); cut-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
     mm and degrees. Elements the drape does not cover are listed in every file, never given a
     value. Exit code 0 when written (also when some elements are not covered), 1 when the
     drape or the export failed, 2 for bad input.

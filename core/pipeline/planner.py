@@ -10,6 +10,7 @@ import difflib
 import graphlib
 from typing import TYPE_CHECKING
 
+from preform._moved import RETIRED_OUTPUTS
 from preform.registry import LazyLoadError, Registry
 from preform.step import Step
 
@@ -45,6 +46,9 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
 
     def visit(product: str, index: int, chain: tuple[str, ...]) -> None:
         name = by_product.get(product)
+        if name is None and product in RETIRED_OUTPUTS:
+            problems.append((index, RETIRED_OUTPUTS[product]))
+            return
         if name is None:
             close = difflib.get_close_matches(product, by_product, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""

@@ -1,5 +1,6 @@
-"""`preform bench tradeoff --quick`: it writes the table and the figure, and the numbers in them
-behave (a behaviour test, not a timed one)."""
+"""`preform bench tradeoff --quick`: it writes the table (and, as it says, no figure: its coarse
+reference cannot show the trade), and the numbers in it behave (a behaviour test, not a timed
+one)."""
 
 from __future__ import annotations
 
@@ -12,12 +13,15 @@ from click.testing import CliRunner
 from preform.bench.tradeoff import bench, pareto_front
 
 
-def test_quick_tradeoff_writes_a_sensible_table_and_figure(tmp_path: Path) -> None:
+def test_quick_tradeoff_writes_a_sensible_table_and_says_why_no_figure(tmp_path: Path) -> None:
     out = tmp_path / "bench"
     result = CliRunner().invoke(bench, ["tradeoff", "--quick", "--out", str(out)])
     assert result.exit_code == 0, result.output
     table, figure = out / "tradeoff.csv", out / "tradeoff.png"
-    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not figure.exists()
+    assert "no tradeoff.png with --quick" in result.stdout
+    assert "Run without --quick for the figure" in result.stdout
+    assert f"wrote {table}\n" in result.stdout
     with table.open(newline="", encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
     labels = [row["label"] for row in rows]
@@ -77,3 +81,18 @@ def test_a_cad_tool_gets_a_tessellation_row_and_a_finer_reference() -> None:
     # An analytic tool has no tessellation: no such row.
     sphere, _ = load_scene(resolve_scene_path("hemisphere-min-energy"), registry)
     assert not any(s.knob == "tessellation_tolerance_mm" for s in tradeoff_settings(sphere, 0.1))
+
+
+def test_quick_json_lists_the_table_only_and_names_an_earlier_figure(tmp_path: Path) -> None:
+    import json
+
+    out = tmp_path / "bench"
+    out.mkdir()
+    (out / "tradeoff.png").write_bytes(b"an earlier full run's figure")
+    result = CliRunner().invoke(bench, ["tradeoff", "--quick", "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    assert report["files"] == [str(out / "tradeoff.csv")]
+    assert report["no_figure"].startswith("no tradeoff.png with --quick")
+    assert report["no_figure"].endswith(f"{out / 'tradeoff.png'} is an earlier run's")
+    assert (out / "tradeoff.png").read_bytes() == b"an earlier full run's figure"  # left alone

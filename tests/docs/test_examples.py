@@ -11,8 +11,8 @@ or reads. Examples run in a fresh folder holding the files of docs/examples/.
 
 from __future__ import annotations
 
+import ast
 import json
-import os
 import re
 import shlex
 import shutil
@@ -150,14 +150,84 @@ def test_the_readme_tour_runs_commands_and_is_not_skipped():
     assert len(api) >= 5
 
 
-def test_the_notebook_runs(folder: Path):
-    """examples/api_tour.ipynb: its code cells, in order, in one namespace (no Jupyter)."""
-    notebook = json.loads((ROOT / "examples" / "api_tour.ipynb").read_text())
+#: IPython magics the notebook may use: the runner here is plain Python, and these only set up
+#: Jupyter's display (run by hand, they would make no difference to what the cells compute).
+NOTEBOOK_MAGICS = {"%matplotlib inline"}
+
+
+def run_cell_as_jupyter(source: str, name: str, namespace: dict[str, object]) -> object:
+    """Run a code cell as Jupyter does and return what it shows: the value of its last
+    statement when that is an expression (None otherwise, or for a trailing ``;``)."""
+    lines = []
+    for line in source.splitlines():
+        if line.startswith("%"):
+            assert line.strip() in NOTEBOOK_MAGICS, f"{name}: magic {line!r} not run here"
+            continue
+        lines.append(line)
+    code = "\n".join(lines)
+    tree = ast.parse(code, name)
+    last = tree.body[-1] if tree.body else None
+    if isinstance(last, ast.Expr) and not code.rstrip().endswith(";"):
+        exec(compile(ast.Module(tree.body[:-1], []), name, "exec"), namespace)
+        return eval(compile(ast.Expression(last.value), name, "eval"), namespace)
+    exec(compile(tree, name, "exec"), namespace)
+    return None
+
+
+def clone_files(folder: Path) -> set[str]:
+    """Files under ``folder`` that git would list as changed or new, as ``git status
+    --porcelain`` lines (paths from the checkout's root; every file when the tree is not a git
+    checkout, e.g. an unpacked sdist)."""
+    import subprocess
+
+    try:
+        listed = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=all", "--", "."],
+            cwd=folder, capture_output=True, text=True, check=True, timeout=60,
+        )  # fmt: skip
+    except (OSError, subprocess.SubprocessError):
+        return {str(p.relative_to(folder)) for p in folder.rglob("*")}
+    return set(listed.stdout.splitlines())
+
+
+def test_the_notebook_runs_shows_its_figures_and_leaves_the_clone_clean(tmp_path, monkeypatch):
+    """examples/api_tour.ipynb: its code cells, in order, in one namespace (no Jupyter), run
+    from the notebook's own folder as Jupyter runs them. Every cell that draws shows its
+    figure (its last value is the Figure, which Jupyter displays inline); the files it writes
+    go to its temporary folder, and nothing in examples/ changes."""
+    import tempfile
+
+    from matplotlib.figure import Figure
+
+    examples = ROOT / "examples"
+    notebook = json.loads((examples / "api_tour.ipynb").read_text())
     assert notebook["nbformat"] == 4
     cells = [c for c in notebook["cells"] if c["cell_type"] == "code"]
     assert cells
+    monkeypatch.chdir(examples)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.delenv("PREFORM_LIBRARY", raising=False)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # the tour's folder lands here
+    before = clone_files(examples)
     namespace: dict[str, object] = {"__name__": "api_tour"}
-    for n, cell in enumerate(cells):
-        source = "".join(cell["source"])
-        exec(compile(source, f"api_tour.ipynb[cell {n}]", "exec"), namespace)
-    assert os.path.exists(folder / "api_tour_pattern.png")
+    shown = []
+    try:
+        for n, cell in enumerate(cells):
+            source = "".join(cell["source"])
+            value = run_cell_as_jupyter(source, f"api_tour.ipynb[cell {n}]", namespace)
+            shown.append((source, value))
+    finally:
+        new = clone_files(examples) - before
+        for line in new:  # leave the clone as it was, then say what the notebook wrote there
+            path = ROOT / line[3:].strip()  # porcelain paths are the checkout's
+            if line.startswith("??") and path.is_file():
+                path.unlink()
+    assert not new, f"the notebook changed the clone: {sorted(new)}"
+    drawing = [(src, value) for src, value in shown if ".plot(" in src]
+    assert len(drawing) >= 2
+    for source, value in drawing:
+        assert isinstance(value, Figure), f"a cell that draws does not show its figure:\n{source}"
+        assert value.axes or value.artists  # something drawn
+    out = namespace["out"]
+    assert isinstance(out, Path) and out.parent == tmp_path
+    assert (out / "api_tour_pattern.png").stat().st_size > 10_000

@@ -138,7 +138,7 @@ def test_files_read_back(tmp_path) -> None:
     np.testing.assert_allclose(pts, ring, atol=1e-9)
     assert len(msp.query("LINE")) == len(pattern.marks) > 4
     texts = [e.dxf.text for e in msp.query("TEXT")]
-    assert texts == [pattern.label] and "E-BX 318, ply 1" in texts[0]
+    assert texts == list(pattern.label_lines) and texts[0] == "E-BX 318, ply 1"
 
     write_cut_pattern_svg(pattern, tmp_path / "p.svg")
     root = ET.parse(tmp_path / "p.svg").getroot()

@@ -51,7 +51,7 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
             "plain-weave-600",
             "abaqus",
             "table",
-            "flat-pattern",
+            "cut-pattern",
             "--scene",
             str(scene),
             "--out",
@@ -65,7 +65,7 @@ def test_export_command_writes_targets_and_reports_uncovered_elements(tmp_path) 
     assert report["written"] == {
         "abaqus": "drape_abaqus.inc",
         "table": "elements.csv",
-        "flat-pattern": ["cut_pattern.dxf", "cut_pattern.svg", "cut_pattern.csv"],
+        "cut-pattern": ["cut_pattern.dxf", "cut_pattern.svg", "cut_pattern.csv"],
     }
     mesh = report["mesh"]
     assert mesh["elements"] == 392 and 0 < mesh["elements_uncovered"] < 392
@@ -187,7 +187,7 @@ def test_scene_darts_and_cuts_reach_the_cutting_pattern(tmp_path) -> None:
         [
             "export",
             "plain-weave-600",
-            "flat-pattern",
+            "cut-pattern",
             "--scene",
             str(scene),
             "--out",

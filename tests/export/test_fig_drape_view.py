@@ -112,19 +112,25 @@ def by_gid(fig, gid):
 
 def test_the_shear_cells_are_the_quads_projected_in_depth_order(make_net, make_energy):
     """The drawn polygons are the blocked quads (and nothing else) seen from the panel's view,
-    farthest first; locked cells keep their black outline."""
+    farthest first; locked cells keep their black outline, failed ones their own."""
     net = make_net(14, 16, dome=True, unplaced=[(0, 0)])
     energy = make_energy(net)
     fig = fibre_pattern_figure(net, energy, None, size_px=(800, 400))
     cells = by_gid(fig, "shear cells")
-    view = shear_view_quads(net, np.asarray(net.valid), np.asarray(energy.past_locking))
+    view = shear_view_quads(
+        net,
+        np.asarray(net.valid),
+        np.asarray(energy.past_locking),
+        past_failure=np.asarray(energy.past_failure),
+    )
     axes = view_axes(VIEW_ELEVATION_DEG, VIEW_AZIMUTH_DEG)
     depth = view.quads_mm.mean(axis=1) @ axes[2]
     order = np.argsort(depth, kind="stable")
     drawn = np.array([p.vertices[:4] for p in cells.get_paths()])
     np.testing.assert_allclose(drawn, view.quads_mm[order] @ axes[:2].T, atol=1e-9)
     outlined = np.asarray(cells.get_linewidths()) > 0.5
-    np.testing.assert_array_equal(outlined, np.asarray(view.locked)[order])
+    marked = np.asarray(view.locked) | np.asarray(view.failed)
+    np.testing.assert_array_equal(outlined, marked[order])
     assert np.count_nonzero(outlined) > 0
 
 

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from preform.drape.result import CellStatus
 from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
 from preform.export.fig_drape import (
+    SHEAR_SCALE_DEG,
     SHEAR_VIEW_MAX_QUADS,
     fibre_lines,
     fibre_pattern_figure,
@@ -114,9 +115,10 @@ def test_fibre_pattern_figure(tmp_path, damaged_net, make_energy, read_png):
     assert np.all(np.isfinite(u_fibres[2 * 11 : 2 * 11 + 10]))
     cells = by_gid(fig, "shear cells")
     assert len(cells.get_paths()) == np.count_nonzero(damaged_net.valid)
-    # The colour scale spans the largest |γ| drawn, centred at zero, labelled in degrees.
+    # The colour scale spans the fixed ±SHEAR_SCALE_DEG (every figure alike), centred at zero,
+    # labelled in degrees.
     scale = by_gid(fig, "colour scale")
-    half = np.degrees(np.max(np.abs(damaged_net.shear[damaged_net.valid])))
+    half = SHEAR_SCALE_DEG
     assert scale.norm.vmin == pytest.approx(-half) and scale.norm.vmax == pytest.approx(half)
     values = scale.get_array()
     assert values.min() == pytest.approx(-half) and values.max() == pytest.approx(half)

@@ -151,7 +151,7 @@ def test_export_and_run_into_one_folder_lose_nothing(tmp_path):
         run = _cli("pipeline", "run", "--scene", str(scene), "--materials", "plain-weave-150",
                    "--workers", "1", "--out", str(out))  # fmt: skip
         time.sleep(0.05 * (trial % 10))  # the export's writes land at different moments of the run
-        export = _cli("export", "plain-weave-150", "flat-pattern", "--scene", str(scene),
+        export = _cli("export", "plain-weave-150", "cut-pattern", "--scene", str(scene),
                       "--out", str(out))  # fmt: skip
         _, export_err = export.communicate(timeout=300)
         _, run_err = run.communicate(timeout=300)
