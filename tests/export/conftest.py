@@ -6,6 +6,7 @@ field (shear, centroid, area, fibre directions, statuses) is known exactly.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any
 
@@ -146,9 +147,27 @@ def build_unit_cell(period: float = 0.008, samples: int = 17) -> UnitCell:
     return UnitCell(period=np.array([[period, 0.0], [0.0, period]]), tows=tuple(tows))
 
 
+def turn_net(result: DrapeResult, angle_deg: float) -> DrapeResult:
+    """``result`` turned by ``angle_deg`` about z (positions and fibre directions)."""
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return dataclasses.replace(
+        result,
+        nodes=result.nodes @ rot.T,
+        centroid=result.centroid @ rot.T,
+        fibre_u=result.fibre_u @ rot.T,
+        fibre_v=result.fibre_v @ rot.T,
+    )
+
+
 @pytest.fixture
 def make_net() -> Callable[..., DrapeResult]:
     return build_net
+
+
+@pytest.fixture
+def turned_net() -> Callable[[DrapeResult, float], DrapeResult]:
+    return turn_net
 
 
 @pytest.fixture

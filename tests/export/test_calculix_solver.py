@@ -117,18 +117,9 @@ def run_plate(folder: Path, ccx, sections: str, materials: list[str]) -> float:
     return (force / W) / (STRETCH / L)
 
 
-def flat_net_mapping(make_net, folder: Path, angle_deg: float) -> MeshMapping:
+def flat_net_mapping(make_net, turned_net, folder: Path, angle_deg: float) -> MeshMapping:
     """A flat unsheared ply with its u fibres at ``angle_deg`` from x, mapped onto the plate."""
-    net = make_net(41, 41, spacing=0.005, start=(20, 20))
-    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
-    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    net = dataclasses.replace(
-        net,
-        nodes=net.nodes @ rot.T,
-        centroid=net.centroid @ rot.T,
-        fibre_u=net.fibre_u @ rot.T,
-        fibre_v=net.fibre_v @ rot.T,
-    )
+    net = turned_net(make_net(41, 41, spacing=0.005, start=(20, 20)), angle_deg)
     plate_mesh(folder)
     mapping = map_to_mesh(net, read_shell_mesh(folder / "mesh.inp"), nominal_thickness_mm=T_PLY)
     assert mapping.covered.all()
@@ -138,10 +129,10 @@ def flat_net_mapping(make_net, folder: Path, angle_deg: float) -> MeshMapping:
 @pytest.mark.parametrize("angles", [[0.0, 45.0, -45.0, 90.0], [0.0, 90.0]])
 @pytest.mark.parametrize("flavour", ["calculix", "abaqus"])
 def test_exported_stack_has_the_laminate_theory_stiffness(
-    tmp_path, make_net, ccx, angles, flavour
+    tmp_path, make_net, turned_net, ccx, angles, flavour
 ) -> None:
     plies = tuple(
-        PlySection(f"ply-{k + 1}", "UD", flat_net_mapping(make_net, tmp_path, a))
+        PlySection(f"ply-{k + 1}", "UD", flat_net_mapping(make_net, turned_net, tmp_path, a))
         for k, a in enumerate(angles)
     )
     text = stack_sections_text(StackSections(plies), flavour=flavour)
@@ -151,10 +142,12 @@ def test_exported_stack_has_the_laminate_theory_stiffness(
     assert abs(stiffness / clt_stiffness([0.0] * len(angles)) - 1) > 0.2
 
 
-def test_single_ply_orientation_takes_effect(tmp_path, make_net, ccx) -> None:
+def test_single_ply_orientation_takes_effect(tmp_path, make_net, turned_net, ccx) -> None:
     stiffness = {}
     for angle in (0.0, 90.0, 30.0):
-        text = calculix_include_text(flat_net_mapping(make_net, tmp_path, angle), material="UD")
+        text = calculix_include_text(
+            flat_net_mapping(make_net, turned_net, tmp_path, angle), material="UD"
+        )
         stiffness[angle] = run_plate(tmp_path, ccx, text, ["UD"])
         assert stiffness[angle] == pytest.approx(clt_stiffness([angle], T_PLY), rel=0.01)
     # the same section on global axes: what ccx computes when it ignores an orientation
@@ -165,18 +158,18 @@ def test_single_ply_orientation_takes_effect(tmp_path, make_net, ccx) -> None:
     assert stiffness[0.0] / stiffness[90.0] == pytest.approx(E1 / E2, rel=0.01)
 
 
-def test_two_layer_form_is_both_fibre_families(tmp_path, make_net, ccx) -> None:
+def test_two_layer_form_is_both_fibre_families(tmp_path, make_net, turned_net, ccx) -> None:
     """An unsheared fabric (u along x, v along y) in two layers of t/2: a [0/90] laminate."""
-    mapping = flat_net_mapping(make_net, tmp_path, 0.0)
+    mapping = flat_net_mapping(make_net, turned_net, tmp_path, 0.0)
     text = calculix_include_text(mapping, form="two-layer", materials=("UD", "UD"), u_fraction=0.5)
     stiffness = run_plate(tmp_path, ccx, text, ["UD"])
     assert stiffness == pytest.approx(clt_stiffness([0.0, 90.0], T_PLY / 2), rel=0.01)
 
 
-def test_the_abaqus_include_is_not_what_ccx_applies(tmp_path, make_net, ccx) -> None:
+def test_the_abaqus_include_is_not_what_ccx_applies(tmp_path, make_net, turned_net, ccx) -> None:
     """Why the CalculiX flavour exists: ccx runs the Abaqus include at 90° and computes the
     global-axes (0°) stiffness. If a future ccx applies it, this test says so."""
-    mapping = flat_net_mapping(make_net, tmp_path, 90.0)
+    mapping = flat_net_mapping(make_net, turned_net, tmp_path, 90.0)
     text = abaqus_include_text(mapping) + (
         f"*SHELL SECTION, ELSET=PREFORM_COVERED, MATERIAL=UD, ORIENTATION=PREFORM_U\n{T_PLY}\n"
     )
@@ -187,3 +180,25 @@ def test_the_abaqus_include_is_not_what_ccx_applies(tmp_path, make_net, ccx) -> 
     dat = (tmp_path / "plate.dat").read_text()
     force = -float(re.findall(r"total force.*?\n\s*\n\s*(\S+)", dat)[-1])
     assert (force / W) / (STRETCH / L) == pytest.approx(clt_stiffness([0.0]), rel=0.01)
+
+
+def test_a_dropped_ply_is_absent_where_ccx_computes(tmp_path, make_net, ccx) -> None:
+    """[0/90] on the half x < 0, [0] on the rest (the 90° ply dropped off): pulled along x the
+    halves are in series, Nx/εx = 2 / (a11[0/90] + a11[0]) (Nx the same in both), to the
+    constraint their different Poisson contractions put on each other at the joint."""
+    plate_mesh(tmp_path)
+    mesh = read_shell_mesh(tmp_path / "mesh.inp")
+    full = map_to_mesh(
+        make_net(41, 41, spacing=0.005, start=(20, 20)), mesh, nominal_thickness_mm=T_PLY
+    )
+    half_net = make_net(21, 41, spacing=0.005, start=(20, 20))  # u in [-100, 0] mm
+    half = map_to_mesh(
+        dataclasses.replace(half_net, fibre_u=half_net.fibre_v, fibre_v=-half_net.fibre_u),
+        mesh,
+        nominal_thickness_mm=T_PLY,
+    )
+    assert np.array_equal(half.covered, mesh.centroids()[:, 0] < 0)
+    stack = StackSections((PlySection("ply-1", "UD", full), PlySection("ply-2", "UD", half)))
+    stiffness = run_plate(tmp_path, ccx, stack_sections_text(stack, flavour="calculix"), ["UD"])
+    series = 2.0 / (1.0 / clt_stiffness([0.0, 90.0]) + 1.0 / clt_stiffness([0.0]))
+    assert stiffness == pytest.approx(series, rel=0.01)
