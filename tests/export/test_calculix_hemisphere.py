@@ -33,37 +33,28 @@ MATERIAL = """*MATERIAL, NAME=FABRIC
 """
 
 
-def cap_mesh(folder: Path) -> dict[str, list[int]]:
+def cap_mesh(folder: Path, grid) -> dict[str, list[int]]:
     """Write ``mesh.inp``: S8R elements on the sphere (mid-side nodes on it too)."""
     step = HALF / N
 
-    def nid(i: int, j: int) -> int:
-        return 1 + i + j * (2 * N + 1)
+    def place(i: int, j: int) -> tuple[float, float, float]:
+        x, y = -HALF + step * i, -HALF + step * j
+        return (x, y, float(np.sqrt(R**2 - x**2 - y**2)))
 
-    lines, sets = ["*NODE"], {"RIM": [], "POLE": [nid(N, N)]}
-    for j in range(2 * N + 1):
-        for i in range(2 * N + 1):
-            if i % 2 and j % 2:
-                continue
-            x, y = -HALF + step * i, -HALF + step * j
-            lines.append(f"{nid(i, j)}, {x}, {y}, {np.sqrt(R**2 - x**2 - y**2):.12g}")
-            if i in (0, 2 * N) or j in (0, 2 * N):
-                sets["RIM"].append(nid(i, j))
-    lines.append("*ELEMENT, TYPE=S8R, ELSET=CAP")
-    for j in range(N):
-        for i in range(N):
-            a, b = nid(2 * i, 2 * j), nid(2 * i + 2, 2 * j)
-            c, d = nid(2 * i + 2, 2 * j + 2), nid(2 * i, 2 * j + 2)
-            m1, m2 = nid(2 * i + 1, 2 * j), nid(2 * i + 2, 2 * j + 1)
-            m3, m4 = nid(2 * i + 1, 2 * j + 2), nid(2 * i, 2 * j + 1)
-            lines.append(f"{1 + i + j * N}, {a}, {b}, {c}, {d}, {m1}, {m2}, {m3}, {m4}")
+    lines, nid = grid(N, N, place, "CAP")
     (folder / "mesh.inp").write_text("\n".join(lines) + "\n")
-    return sets
+    rim = [
+        nid(i, j)
+        for j in range(2 * N + 1)
+        for i in range(2 * N + 1)
+        if i in (0, 2 * N) or j in (0, 2 * N)
+    ]
+    return {"RIM": rim, "POLE": [nid(N, N)]}
 
 
-def pole_displacement(folder: Path, ccx, sections: str) -> np.ndarray:
+def pole_displacement(folder: Path, ccx, grid, sections: str) -> np.ndarray:
     """Displacement (x, y, z) [mm] of the pole under 1 N along x, with ``sections``."""
-    sets = cap_mesh(folder)
+    sets = cap_mesh(folder, grid)
     (folder / "sections.inp").write_text(sections)
     lines = ["*INCLUDE, INPUT=mesh.inp", MATERIAL.strip(), "*INCLUDE, INPUT=sections.inp"]
     for name, members in sets.items():
@@ -88,9 +79,9 @@ def pole_displacement(folder: Path, ccx, sections: str) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def cap_mapping(tmp_path_factory) -> MeshMapping:
+def cap_mapping(tmp_path_factory, quadratic_shells) -> MeshMapping:
     folder = tmp_path_factory.mktemp("cap")
-    cap_mesh(folder)
+    cap_mesh(folder, quadratic_shells)
     result = drape(
         Hemisphere(R / 1e3),
         start_xy_m=(0.0, 0.0),
@@ -106,16 +97,22 @@ def cap_mapping(tmp_path_factory) -> MeshMapping:
     return mapping
 
 
-def test_the_cap_deflects_as_the_mapped_fibres_say(tmp_path, ccx, cap_mapping) -> None:
+def test_the_cap_deflects_as_the_mapped_fibres_say(
+    tmp_path, ccx, quadratic_shells, cap_mapping
+) -> None:
     pole = int(np.argmin(np.linalg.norm(cap_mapping.centroid_mm[:, :2], axis=1)))
     # the mapped angle of the u fibres near the pole is the drape's +45°
     assert cap_mapping.angle_u_deg[pole] == pytest.approx(45.0, abs=2.0)
     along_u = pole_displacement(
-        tmp_path, ccx, calculix_include_text(cap_mapping, material="FABRIC")
+        tmp_path, ccx, quadratic_shells, calculix_include_text(cap_mapping, material="FABRIC")
     )
     swapped = dataclasses.replace(cap_mapping, fibre_u=cap_mapping.fibre_v)
-    along_v = pole_displacement(tmp_path, ccx, calculix_include_text(swapped, material="FABRIC"))
-    plain = pole_displacement(tmp_path, ccx, "*SHELL SECTION, ELSET=CAP, MATERIAL=FABRIC\n0.5\n")
+    along_v = pole_displacement(
+        tmp_path, ccx, quadratic_shells, calculix_include_text(swapped, material="FABRIC")
+    )
+    plain = pole_displacement(
+        tmp_path, ccx, quadratic_shells, "*SHELL SECTION, ELSET=CAP, MATERIAL=FABRIC\n0.5\n"
+    )
     # off the load's line towards the compliant axis (n x u, at 135°): to -y
     assert along_u[0] > 0 and along_u[1] < -0.1 * along_u[0]
     # the mirror image: axis 1 along v moves the pole to +y by as much

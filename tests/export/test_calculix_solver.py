@@ -56,38 +56,23 @@ def clt_stiffness(angles_deg: list[float], t: float = T_PLY) -> float:
     return float(1.0 / np.linalg.inv(a)[0, 0])
 
 
-def plate_mesh(folder: Path, nx: int = 8, ny: int = 4) -> dict[str, list[int]]:
+def plate_mesh(folder: Path, grid, nx: int = 8, ny: int = 4) -> dict[str, list[int]]:
     """Write ``mesh.inp`` (S8R plate centred on the origin, normal +z); return node sets."""
-
-    def nid(i: int, j: int) -> int:
-        return 1 + i + j * (2 * nx + 1)
-
-    lines, sets = ["*NODE"], {"LEFT": [], "RIGHT": [], "ALL": []}
-    for j in range(2 * ny + 1):
-        for i in range(2 * nx + 1):
-            if i % 2 and j % 2:
-                continue
-            lines.append(f"{nid(i, j)}, {L * i / (2 * nx) - L / 2}, {W * j / (2 * ny) - W / 2}, 0.")
-            sets["ALL"].append(nid(i, j))
-            if i == 0:
-                sets["LEFT"].append(nid(i, j))
-            if i == 2 * nx:
-                sets["RIGHT"].append(nid(i, j))
-    lines.append("*ELEMENT, TYPE=S8R, ELSET=PLATE")
-    for j in range(ny):
-        for i in range(nx):
-            a, b = nid(2 * i, 2 * j), nid(2 * i + 2, 2 * j)
-            c, d = nid(2 * i + 2, 2 * j + 2), nid(2 * i, 2 * j + 2)
-            m1, m2 = nid(2 * i + 1, 2 * j), nid(2 * i + 2, 2 * j + 1)
-            m3, m4 = nid(2 * i + 1, 2 * j + 2), nid(2 * i, 2 * j + 1)
-            lines.append(f"{1 + i + j * nx}, {a}, {b}, {c}, {d}, {m1}, {m2}, {m3}, {m4}")
+    lines, nid = grid(
+        nx, ny, lambda i, j: (L * i / (2 * nx) - L / 2, W * j / (2 * ny) - W / 2, 0.0), "PLATE"
+    )
     (folder / "mesh.inp").write_text("\n".join(lines) + "\n")
-    return sets
+    nodes = [(i, j) for j in range(2 * ny + 1) for i in range(2 * nx + 1) if not (i % 2 and j % 2)]
+    return {
+        "LEFT": [nid(i, j) for i, j in nodes if i == 0],
+        "RIGHT": [nid(i, j) for i, j in nodes if i == 2 * nx],
+        "ALL": [nid(i, j) for i, j in nodes],
+    }
 
 
-def run_plate(folder: Path, ccx, sections: str, materials: list[str]) -> float:
+def run_plate(folder: Path, ccx, grid, sections: str, materials: list[str]) -> float:
     """Pull the plate with ``sections`` (an include's text); return Nx/εx [N/mm]."""
-    sets = plate_mesh(folder)
+    sets = plate_mesh(folder, grid)
     (folder / "sections.inp").write_text(sections)
     lines = ["*INCLUDE, INPUT=mesh.inp"]
     for name in materials:
@@ -117,10 +102,10 @@ def run_plate(folder: Path, ccx, sections: str, materials: list[str]) -> float:
     return (force / W) / (STRETCH / L)
 
 
-def flat_net_mapping(make_net, turned_net, folder: Path, angle_deg: float) -> MeshMapping:
+def flat_net_mapping(make_net, turned_net, grid, folder: Path, angle_deg: float) -> MeshMapping:
     """A flat unsheared ply with its u fibres at ``angle_deg`` from x, mapped onto the plate."""
     net = turned_net(make_net(41, 41, spacing=0.005, start=(20, 20)), angle_deg)
-    plate_mesh(folder)
+    plate_mesh(folder, grid)
     mapping = map_to_mesh(net, read_shell_mesh(folder / "mesh.inp"), nominal_thickness_mm=T_PLY)
     assert mapping.covered.all()
     return mapping
@@ -129,64 +114,82 @@ def flat_net_mapping(make_net, turned_net, folder: Path, angle_deg: float) -> Me
 @pytest.mark.parametrize("angles", [[0.0, 45.0, -45.0, 90.0], [0.0, 90.0]])
 @pytest.mark.parametrize("flavour", ["calculix", "abaqus"])
 def test_exported_stack_has_the_laminate_theory_stiffness(
-    tmp_path, make_net, turned_net, ccx, angles, flavour
+    tmp_path, make_net, turned_net, quadratic_shells, ccx, angles, flavour
 ) -> None:
     plies = tuple(
-        PlySection(f"ply-{k + 1}", "UD", flat_net_mapping(make_net, turned_net, tmp_path, a))
+        PlySection(
+            f"ply-{k + 1}",
+            "UD",
+            flat_net_mapping(make_net, turned_net, quadratic_shells, tmp_path, a),
+        )
         for k, a in enumerate(angles)
     )
     text = stack_sections_text(StackSections(plies), flavour=flavour)
-    stiffness = run_plate(tmp_path, ccx, text, ["UD"])
+    stiffness = run_plate(tmp_path, ccx, quadratic_shells, text, ["UD"])
     assert stiffness == pytest.approx(clt_stiffness(angles), rel=0.01)
     # and not what the plies would give all along x (orientations ignored)
     assert abs(stiffness / clt_stiffness([0.0] * len(angles)) - 1) > 0.2
 
 
-def test_single_ply_orientation_takes_effect(tmp_path, make_net, turned_net, ccx) -> None:
+def test_single_ply_orientation_takes_effect(
+    tmp_path, make_net, turned_net, quadratic_shells, ccx
+) -> None:
     stiffness = {}
     for angle in (0.0, 90.0, 30.0):
         text = calculix_include_text(
-            flat_net_mapping(make_net, turned_net, tmp_path, angle), material="UD"
+            flat_net_mapping(make_net, turned_net, quadratic_shells, tmp_path, angle), material="UD"
         )
-        stiffness[angle] = run_plate(tmp_path, ccx, text, ["UD"])
+        stiffness[angle] = run_plate(tmp_path, ccx, quadratic_shells, text, ["UD"])
         assert stiffness[angle] == pytest.approx(clt_stiffness([angle], T_PLY), rel=0.01)
     # the same section on global axes: what ccx computes when it ignores an orientation
-    plain = run_plate(tmp_path, ccx, f"*SHELL SECTION, ELSET=PLATE, MATERIAL=UD\n{T_PLY}\n", ["UD"])
+    plain = run_plate(
+        tmp_path,
+        ccx,
+        quadratic_shells,
+        f"*SHELL SECTION, ELSET=PLATE, MATERIAL=UD\n{T_PLY}\n",
+        ["UD"],
+    )
     assert plain == pytest.approx(clt_stiffness([0.0], T_PLY), rel=0.01)
     for angle in (90.0, 30.0):
         assert abs(stiffness[angle] / plain - 1) > 0.5, "ccx ignored the orientations"
     assert stiffness[0.0] / stiffness[90.0] == pytest.approx(E1 / E2, rel=0.01)
 
 
-def test_two_layer_form_is_both_fibre_families(tmp_path, make_net, turned_net, ccx) -> None:
+def test_two_layer_form_is_both_fibre_families(
+    tmp_path, make_net, turned_net, quadratic_shells, ccx
+) -> None:
     """An unsheared fabric (u along x, v along y) in two layers of t/2: a [0/90] laminate."""
-    mapping = flat_net_mapping(make_net, turned_net, tmp_path, 0.0)
+    mapping = flat_net_mapping(make_net, turned_net, quadratic_shells, tmp_path, 0.0)
     text = calculix_include_text(mapping, form="two-layer", materials=("UD", "UD"), u_fraction=0.5)
-    stiffness = run_plate(tmp_path, ccx, text, ["UD"])
+    stiffness = run_plate(tmp_path, ccx, quadratic_shells, text, ["UD"])
     assert stiffness == pytest.approx(clt_stiffness([0.0, 90.0], T_PLY / 2), rel=0.01)
 
 
-def test_the_abaqus_include_is_not_what_ccx_applies(tmp_path, make_net, turned_net, ccx) -> None:
+def test_the_abaqus_include_is_not_what_ccx_applies(
+    tmp_path, make_net, turned_net, quadratic_shells, ccx
+) -> None:
     """Why the CalculiX flavour exists: ccx runs the Abaqus include at 90° and computes the
     global-axes (0°) stiffness. If a future ccx applies it, this test says so."""
-    mapping = flat_net_mapping(make_net, turned_net, tmp_path, 90.0)
+    mapping = flat_net_mapping(make_net, turned_net, quadratic_shells, tmp_path, 90.0)
     text = abaqus_include_text(mapping) + (
         f"*SHELL SECTION, ELSET=PREFORM_COVERED, MATERIAL=UD, ORIENTATION=PREFORM_U\n{T_PLY}\n"
     )
-    sets = plate_mesh(tmp_path)
+    sets = plate_mesh(tmp_path, quadratic_shells)
     assert sets["ALL"]
     with pytest.raises(AssertionError, match="WARNING"):
-        run_plate(tmp_path, ccx, text, ["UD"])
+        run_plate(tmp_path, ccx, quadratic_shells, text, ["UD"])
     dat = (tmp_path / "plate.dat").read_text()
     force = -float(re.findall(r"total force.*?\n\s*\n\s*(\S+)", dat)[-1])
     assert (force / W) / (STRETCH / L) == pytest.approx(clt_stiffness([0.0]), rel=0.01)
 
 
-def test_a_dropped_ply_is_absent_where_ccx_computes(tmp_path, make_net, ccx) -> None:
+def test_a_dropped_ply_is_absent_where_ccx_computes(
+    tmp_path, make_net, quadratic_shells, ccx
+) -> None:
     """[0/90] on the half x < 0, [0] on the rest (the 90° ply dropped off): pulled along x the
     halves are in series, Nx/εx = 2 / (a11[0/90] + a11[0]) (Nx the same in both), to the
     constraint their different Poisson contractions put on each other at the joint."""
-    plate_mesh(tmp_path)
+    plate_mesh(tmp_path, quadratic_shells)
     mesh = read_shell_mesh(tmp_path / "mesh.inp")
     full = map_to_mesh(
         make_net(41, 41, spacing=0.005, start=(20, 20)), mesh, nominal_thickness_mm=T_PLY
@@ -199,6 +202,8 @@ def test_a_dropped_ply_is_absent_where_ccx_computes(tmp_path, make_net, ccx) -> 
     )
     assert np.array_equal(half.covered, mesh.centroids()[:, 0] < 0)
     stack = StackSections((PlySection("ply-1", "UD", full), PlySection("ply-2", "UD", half)))
-    stiffness = run_plate(tmp_path, ccx, stack_sections_text(stack, flavour="calculix"), ["UD"])
+    stiffness = run_plate(
+        tmp_path, ccx, quadratic_shells, stack_sections_text(stack, flavour="calculix"), ["UD"]
+    )
     series = 2.0 / (1.0 / clt_stiffness([0.0, 90.0]) + 1.0 / clt_stiffness([0.0]))
     assert stiffness == pytest.approx(series, rel=0.01)
