@@ -30,7 +30,7 @@ elements (``*INCLUDE, INPUT=drape_calculix.inp``).
 from __future__ import annotations
 
 import os
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -171,24 +171,7 @@ def write_ascii(text: str, path: str | os.PathLike[str]) -> None:
 
 
 def write_calculix_include(
-    mapping: MeshMapping,
-    path: str | os.PathLike[str],
-    *,
-    prefix: str = "PREFORM",
-    form: Form = "orthotropic",
-    material: str | None = None,
-    materials: tuple[str, str] | None = None,
-    u_fraction: float = 0.5,
-    title: str | None = None,
+    mapping: MeshMapping, path: str | os.PathLike[str], **options: Any
 ) -> None:
-    """Write :func:`calculix_include_text` to ``path`` (atomically, ASCII)."""
-    text = calculix_include_text(
-        mapping,
-        prefix=prefix,
-        form=form,
-        material=material,
-        materials=materials,
-        u_fraction=u_fraction,
-        title=title,
-    )
-    write_ascii(text, path)
+    """Write :func:`calculix_include_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    write_ascii(calculix_include_text(mapping, **options), path)

@@ -21,7 +21,7 @@ section. Lengths in mm, angles in degrees; the materials are the model's own ``*
 from __future__ import annotations
 
 import os
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -92,16 +92,7 @@ def stack_sections_text(
 
 
 def write_stack_sections(
-    stack: StackSections,
-    path: str | os.PathLike[str],
-    *,
-    prefix: str = "PREFORM",
-    flavour: Flavour = "abaqus",
-    section_points: int = 3,
-    title: str | None = None,
+    stack: StackSections, path: str | os.PathLike[str], **options: Any
 ) -> None:
-    """Write :func:`stack_sections_text` to ``path`` (atomically, ASCII)."""
-    text = stack_sections_text(
-        stack, prefix=prefix, flavour=flavour, section_points=section_points, title=title
-    )
-    write_ascii(text, path)
+    """Write :func:`stack_sections_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    write_ascii(stack_sections_text(stack, **options), path)

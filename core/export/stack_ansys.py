@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -108,25 +109,6 @@ def stack_ansys_text(
     return "\n".join(lines) + "\n"
 
 
-def write_stack_ansys(
-    stack: StackSections,
-    path: str | os.PathLike[str],
-    *,
-    prefix: str = "PREFORM",
-    first_system: int = 1001,
-    first_section: int = 1001,
-    material_ids: Mapping[str, int] | None = None,
-    points_per_layer: int = 3,
-) -> None:
-    """Write :func:`stack_ansys_text` to ``path`` (atomically, ASCII)."""
-    write_ascii(
-        stack_ansys_text(
-            stack,
-            prefix=prefix,
-            first_system=first_system,
-            first_section=first_section,
-            material_ids=material_ids,
-            points_per_layer=points_per_layer,
-        ),
-        path,
-    )
+def write_stack_ansys(stack: StackSections, path: str | os.PathLike[str], **options: Any) -> None:
+    """Write :func:`stack_ansys_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    write_ascii(stack_ansys_text(stack, **options), path)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -89,23 +90,6 @@ def stack_lsdyna_text(
     return "\n".join(lines) + "\n"
 
 
-def write_stack_lsdyna(
-    stack: StackSections,
-    path: str | os.PathLike[str],
-    *,
-    part_id: int = 1,
-    bare_set_id: int = 1,
-    material_ids: Mapping[str, int] | None = None,
-    title: str | None = None,
-) -> None:
-    """Write :func:`stack_lsdyna_text` to ``path`` (atomically, ASCII)."""
-    write_ascii(
-        stack_lsdyna_text(
-            stack,
-            part_id=part_id,
-            bare_set_id=bare_set_id,
-            material_ids=material_ids,
-            title=title,
-        ),
-        path,
-    )
+def write_stack_lsdyna(stack: StackSections, path: str | os.PathLike[str], **options: Any) -> None:
+    """Write :func:`stack_lsdyna_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    write_ascii(stack_lsdyna_text(stack, **options), path)
