@@ -6,6 +6,14 @@ with its material name. Per element, the plies present are those whose mapping c
 element; a ply that does not cover an element is *absent* there (a drop-off): it is left out of
 that element's section and counted, never given a default angle or thickness.
 
+Layer order. Solvers list a composite section's layers from the element's negative side to its
+positive side (the normal by the right-hand rule on the element's nodes). The tool side is
+where the drape's outward normal u × v points away from (a ply's generator angle is counted
+counter-clockwise seen from outside), so where an element's normal points into the tool
+(n · (u × v) < 0 for its first present ply) its layers are written outermost ply first;
+:meth:`StackSections.layer_order` gives the order and the files' headers count those elements.
+The section's reference surface is the solver's default, the element's mid-surface.
+
 The writers (Abaqus and CalculiX :mod:`preform.export.stack_abaqus`, LS-DYNA
 :mod:`preform.export.stack_lsdyna`, ANSYS :mod:`preform.export.stack_ansys`) write, per element,
 each present ply as one layer: its thickness t0 · t/t0 [mm], its material, and its material
@@ -103,6 +111,28 @@ class StackSections:
         """Stack thickness per element [mm]: the sum of the present plies (0 where bare)."""
         return np.asarray(self.thickness_mm().sum(axis=1))
 
+    def normal_into_tool(self) -> NDArray[np.bool_]:
+        """(m,): the element's normal points into the tool (n · (u × v) < 0 for its first
+        present ply); False where no ply is present."""
+        present = self.present()
+        first = np.argmax(present, axis=1)
+        rows = np.arange(len(first))
+        u = np.stack([p.mapping.fibre_u for p in self.plies], axis=1)[rows, first]
+        v = np.stack([p.mapping.fibre_v for p in self.plies], axis=1)[rows, first]
+        outward = np.einsum("ij,ij->i", np.cross(u, v), self.normal)
+        return np.asarray(present.any(axis=1) & (np.nan_to_num(outward, nan=1.0) < 0))
+
+    def layer_order(self) -> list[list[int]]:
+        """Per element, the indices of its present plies from the element's negative side to
+        its positive side: stacking order, reversed where the normal points into the tool."""
+        present = self.present()
+        into = self.normal_into_tool()
+        out = []
+        for e in range(present.shape[0]):
+            order = np.nonzero(present[e])[0].tolist()
+            out.append(order[::-1] if into[e] else order)
+        return out
+
     def materials(self) -> list[str]:
         """Material names in order of first use (tool side first)."""
         return list(dict.fromkeys(p.material for p in self.plies))
@@ -124,6 +154,7 @@ class StackSections:
                 p.name: int(np.count_nonzero(any_ply & ~present[:, k]))
                 for k, p in enumerate(self.plies)
             },
+            "elements_normal_into_tool": int(np.count_nonzero(self.normal_into_tool())),
             "max_total_thickness_mm": float(self.total_thickness_mm().max(initial=0.0)),
             "length_unit": "mm",
             "angle_unit": "deg",
@@ -139,6 +170,12 @@ class StackSections:
             f"{mark} Elements: {s['elements']}; with every ply: {s['elements_all_plies']}; "
             f"with no ply (no section here): {s['elements_bare']}.",
         ]
+        if s["elements_normal_into_tool"]:
+            lines.append(
+                f"{mark} Elements whose normal points into the tool (layers listed outermost "
+                f"ply first, as a section lists them from the normal's negative side): "
+                f"{s['elements_normal_into_tool']}"
+            )
         absent = [f"{name} {n}" for name, n in s["ply_absent_elements"].items() if n]
         if absent:
             lines.append(

@@ -7,7 +7,8 @@ For every element with at least one ply (``<P>`` the prefix, L the element label
   ply's u fibres in the element's plane, point b = n × a, second line ``3, 0.`` (no extra
   rotation), so layer axis 3 is the element normal;
 - ``*ELSET, ELSET=<P>_E<L>`` and ``*SHELL SECTION, ELSET=<P>_E<L>, COMPOSITE`` with one data line
-  per present ply, tool side first: thickness [mm], section points, material, orientation, and
+  per present ply, from the element's negative side (tool side first where the normal points
+  away from the tool; :meth:`~preform.export.ply_stack.StackSections.layer_order`): thickness [mm], section points, material, orientation, and
   (Abaqus) the ply name.
 
 Explicit orientations rather than ``*DISTRIBUTION`` tables, because the plies present and their
@@ -69,12 +70,12 @@ def stack_sections_text(
     bare = ids[~present.any(axis=1)]
     if bare.size:
         out += [f"*ELSET, ELSET={name}_BARE", *_set_lines(bare)]
+    order = stack.layer_order()
     for e in np.nonzero(present.any(axis=1))[0].tolist():
         label = int(ids[e])
         layers = []
-        for k, ply in enumerate(stack.plies):
-            if not present[e, k]:
-                continue
+        for k in order[e]:
+            ply = stack.plies[k]
             orient = f"{name}_{k + 1}_{label}"
             out += orientation_lines(orient, ply.mapping.fibre_u[e], normal[e])
             t = _num(float(thickness[e, k]))

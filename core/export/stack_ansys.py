@@ -1,13 +1,14 @@
 """ANSYS Mechanical APDL input of a ply stack: a layered shell section per element.
 
 For each element with at least one ply: a local Cartesian system (``LOCAL``, origin at the
-element centroid, x along the u fibres of the element's first present ply, tool side first,
+element centroid, x along the u fibres of the element's first layer,
 z along the element normal; angles as :func:`preform.export.ansys.local_angles_deg` solves
 them) pointed at with ``EMODIF, elem, ESYS``; and a section of its own (``SECTYPE, s, SHELL``)
-with one ``SECDATA, TK, MAT, THETA, NUMPT`` layer per present ply in stacking order (bottom
-first, as ANSYS numbers layers): the ply's thickness t0 · t/t0 [mm], its material, THETA the
+with one ``SECDATA, TK, MAT, THETA, NUMPT`` layer per present ply from the element's
+bottom (−normal) side, as ANSYS numbers layers (stacking order, reversed where the normal
+points into the tool): the ply's thickness t0 · t/t0 [mm], its material, THETA the
 angle [deg] from the element x axis to the ply's u fibres about the normal (0 for the first
-ply), then ``EMODIF, elem, SECNUM, s``. A ply absent from an element (a drop-off) has no layer
+layer), then ``EMODIF, elem, SECNUM, s``. A ply absent from an element (a drop-off) has no layer
 there. Material numbers are APDL parameters at the top (``<P>_M1``, ``<P>_M2``, ... with the
 material names in comments; default 1, 2, ... in order of first use), to be pointed at the
 model's materials. Elements with no ply are the component ``<P>_BARE``. Lengths in mm, angles
@@ -63,14 +64,15 @@ def stack_ansys_text(
     z = stack.normal
     fibres = np.stack([p.mapping.fibre_u for p in stack.plies], axis=1)  # (m, plies, 3)
     has = present.any(axis=1)
-    first_ply = np.argmax(present, axis=1)
+    order = stack.layer_order()
+    first_ply = np.array([o[0] if o else 0 for o in order], dtype=np.int64)
     x = fibres[np.arange(len(ids)), first_ply]
     frames = np.stack([x, np.cross(z, x), z], axis=-1)
     centroid = stack.plies[0].mapping.centroid_mm
     lines = [
         f"! preform ply stack mapped onto {mesh.source or 'a shell mesh'}",
         *stack.comment_lines("!"),
-        "! Element x axis = u fibres of the element's first present ply; THETA from it.",
+        "! Element x axis = u fibres of the element's first layer; THETA from it.",
         "/PREP7",
         "! Material numbers (point them at your materials):",
     ]
@@ -91,12 +93,11 @@ def stack_ansys_text(
             fibres[e],
             np.repeat(z[e : e + 1], len(stack.plies), axis=0),
         )
-        for k, ply in enumerate(stack.plies):
-            if present[e, k]:
-                lines.append(
-                    f"SECDATA,{float(thickness[e, k]):.9g},{param[ply.material]},"
-                    f"{float(theta[k]):.9g},{points_per_layer}"
-                )
+        for k in order[e]:
+            lines.append(
+                f"SECDATA,{float(thickness[e, k]):.9g},{param[stack.plies[k].material]},"
+                f"{float(theta[k]):.9g},{points_per_layer}"
+            )
         lines.append(f"EMODIF,{label},SECNUM,{section}")
         system += 1
         section += 1

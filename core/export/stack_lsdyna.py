@@ -3,7 +3,8 @@
 Each element with at least one ply is written as ``*ELEMENT_SHELL_COMPOSITE`` (the card layout
 of :mod:`preform.export.lsdyna`: card 1 EID, PID, N1–N8 in 8-character fields; then cards of two
 integration points each in 10-character fields, MID, THICK, B, blank, MID, THICK, B, blank), one
-integration point per present ply in stacking order, tool side first: its material id, its
+integration point per present ply from the element's bottom (−normal) side up (stacking order,
+tool side first, reversed where the normal points into the tool): its material id, its
 thickness t0 · t/t0 [mm] and B, the angle [deg] from the element's N1→N2 edge to the ply's u
 fibres about the element normal (the material angle a ``*MAT`` with AOPT = 0 adds). An odd
 count leaves the last card's second half blank. A ply absent from an element (a drop-off) has no
@@ -72,6 +73,7 @@ def stack_lsdyna_text(
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
         "$#    mid1    thick1        b1              mid2    thick2        b2",
     ]
+    order = stack.layer_order()
     for e in np.nonzero(present.any(axis=1))[0].tolist():
         n1, n2, n3, n4 = (int(v) for v in node_labels[e])
         lines.append(
@@ -79,10 +81,9 @@ def stack_lsdyna_text(
             + f"{0:8d}" * 4
         )
         points = [
-            f"{mids[ply.material]:10d}{_f10(float(thickness[e, k]))}"
+            f"{mids[stack.plies[k].material]:10d}{_f10(float(thickness[e, k]))}"
             f"{_f10(float(beta[e, k]))}{'':10}"
-            for k, ply in enumerate(stack.plies)
-            if present[e, k]
+            for k in order[e]
         ]
         lines += ["".join(points[i : i + 2]).rstrip() for i in range(0, len(points), 2)]
     lines += _uncovered_set(mesh.element_ids[~present.any(axis=1)], bare_set_id)

@@ -244,3 +244,38 @@ def test_written_file_is_ascii(tmp_path, stack) -> None:
     write_stack_sections(stack, path, flavour="calculix", title="γ-test")
     assert path.read_bytes().isascii()
     assert "gamma-test" in path.read_text()
+
+
+def test_layers_run_from_the_normal_s_negative_side(make_net, turned_net) -> None:
+    """Elements listed the other way round (normal −z, into the tool under a ply whose outward
+    normal u × v is +z) list their layers outermost first in every writer."""
+    mesh = plate(4, 2)
+    flipped = np.zeros(mesh.n_elements, dtype=bool)
+    flipped[::3] = True
+    corners = np.where(flipped[:, None], mesh.corners[:, ::-1], mesh.corners)
+    mesh = shell_mesh(mesh.points, corners, element_ids=mesh.element_ids)
+    stack = StackSections(
+        tuple(
+            PlySection(f"ply-{k + 1}", f"M{k + 1}", ply(make_net, turned_net, mesh, a))
+            for k, a in enumerate([0.0, 30.0, 90.0])
+        )
+    )
+    assert np.array_equal(stack.normal_into_tool(), flipped)
+    assert stack.summary()["elements_normal_into_tool"] == int(flipped.sum())
+    ids = mesh.element_ids.tolist()
+    for label, layers in sections(stack_sections_text(stack)).items():
+        wanted = ["M1", "M2", "M3"][:: -1 if flipped[ids.index(label)] else 1]
+        assert [layer[2] for layer in layers] == wanted
+    ansys = stack_ansys_text(stack)
+    blocks = re.findall(r"SECTYPE,\d+,SHELL\n((?:SECDATA.*\n)+)EMODIF,(\d+),SECNUM", ansys)
+    for body, label in blocks:
+        mats = [line.split(",")[2] for line in body.strip().splitlines()]
+        wanted = ["PREFORM_M1", "PREFORM_M2", "PREFORM_M3"]
+        assert mats == wanted[:: -1 if flipped[ids.index(int(label))] else 1]
+    lsdyna = stack_lsdyna_text(stack).splitlines()
+    at = lsdyna.index("*ELEMENT_SHELL_COMPOSITE") + 3
+    for k in range(mesh.n_elements):
+        label = int(lsdyna[at + 3 * k][:8])
+        mids = [int(lsdyna[at + 3 * k + 1][:10]), int(lsdyna[at + 3 * k + 1][40:50])]
+        mids.append(int(lsdyna[at + 3 * k + 2][:10]))
+        assert mids == [1, 2, 3][:: -1 if flipped[ids.index(label)] else 1]
