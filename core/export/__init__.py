@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from preform.export.shell_mesh import ShellMesh, read_shell_mesh, shell_mesh
     from preform.export.stack_abaqus import write_stack_sections
     from preform.export.stack_ansys import write_stack_ansys
+    from preform.export.stack_files import write_stack_files
     from preform.export.stack_lsdyna import write_stack_lsdyna
     from preform.export.tables import cells_table, write_json, write_table
     from preform.export.vtu import write_drape_vtu, write_unit_cell_vtu
@@ -75,6 +76,7 @@ _HOME = {
     "write_lsdyna_include": "preform.export.lsdyna",
     "write_mapped_vtu": "preform.export.mapped_vtu",
     "write_stack_ansys": "preform.export.stack_ansys",
+    "write_stack_files": "preform.export.stack_files",
     "write_stack_lsdyna": "preform.export.stack_lsdyna",
     "write_stack_sections": "preform.export.stack_abaqus",
     "write_table": "preform.export.tables",
@@ -121,6 +123,7 @@ __all__ = [
     "write_lsdyna_include",
     "write_mapped_vtu",
     "write_stack_ansys",
+    "write_stack_files",
     "write_stack_lsdyna",
     "write_stack_sections",
     "write_table",

@@ -21,6 +21,7 @@ from preform.export.ply_stack import PlySection, StackSections
 from preform.export.shell_mesh import ShellMesh, shell_mesh
 from preform.export.stack_abaqus import stack_sections_text, write_stack_sections
 from preform.export.stack_ansys import stack_ansys_text
+from preform.export.stack_files import write_stack_files
 from preform.export.stack_lsdyna import stack_lsdyna_text
 
 T = 0.25  # mm
@@ -279,3 +280,15 @@ def test_layers_run_from_the_normal_s_negative_side(make_net, turned_net) -> Non
         mids = [int(lsdyna[at + 3 * k + 1][:10]), int(lsdyna[at + 3 * k + 1][40:50])]
         mids.append(int(lsdyna[at + 3 * k + 2][:10]))
         assert mids == [1, 2, 3][:: -1 if flipped[ids.index(label)] else 1]
+
+
+def test_stack_files_for_the_named_targets(tmp_path, stack) -> None:
+    written = write_stack_files(stack, tmp_path, ["calculix", "ansys", "calculix"], prefix="LAY")
+    assert written == {"calculix": "stack_calculix.inp", "ansys": "stack_ansys.mac"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(written.values())
+    assert (tmp_path / "stack_calculix.inp").read_text() == stack_sections_text(
+        stack, prefix="LAY", flavour="calculix"
+    )
+    assert "LAY_M1 = 1" in (tmp_path / "stack_ansys.mac").read_text()
+    with pytest.raises(ValueError, match="no stack target nastran; known: abaqus"):
+        write_stack_files(stack, tmp_path, ["nastran"])
