@@ -30,6 +30,7 @@ elements (``*INCLUDE, INPUT=drape_calculix.inp``).
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -37,6 +38,7 @@ import numpy as np
 from preform.export.abaqus import _num, _set_lines
 from preform.export.atomic import atomic_open
 from preform.export.fe_mapping import MeshMapping
+from preform.export.shell_mesh import ShellMesh
 
 #: CalculiX reads names of at most 80 characters.
 MAX_NAME = 80
@@ -67,15 +69,22 @@ def orientation_lines(name: str, axis_1: np.ndarray, normal: np.ndarray) -> list
     ]
 
 
+def mesh_name(mesh: ShellMesh) -> str:
+    """The mesh file's name without its folder, for a deck's header (a deck goes to other
+    machines: it names nothing of the one it was written on)."""
+    return Path(mesh.source).name if mesh.source else "a shell mesh"
+
+
 def covered_sets(mapping: MeshMapping, name: str) -> list[str]:
-    """``*ELSET`` cards of the covered and uncovered elements (an empty one said in a comment)."""
+    """``*ELSET`` cards of the covered and uncovered elements; an empty set is not written
+    (a solver refuses an ``*ELSET`` without members) but said in a comment."""
     ids = mapping.mesh.element_ids
     out: list[str] = []
     for label, members in (("COVERED", ids[mapping.covered]), ("UNCOVERED", ids[~mapping.covered])):
         if members.size:
             out += [f"*ELSET, ELSET={name}_{label}", *_set_lines(members)]
         else:
-            out.append(f"** ELSET {name}_{label} would be empty: no such element")
+            out.append(f"** No {label.lower()} element: no such set written.")
     return out
 
 
@@ -122,13 +131,18 @@ def calculix_include_text(
         f"of t), v ({mat_v}, {1 - u_fraction:g} of t)"
     )
     out = [
-        f"** preform drape mapped onto {mapping.mesh.source or 'a shell mesh'} for CalculiX"
+        f"** preform drape mapped onto {mesh_name(mapping.mesh)} for CalculiX"
         + (f": {title}" if title else ""),
         "** Units: lengths in mm, angles in degrees. Element labels from the "
         f"{mapping.mesh.labels_from}.",
         f"** Covered elements: {summary['elements_covered']} of {summary['elements']}; "
-        f"uncovered: {summary['elements_uncovered']} (ELSET={name}_UNCOVERED: no section here, "
-        "give them one).",
+        f"uncovered: {summary['elements_uncovered']}"
+        # the set is named only when it is written
+        + (
+            f" (ELSET={name}_UNCOVERED), given no section here: give them one."
+            if summary["elements_uncovered"]
+            else "."
+        ),
         f"** Thickness model: {mapping.thickness_words}.",
         f"** Per covered element: explicit orientation(s) and a shell section, {uses}.",
         "** Define the material(s) named here with *MATERIAL in your model.",

@@ -24,6 +24,7 @@ of a sheared ply are then not along axis 2 (the single-ply two-layer forms model
 
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass
 from typing import Any
 
@@ -160,26 +161,41 @@ class StackSections:
             "angle_unit": "deg",
         }
 
-    def comment_lines(self, mark: str) -> list[str]:
-        """The stack's summary as comment lines of a deck (``mark``: ``**``, ``$`` or ``!``)."""
+    def comment_lines(self, mark: str, first: str, bare_set: str) -> list[str]:
+        """A deck's header: ``first`` (what the deck is), then the stack's summary, as comment
+        lines (``mark``: ``**``, ``$`` or ``!``) of at most 80 columns, LS-DYNA's card width
+        (a long name is broken, never cut off). ``bare_set`` names the set of elements with
+        no ply, named only when there are such elements (it is written only then)."""
         s = self.summary()
-        lines = [
-            f"{mark} Stack, tool side first: "
-            + ", ".join(f"{p.name} ({p.material})" for p in self.plies),
-            f"{mark} Units: lengths in mm, angles in degrees. Layer axis 1 = the ply's u fibres.",
-            f"{mark} Elements: {s['elements']}; with every ply: {s['elements_all_plies']}; "
-            f"with no ply (no section here): {s['elements_bare']}.",
+        sentences = [
+            first,
+            "Stack, tool side first: "
+            + ", ".join(f"{p.name} ({p.material})" for p in self.plies)
+            + ".",
+            "Units: lengths in mm, angles in degrees. Layer axis 1 = the ply's u fibres.",
+            f"Elements: {s['elements']}; with every ply: {s['elements_all_plies']}; with no "
+            f"ply: {s['elements_bare']}"
+            + (f" ({bare_set}, no section here)." if s["elements_bare"] else "."),
         ]
         if s["elements_normal_into_tool"]:
-            lines.append(
-                f"{mark} Elements whose normal points into the tool (layers listed outermost "
-                f"ply first, as a section lists them from the normal's negative side): "
-                f"{s['elements_normal_into_tool']}"
+            sentences.append(
+                "Elements whose normal points into the tool, layers listed outermost ply "
+                f"first (from the normal's negative side): {s['elements_normal_into_tool']}."
             )
         absent = [f"{name} {n}" for name, n in s["ply_absent_elements"].items() if n]
         if absent:
-            lines.append(
-                f"{mark} Drop-offs (elements where a ply is absent and left out): "
+            sentences.append(
+                "Drop-offs (elements where a ply is absent and left out): "
                 + ", ".join(absent)
+                + "."
+            )
+        lines: list[str] = []
+        for sentence in sentences:
+            lines += textwrap.wrap(
+                sentence,
+                80,
+                initial_indent=f"{mark} ",
+                subsequent_indent=f"{mark}   ",
+                break_on_hyphens=False,
             )
         return lines

@@ -27,7 +27,7 @@ from typing import Any, Literal
 import numpy as np
 
 from preform.export.abaqus import _num, _set_lines
-from preform.export.calculix import orientation_lines, write_ascii
+from preform.export.calculix import mesh_name, orientation_lines, write_ascii
 from preform.export.ply_stack import StackSections
 
 Flavour = Literal["abaqus", "calculix"]
@@ -59,10 +59,13 @@ def stack_sections_text(
     thickness = stack.thickness_mm()
     normal = stack.normal
     out = [
-        f"** preform ply stack mapped onto {mesh.source or 'a shell mesh'}"
-        + (f" for {'CalculiX' if flavour == 'calculix' else 'Abaqus'}")
-        + (f": {title}" if title else ""),
-        *stack.comment_lines("**"),
+        *stack.comment_lines(
+            "**",
+            f"preform ply stack mapped onto {mesh_name(mesh)}"
+            + (f" for {'CalculiX' if flavour == 'calculix' else 'Abaqus'}")
+            + (f": {title}" if title else ""),
+            f"ELSET={name}_BARE",
+        ),
         "** Define these materials with *MATERIAL in your model: " + ", ".join(stack.materials()),
     ]
     if flavour == "calculix":

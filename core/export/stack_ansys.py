@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from preform.export.ansys import local_angles_deg
-from preform.export.calculix import write_ascii
+from preform.export.calculix import mesh_name, write_ascii
 from preform.export.ply_stack import StackSections
 from preform.export.stack_lsdyna import stack_material_ids
 
@@ -70,8 +70,9 @@ def stack_ansys_text(
     frames = np.stack([x, np.cross(z, x), z], axis=-1)
     centroid = stack.plies[0].mapping.centroid_mm
     lines = [
-        f"! preform ply stack mapped onto {mesh.source or 'a shell mesh'}",
-        *stack.comment_lines("!"),
+        *stack.comment_lines(
+            "!", f"preform ply stack mapped onto {mesh_name(mesh)}", f"component {name}_BARE"
+        ),
         "! Element x axis = u fibres of the element's first layer; THETA from it.",
         "/PREP7",
         "! Material numbers (point them at your materials):",

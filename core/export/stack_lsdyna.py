@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from preform.export.calculix import write_ascii
+from preform.export.calculix import mesh_name, write_ascii
 from preform.export.lsdyna import _angle_from_first_edge_to, _element_cards, _f10, _uncovered_set
 from preform.export.ply_stack import StackSections
 
@@ -62,12 +62,13 @@ def stack_lsdyna_text(
     )
     lines = [
         "*KEYWORD",
-        "$ preform ply stack mapped onto "
-        + (mesh.source or "a shell mesh")
-        + (f": {title}" if title else ""),
-        *stack.comment_lines("$"),
-        "$ B: from the N1->N2 edge to the ply's u fibres. Material ids: "
-        + ", ".join(f"{name} = {mid}" for name, mid in mids.items()),
+        *stack.comment_lines(
+            "$",
+            f"preform ply stack mapped onto {mesh_name(mesh)}" + (f": {title}" if title else ""),
+            f"*SET_SHELL_LIST {bare_set_id}",
+        ),
+        "$ B: from the N1->N2 edge to the ply's u fibres. Material ids:",
+        *(f"$   {name} = {mid}" for name, mid in mids.items()),
         "$ These cards replace your *ELEMENT_SHELL cards of the same elements.",
         "*ELEMENT_SHELL_COMPOSITE",
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
@@ -86,7 +87,9 @@ def stack_lsdyna_text(
             for k in order[e]
         ]
         lines += ["".join(points[i : i + 2]).rstrip() for i in range(0, len(points), 2)]
-    lines += _uncovered_set(mesh.element_ids[~present.any(axis=1)], bare_set_id)
+    bare = mesh.element_ids[~present.any(axis=1)]
+    if bare.size:  # an empty list is no set: written only when an element has no ply
+        lines += _uncovered_set(bare, bare_set_id)
     lines.append("*END")
     return "\n".join(lines) + "\n"
 

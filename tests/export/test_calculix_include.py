@@ -12,9 +12,9 @@ from preform.export.fe_mapping import map_to_mesh
 from preform.export.shell_mesh import shell_mesh
 
 
-def cap_mapping(make_net):
-    """A domed, skewed net (shear of both signs) under a mesh of its own cells, a few of them
-    moved off the net so they are not covered."""
+def cap_mapping(make_net, lift_mm: float = 50.0):
+    """A domed, skewed net (shear of both signs) under a mesh of its own cells, those at one
+    corner lifted ``lift_mm`` off the net so they are not covered."""
     net = make_net(10, 12, dome=True)
     nodes = net.nodes.reshape(-1, 3) * 1e3
     idx = np.arange(len(nodes)).reshape(net.nodes.shape[:2])
@@ -22,7 +22,7 @@ def cap_mapping(make_net):
         [idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()]
     )
     far = nodes.copy()
-    far[idx[:2, :2].ravel(), 2] += 50.0  # lift one corner of the net away
+    far[idx[:2, :2].ravel(), 2] += lift_mm
     mesh = shell_mesh(far, corners, element_ids=500 + 2 * np.arange(len(corners)))
     return map_to_mesh(net, mesh, nominal_thickness_mm=0.3)
 
@@ -86,6 +86,11 @@ def test_uncovered_elements_are_listed_and_get_nothing(make_net) -> None:
     assert sorted(int(v) for v in listed.replace("\n", ",").split(",") if v.strip()) == uncovered
     for label in uncovered:
         assert f"PREFORM_E{label}," not in text and f"PREFORM_U{label}," not in text
+    assert f"uncovered: {len(uncovered)} (ELSET=PREFORM_UNCOVERED)" in text
+    # all covered (the mesh of the net's own cells, none lifted): the set is neither written
+    # nor named
+    text = calculix_include_text(cap_mapping(make_net, lift_mm=0.0))
+    assert "PREFORM_UNCOVERED" not in text and "No uncovered element" in text
 
 
 def test_refused_inputs(make_net, tmp_path) -> None:

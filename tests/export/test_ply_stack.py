@@ -292,3 +292,57 @@ def test_stack_files_for_the_named_targets(tmp_path, stack) -> None:
     assert "LAY_M1 = 1" in (tmp_path / "stack_ansys.mac").read_text()
     with pytest.raises(ValueError, match="no stack target nastran; known: abaqus"):
         write_stack_files(stack, tmp_path, ["nastran"])
+
+
+@pytest.mark.parametrize("half", [False, True], ids=["no bare element", "bare elements"])
+def test_headers_name_the_mesh_file_only_and_the_sets_written(
+    tmp_path, make_net, turned_net, half
+) -> None:
+    """As the single-ply decks: nothing of the machine (the mesh by its file name), LS-DYNA
+    within 80 columns, and the set of elements with no ply named exactly when written."""
+    from preform.export.shell_mesh import read_shell_mesh
+
+    deep = tmp_path / "home" / "someone" / "projects"
+    deep.mkdir(parents=True)
+    name = "left_hand_door_inner_panel_revision_C_shell_mesh_of_the_tool_surface_coarse.inp"
+    mesh = plate(4, 2)
+    lines = ["*NODE"] + [f"{k + 1}, {x}, {y}, {z}" for k, (x, y, z) in enumerate(mesh.points)]
+    lines.append("*ELEMENT, TYPE=S4R, ELSET=SKIN")
+    lines += [
+        ", ".join(map(str, [e, *(c + 1)]))
+        for e, c in zip(mesh.element_ids, mesh.corners, strict=True)
+    ]
+    (deep / name).write_text("\n".join(lines) + "\n")
+    mesh = read_shell_mesh(deep / name)
+    plies = (
+        PlySection("ply-1", "UD", ply(make_net, turned_net, mesh, 0.0, half=half)),
+        PlySection(
+            "a-ply-with-a-name-long-enough-to-wrap",
+            "UD",
+            ply(make_net, turned_net, mesh, 90.0, half=half),
+        ),
+    )
+    stack = StackSections(plies)
+    title = "E-BX-318 over the door panel, least-energy generator angle, ply 3 of 8, " * 2
+    texts = {
+        "abaqus": stack_sections_text(stack, title=title),
+        "calculix": stack_sections_text(stack, flavour="calculix", title=title),
+        "lsdyna": stack_lsdyna_text(stack, title=title, bare_set_id=7),
+        "ansys": stack_ansys_text(stack),
+    }
+    for kind, text in texts.items():
+        assert str(tmp_path) not in text and "someone" not in text, kind
+        assert name[:40] in text.replace("\n$   ", "").replace("\n**   ", ""), kind
+        bare_named = {"lsdyna": "*SET_SHELL_LIST 7", "ansys": "component PREFORM_BARE"}.get(
+            kind, "ELSET=PREFORM_BARE"
+        )
+        assert (bare_named in text) == half, kind
+        written = {"lsdyna": "\n*SET_SHELL_LIST\n", "ansys": "CM,PREFORM_BARE,ELEM"}.get(
+            kind, "*ELSET, ELSET=PREFORM_BARE\n"
+        )
+        assert (written in text) == half, kind
+    assert all(len(line) <= 80 for line in texts["lsdyna"].splitlines())
+    comments = " ".join(
+        ln[1:].strip() for ln in texts["lsdyna"].splitlines() if ln.startswith("$ ")
+    )
+    assert "ply 3 of 8" in comments
