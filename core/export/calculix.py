@@ -187,5 +187,5 @@ def write_ascii(text: str, path: str | os.PathLike[str]) -> None:
 def write_calculix_include(
     mapping: MeshMapping, path: str | os.PathLike[str], **options: Any
 ) -> None:
-    """Write :func:`calculix_include_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    """Write :func:`calculix_include_text` (same options) to ``path``, atomically, in ASCII."""
     write_ascii(calculix_include_text(mapping, **options), path)

@@ -6,10 +6,10 @@ For every element with at least one ply (``<P>`` the prefix, L the element label
 - one ``*ORIENTATION, NAME=<P>_<k>_<L>, SYSTEM=RECTANGULAR`` per present ply: point a = the
   ply's u fibres in the element's plane, point b = n × a, second line ``3, 0.`` (no extra
   rotation), so layer axis 3 is the element normal;
-- ``*ELSET, ELSET=<P>_E<L>`` and ``*SHELL SECTION, ELSET=<P>_E<L>, COMPOSITE`` with one data line
-  per present ply, from the element's negative side (tool side first where the normal points
-  away from the tool; :meth:`~preform.export.ply_stack.StackSections.layer_order`): thickness [mm], section points, material, orientation, and
-  (Abaqus) the ply name.
+- ``*ELSET, ELSET=<P>_E<L>`` and ``*SHELL SECTION, ELSET=<P>_E<L>, COMPOSITE`` with one data
+  line per present ply from the element's negative side (tool side first where the normal
+  points away from the tool; :meth:`~preform.export.ply_stack.StackSections.layer_order`):
+  thickness [mm], section points, material, orientation, and (Abaqus) the ply name.
 
 Explicit orientations rather than ``*DISTRIBUTION`` tables, because the plies present and their
 thicknesses differ from element to element (drop-offs, sheared thickness), so each element needs
@@ -98,5 +98,5 @@ def stack_sections_text(
 def write_stack_sections(
     stack: StackSections, path: str | os.PathLike[str], **options: Any
 ) -> None:
-    """Write :func:`stack_sections_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    """Write :func:`stack_sections_text` (same options) to ``path``, atomically, in ASCII."""
     write_ascii(stack_sections_text(stack, **options), path)

@@ -112,5 +112,5 @@ def stack_ansys_text(
 
 
 def write_stack_ansys(stack: StackSections, path: str | os.PathLike[str], **options: Any) -> None:
-    """Write :func:`stack_ansys_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    """Write :func:`stack_ansys_text` (same options) to ``path``, atomically, in ASCII."""
     write_ascii(stack_ansys_text(stack, **options), path)

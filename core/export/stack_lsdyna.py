@@ -95,5 +95,5 @@ def stack_lsdyna_text(
 
 
 def write_stack_lsdyna(stack: StackSections, path: str | os.PathLike[str], **options: Any) -> None:
-    """Write :func:`stack_lsdyna_text` (the same keyword options) to ``path`` (atomically, ASCII)."""
+    """Write :func:`stack_lsdyna_text` (same options) to ``path``, atomically, in ASCII."""
     write_ascii(stack_lsdyna_text(stack, **options), path)

@@ -108,8 +108,8 @@ def export_command(
     """Drape fabric NAME as the scene says and write TARGETS (abaqus, calculix, lsdyna, ansys,
     table, vtu, flat-pattern).
 
-    abaqus/calculix/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the scene's
-    export.mesh); flat-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
+    abaqus/calculix/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the
+    scene's export.mesh); flat-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
     mm and degrees. Elements the drape does not cover are listed in every file, never given a
     value. Exit code 0 when written (also when some elements are not covered), 1 when the
     drape or the export failed, 2 for bad input.

@@ -4,8 +4,9 @@ One ply of a strongly orthotropic (illustrative) material, draped from the pole 
 radius 100 mm with its generators at +45° and +135° to x, mapped onto an S8R cap mesh (|x|, |y|
 ≤ 40 mm) held at its rim, and pushed at the pole along x. An orthotropic shell moves off the
 line of the load towards its compliant axis: with axis 1 along the u fibres (+45°) the pole
-moves to −y, with axis 1 along v (+135°, the mirror image y → −y of the u run) to +y by as much,
-and on global axes (orientations ignored: axis 1 along x, the load's line) it hardly leaves it.
+moves to −y, with axis 1 along v (+135°, the mirror image y → −y of the u run) to +y by as
+much, and on global axes (orientations ignored: axis 1 along x, the load's line) it hardly
+leaves it.
 """
 
 from __future__ import annotations
