@@ -168,19 +168,23 @@ def test_two_layer_form_is_both_fibre_families(
 def test_the_abaqus_include_is_not_what_ccx_applies(
     tmp_path, make_net, turned_net, quadratic_shells, ccx
 ) -> None:
-    """Why the CalculiX flavour exists: ccx runs the Abaqus include at 90° and computes the
-    global-axes (0°) stiffness. If a future ccx applies it, this test says so."""
+    """Why the CalculiX flavour exists: ccx runs the Abaqus include (fibres at 90°) with a
+    warning and computes the global-axes (0°) stiffness. A ccx that applies it is no defect of
+    preform's: the test then skips, saying docs/exports.md's CalculiX section is out of date."""
     mapping = flat_net_mapping(make_net, turned_net, quadratic_shells, tmp_path, 90.0)
     text = abaqus_include_text(mapping) + (
         f"*SHELL SECTION, ELSET=PREFORM_COVERED, MATERIAL=UD, ORIENTATION=PREFORM_U\n{T_PLY}\n"
     )
-    sets = plate_mesh(tmp_path, quadratic_shells)
-    assert sets["ALL"]
-    with pytest.raises(AssertionError, match="WARNING"):
-        run_plate(tmp_path, ccx, quadratic_shells, text, ["UD"])
-    dat = (tmp_path / "plate.dat").read_text()
-    force = -float(re.findall(r"total force.*?\n\s*\n\s*(\S+)", dat)[-1])
-    assert (force / W) / (STRETCH / L) == pytest.approx(clt_stiffness([0.0]), rel=0.01)
+    try:
+        stiffness = run_plate(tmp_path, ccx, quadratic_shells, text, ["UD"])
+    except AssertionError as error:
+        assert "WARNING" in str(error)  # it ran, and said what it ignored
+        dat = (tmp_path / "plate.dat").read_text()
+        force = -float(re.findall(r"total force.*?\n\s*\n\s*(\S+)", dat)[-1])
+        stiffness = (force / W) / (STRETCH / L)
+    if stiffness == pytest.approx(clt_stiffness([90.0]), rel=0.01):
+        pytest.skip("this ccx applies the Abaqus include: docs/exports.md says it does not")
+    assert stiffness == pytest.approx(clt_stiffness([0.0]), rel=0.01)
 
 
 def test_a_dropped_ply_is_absent_where_ccx_computes(
