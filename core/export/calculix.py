@@ -22,9 +22,9 @@ What the file holds, for each covered element with label L (``<P>`` the prefix):
 A section names one orientation, so every element has its own section: grouping elements of
 equal thickness would not reduce their number. ``*ELSET`` ``<P>_COVERED`` / ``<P>_UNCOVERED``
 as in the Abaqus include; uncovered elements get no orientation and no section (the model gives
-them what it decides; ccx stops on an element without a section). The materials are the model's
-own ``*MATERIAL`` cards, named here. Lengths in mm, angles in degrees. Include it after the
-elements (``*INCLUDE, INPUT=drape_calculix.inp``).
+them what it decides; ccx stops on a shell without a section, "first thickness ... is zero").
+The materials are the model's own ``*MATERIAL`` cards, named here. Lengths in mm, angles in
+degrees. Include it after the elements (``*INCLUDE, INPUT=drape_calculix.inp``).
 """
 
 from __future__ import annotations
