@@ -44,6 +44,7 @@ EXPORTERS: tuple[tuple[str, str], ...] = (
     ("abaqus_include", "preform.export.export_steps:EXPORTERS"),
     ("lsdyna_include", "preform.export.export_steps:EXPORTERS"),
     ("ansys_macro", "preform.export.export_steps:EXPORTERS"),
+    ("calculix_include", "preform.export.export_steps:EXPORTERS"),
     ("cut_pattern", "preform.export.export_steps:EXPORTERS"),
 )
 

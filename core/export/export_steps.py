@@ -9,6 +9,7 @@ cutting pattern. Outputs a scene can ask for:
 | ``abaqus_include`` | ``drape_abaqus.inc`` | ``export.mesh`` |
 | ``lsdyna_include`` | ``drape_lsdyna.k`` (``export.lsdyna_form``: beta or composite) | ``export.mesh`` |
 | ``ansys_macro`` | ``drape_ansys.mac`` (LOCAL + ESYS, two-layer section per element) | ``export.mesh`` |
+| ``calculix_include`` | ``drape_calculix.inp`` (explicit *ORIENTATION + *SHELL SECTION per element) | ``export.mesh`` |
 | ``cut_pattern`` | ``cut_pattern.dxf``, ``.svg``, ``.csv`` (mm; darts, cuts) | the drape |
 
 Status: elements of the mesh the drape does not cover make the case ``partial`` (the share of
@@ -187,6 +188,21 @@ def write_ansys_step(ctx: CaseContext) -> dict[str, Any]:
     return {"ansys_macro": "drape_ansys.mac"}
 
 
+def write_calculix_step(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.calculix import write_calculix_include
+
+    try:
+        write_calculix_include(
+            ctx.products["mesh_mapping"],
+            ctx.case_dir / "drape_calculix.inp",
+            prefix=export_options(ctx).prefix,
+            title=f"{ctx.fabric.name}, scene {ctx.scene.name}",
+        )
+    except ValueError as error:
+        raise CaseFailure(f"calculix_include: {error}") from None
+    return {"calculix_include": "drape_calculix.inp"}
+
+
 def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
     from preform.drape.steps import scene_part
     from preform.export.cut_pattern import (
@@ -288,6 +304,16 @@ EXPORTERS = [
         write_ansys_step,
         "drape_ansys.mac: APDL element systems (u fibres), two-layer sections (thickness, "
         "v fibres), components",
+        writes_files=True,
+    ),
+    Step(
+        "calculix_include",
+        ("calculix_include",),
+        ("mesh_mapping",),
+        "1",
+        write_calculix_step,
+        "drape_calculix.inp: explicit *ORIENTATION and *SHELL SECTION per covered element "
+        "(what CalculiX applies), element sets",
         writes_files=True,
     ),
     Step(

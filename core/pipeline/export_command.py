@@ -21,12 +21,13 @@ TARGETS: dict[str, str] = {
     "abaqus": "abaqus_include",
     "lsdyna": "lsdyna_include",
     "ansys": "ansys_macro",
+    "calculix": "calculix_include",
     "table": "element_table",
     "vtu": "element_vtu",
     "cut-pattern": "cut_pattern",
 }
 #: Targets that need the user's FE mesh.
-NEEDS_MESH = frozenset({"abaqus", "lsdyna", "ansys", "table", "vtu"})
+NEEDS_MESH = frozenset({"abaqus", "calculix", "lsdyna", "ansys", "table", "vtu"})
 
 
 class TargetChoice(click.Choice):
@@ -116,11 +117,11 @@ def export_command(
     no_bundled: bool,
     as_json: bool,
 ) -> None:
-    """Drape fabric NAME as the scene says and write TARGETS (abaqus, lsdyna, ansys, table,
-    vtu, cut-pattern).
+    """Drape fabric NAME as the scene says and write TARGETS (abaqus, calculix, lsdyna, ansys,
+    table, vtu, cut-pattern).
 
-    abaqus/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the scene's
-    export.mesh); cut-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
+    abaqus/calculix/lsdyna/ansys/table/vtu map the drape onto your shell mesh (--mesh, or the
+    scene's export.mesh); cut-pattern writes the cutting pattern (DXF, SVG, CSV). Everything is in
     mm and degrees. Elements the drape does not cover are listed in every file, never given a
     value. Exit code 0 when written (also when some elements are not covered), 1 when the
     drape or the export failed, 2 for bad input.
@@ -165,7 +166,7 @@ def export_command(
         if value is not None:
             section[key] = list(value) if isinstance(value, tuple) else value
     if NEEDS_MESH & set(targets) and "mesh" not in section:
-        fail(["error: abaqus, lsdyna, ansys, table and vtu need your mesh: --mesh FILE"])
+        fail(["error: abaqus, calculix, lsdyna, ansys, table and vtu need your mesh: --mesh FILE"])
     data["export"] = section
     data["outputs"] = [TARGETS[t] for t in dict.fromkeys(targets)]
     try:

@@ -6,6 +6,7 @@ field (shear, centroid, area, fibre directions, statuses) is known exactly.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any
 
@@ -146,9 +147,58 @@ def build_unit_cell(period: float = 0.008, samples: int = 17) -> UnitCell:
     return UnitCell(period=np.array([[period, 0.0], [0.0, period]]), tows=tuple(tows))
 
 
+def turn_net(result: DrapeResult, angle_deg: float) -> DrapeResult:
+    """``result`` turned by ``angle_deg`` about z (positions and fibre directions)."""
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return dataclasses.replace(
+        result,
+        nodes=result.nodes @ rot.T,
+        centroid=result.centroid @ rot.T,
+        fibre_u=result.fibre_u @ rot.T,
+        fibre_v=result.fibre_v @ rot.T,
+    )
+
+
+def s8r_grid(
+    nx: int, ny: int, place: Callable[[int, int], tuple[float, float, float]], elset: str
+) -> tuple[list[str], Callable[[int, int], int]]:
+    """``*NODE`` and ``*ELEMENT, TYPE=S8R`` lines of nx × ny quadratic shells (for ccx), and
+    the node label of grid point (i, j), 0 ≤ i ≤ 2 nx, 0 ≤ j ≤ 2 ny (odd i and j together:
+    an element's centre, no node). ``place(i, j)`` gives the node's position [mm]; elements
+    are labelled 1, 2, ... row by row, corners counter-clockwise seen from +z."""
+
+    def nid(i: int, j: int) -> int:
+        return 1 + i + j * (2 * nx + 1)
+
+    lines = ["*NODE"]
+    for j in range(2 * ny + 1):
+        for i in range(2 * nx + 1):
+            if not (i % 2 and j % 2):
+                lines.append(f"{nid(i, j)}, " + ", ".join(f"{v:.12g}" for v in place(i, j)))
+    lines.append(f"*ELEMENT, TYPE=S8R, ELSET={elset}")
+    for j in range(ny):
+        for i in range(nx):
+            i2, j2 = 2 * i, 2 * j
+            corners = (nid(i2, j2), nid(i2 + 2, j2), nid(i2 + 2, j2 + 2), nid(i2, j2 + 2))
+            mids = (nid(i2 + 1, j2), nid(i2 + 2, j2 + 1), nid(i2 + 1, j2 + 2), nid(i2, j2 + 1))
+            lines.append(", ".join(str(n) for n in (1 + i + j * nx, *corners, *mids)))
+    return lines, nid
+
+
+@pytest.fixture(scope="session")
+def quadratic_shells() -> Callable[..., tuple[list[str], Callable[[int, int], int]]]:
+    return s8r_grid
+
+
 @pytest.fixture
 def make_net() -> Callable[..., DrapeResult]:
     return build_net
+
+
+@pytest.fixture
+def turned_net() -> Callable[[DrapeResult, float], DrapeResult]:
+    return turn_net
 
 
 @pytest.fixture
