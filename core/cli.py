@@ -30,6 +30,11 @@ LIBRARY_OPTION_HELP = LIBRARY_HELP
 _echo_json = echo_json
 _fail = fail
 
+QUIET_HELP = "Print only the run's summary line and the cases that failed (errors)."
+VERBOSE_HELP = (
+    "Print every warning of every case in full, those about angles a search only sampled too."
+)
+
 EXIT_CODES_HELP = """\b
 Exit codes:
   0    done; no case failed
@@ -184,14 +189,25 @@ class PreformGroup(click.Group):
     is_flag=True,
     help="Show the traceback of an unexpected error (also PREFORM_DEBUG=1).",
 )
+@click.option("-q", "--quiet", is_flag=True, help=QUIET_HELP)
+@click.option("-v", "--verbose", is_flag=True, help=VERBOSE_HELP)
 @click.pass_context
-def cli(ctx: click.Context, debug: bool) -> None:
+def cli(ctx: click.Context, debug: bool, quiet: bool, verbose: bool) -> None:
     """preform: fabric-architecture-aware drape simulation for composite preforms.
 
     Lengths are in mm and angles in degrees everywhere you type or read them; --library adds
     to the bundled library (--no-bundled leaves it out); --json prints only JSON on stdout.
     """
     ctx.meta["preform.debug"] = debug
+    ctx.meta["preform.verbosity"] = _verbosity(quiet, verbose)
+
+
+def _verbosity(quiet: bool, verbose: bool, default: int = 0) -> int:
+    """-1 (``-q``), 0 or 1 (``-v``); ``default`` when neither is given (``preform.pipeline
+    .console``)."""
+    if quiet and verbose:
+        raise click.UsageError("-q/--quiet and -v/--verbose exclude each other")
+    return -1 if quiet else (1 if verbose else default)
 
 
 # -- plugins --------------------------------------------------------------------------------
@@ -561,6 +577,8 @@ def pipeline() -> None:
 )
 @click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
+@click.option("-q", "--quiet", is_flag=True, help=QUIET_HELP)
+@click.option("-v", "--verbose", is_flag=True, help=VERBOSE_HELP)
 @json_option
 def pipeline_run(
     libraries: tuple[str, ...],
@@ -577,6 +595,8 @@ def pipeline_run(
     batch_size: int | None = None,
     force: bool = False,
     explain: bool = False,
+    quiet: bool = False,
+    verbose: bool = False,
     as_json: bool = False,
 ) -> None:
     """Run every (material, scene) case.
@@ -590,7 +610,13 @@ def pipeline_run(
     skipped counts cases kept from an earlier run with identical inputs. Exit code 0 when no
     case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
     summary (every case with its status, reasons, warnings and error) and nothing else.
+
+    The console ends with the counts and one line per case that is not plainly ok, the
+    worst first (every warning in full: -v, summary.json, results.csv); -q keeps the counts
+    and the cases that failed.
     """
+    root = click.get_current_context().find_root()
+    verbosity = _verbosity(quiet, verbose, default=root.meta.get("preform.verbosity", 0))
     # starting the workers, importing the pipeline's modules, reading the library and the
     # scenes and planning the cases is start-up: no garbage collection meanwhile
     # (preform.collector)
@@ -617,7 +643,7 @@ def pipeline_run(
 
         host = _host()
         lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
-        for warning in lib.warnings:
+        for warning in lib.warnings if verbosity >= 0 else ():
             click.echo(f"warning: {warning}", err=True)
         scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
         loaded = []
@@ -694,48 +720,17 @@ def pipeline_run(
         _fail([f"error: {exc}; nothing was run."])
     except OSError as exc:  # the results directory became unwritable (disk full, ...)
         _fail([f"error: could not write the results into {out}/: {exc}"], code=1)
-    for line in run_report_lines(report):
+    from preform.pipeline.console import PROBLEM_PREFIXES, run_report_lines
+
+    for line in run_report_lines(report, verbosity):
         # with --json, stdout holds the JSON only: the words go to stderr
-        problem = line.startswith(("FAILED", "TIMED OUT", "INTERRUPTED"))
+        problem = line.startswith(PROBLEM_PREFIXES)
         click.echo(line, err=as_json or problem)
     summary = run_summary(report)
     if as_json:
         _echo_json(summary)
     if summary["exit_code"]:
         sys.exit(summary["exit_code"])
-
-
-def run_report_lines(report: Any) -> list[str]:
-    """The end of a run in words: counts by status, then every case that is not plainly ok."""
-    from preform.pipeline.status import MEANING, CaseStatus
-
-    counts = report.counts()
-    lines = [
-        f"{len(report.results)} case(s) -> {report.out_dir}/: "
-        + ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-    ]
-    for r in report.results:
-        kept = " (kept from an earlier run)" if r.reused else ""
-        if r.status == CaseStatus.PARTIAL:
-            covered = r.results.get("covered_fraction")
-            share = f" covers {100 * covered:.1f} % of what the scene asked;" if covered else ""
-            lines.append(f"PARTIAL {r.case_id}{kept}:{share} " + "; ".join(r.reasons))
-        elif r.status == CaseStatus.FAILED:
-            lines.append(f"FAILED {r.case_id}: {r.error}")
-        elif r.status == CaseStatus.TIMED_OUT:
-            lines.append(f"TIMED OUT {r.case_id}: {r.error}")
-        elif r.status == CaseStatus.INTERRUPTED:
-            lines.append(f"INTERRUPTED {r.case_id}: not finished; rerun to compute it")
-        for warning in r.warnings:
-            lines.append(f"WARNING {r.case_id}{kept}: {warning}")
-    shown = sorted({CaseStatus(r.status) for r in report.results} - {CaseStatus.OK})
-    if shown:
-        lines.append("status: " + "; ".join(f"{s.value} = {MEANING[s]}" for s in shown))
-    if report.interrupted:
-        lines.append(
-            "INTERRUPTED: finished cases are kept; run the same command again to do the rest."
-        )
-    return lines
 
 
 for _name, (_target, _short_help) in LAZY_COMMANDS.items():

@@ -30,7 +30,7 @@ from preform.drape.verdict import (
     coverage,
     first_nonfinite_energy,
     law_range,
-    shear_limit_warnings,
+    shear_limit_notes,
 )
 from preform.drape.wrinkling import Wrinkling, wrinkle_limits, wrinkling
 from preform.pipeline import fidelity
@@ -271,16 +271,16 @@ def judge_drape(
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
-        ctx.warn(cover.fold_warning())
+        ctx.warn(cover.fold_warning(), cause="fold zones")
     law = ctx.products["shear_law"]
     block = getattr(ctx.fabric, "shear_law", None)
     if block is None and hasattr(ctx.fabric, "default_shear_law"):
         block = ctx.fabric.default_shear_law()
     limits = law_range(law, block)
-    messages, counts = shear_limit_warnings(result, energy, limits)
+    notes, counts = shear_limit_notes(result, energy, limits)
     ctx.summary.update(counts)
-    for message in messages:
-        ctx.warn(message)
+    for message, about in notes:
+        ctx.warn(message, **about)
     wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
     judge_wrinkling(ctx, wrinkles, cover.covered_fraction)
 

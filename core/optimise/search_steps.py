@@ -252,7 +252,8 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
                 f"the drape shears cells past {math.degrees(limits.packing):.1f}°, where the "
                 "law's fabric is jammed: E(α) there (up to "
                 f"{worst:.3g} J) is the law's continuation past that physical limit, not a "
-                "physical energy"
+                "physical energy",
+                scan=True,
             )
     ends = [e for e in (limits.data_positive, limits.data_negative) if e is not None]
     if ends:
@@ -265,7 +266,8 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
                 f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
                 f"the drape shears cells beyond the shear law's data range (up to "
                 f"{math.degrees(end):.1f}° in one sense at least): E(α) there rests on the "
-                "law's continuation past its data, not on measurements"
+                "law's continuation past its data, not on measurements",
+                scan=True,
             )
 
 
@@ -276,15 +278,22 @@ def _warn_accounting(ctx: CaseContext, search: AngleSearchResult) -> None:
             f"{1e6 * search.excluded_fabric_area_m2:.0f} mm² of the ply's fabric is left out "
             "of every angle's energy because the net fails to drape it (a fold zone, or fabric "
             "not reached) at some compared angle: the angles are compared on the fabric they "
-            "all drape, so no angle looks cheap because part of the part dropped out of its sum"
+            "all drape, so no angle looks cheap because part of the part dropped out of its sum",
+            cause="fabric left out of the comparison",
         )
     jumps = search.discontinuities
     if jumps:
         shown = "; ".join(jump.words() for jump in jumps[:4])
         more = f"; and {len(jumps) - 4} more" if len(jumps) > 4 else ""
-        ctx.warn(f"E(α) jumps at {len(jumps)} place(s) (no fit straddles one): {shown}{more}")
+        ctx.warn(
+            f"E(α) jumps at {len(jumps)} place(s) (no fit straddles one): {shown}{more}",
+            scan=True,
+        )
     if search.optimum_from != "fit":
-        ctx.warn(f"the least-energy generator angle is a sample, not a fit: {search.optimum_note}")
+        ctx.warn(
+            f"the least-energy generator angle is a sample, not a fit: {search.optimum_note}",
+            cause="optimum not resolved",
+        )
 
 
 def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
@@ -293,7 +302,8 @@ def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
         ctx.warn(
             f"the least-energy generator angle {search.optimum_angle_deg:.4g}° lies at an end "
             f"of the searched range [{lo:.4g}°, {hi:.4g}°]: the true optimum may lie outside "
-            "it; widen search.generator_angle_deg"
+            "it; widen search.generator_angle_deg",
+            cause="optimum at an end of the searched range",
         )
     if search.noise_limited:
         a, b = (math.degrees(v) for v in search.bracket_rad)
@@ -301,7 +311,8 @@ def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
             "the angle refinement stopped noise-limited: the energy's staircase (rim cells "
             "appearing and disappearing as α changes) hid its curvature, so the optimum "
             f"{search.optimum_angle_deg:.4g}° is resolved only to [{a:.4g}°, {b:.4g}°]; a "
-            "finer node spacing resolves it better"
+            "finer node spacing resolves it better",
+            cause="optimum not resolved",
         )
 
 
@@ -326,7 +337,7 @@ def _judge_optimum_drape(
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
-        ctx.warn(cover.fold_warning())
+        ctx.warn(cover.fold_warning(), cause="fold zones")
     # the status rule on wrinkling, as the drape step gives it (preform.drape.wrinkling)
     result = evaluation.result
     counted = objective.counted(result)
