@@ -157,6 +157,9 @@ def run_report_lines(report: RunReport, verbosity: int = NORMAL) -> list[str]:
         if line is None or (verbosity <= QUIET and not line.startswith(PROBLEM_PREFIXES)):
             continue
         lines.append(line)
+    shown = sorted({CaseStatus(r.status) for r in report.results} - {CaseStatus.OK})
+    if shown and verbosity > QUIET:  # what a status means, on the summary line: no extra line
+        summary += " (" + "; ".join(f"{s.value} = {MEANING[s]}" for s in shown) + ")"
     if verbosity > QUIET:
         warned = sum(1 for line in lines if not line.startswith((*PROBLEM_PREFIXES, "PARTIAL")))
         if warned:
