@@ -280,8 +280,27 @@ def materials_list(libraries: tuple[str, ...], no_bundled: bool, as_json: bool) 
     if as_json:
         _echo_json(rows)
         return
-    for row in rows:
-        click.echo(f"{row['name']:<24} {row['architecture']:<12} {row['origin']}")
+    shown = [(r["name"], r["architecture"], shown_origin(lib.origins[r["name"]])) for r in rows]
+    widths = [max([len(h), *(len(row[i]) for row in shown)]) for i, h in enumerate(LIST_HEADER)]
+    for row in [LIST_HEADER, *shown]:
+        click.echo("  ".join(f"{v:<{w}}" for v, w in zip(row, widths, strict=True)).rstrip())
+
+
+#: The columns of ``materials list`` (``--json`` gives each fabric's full origin and source).
+LIST_HEADER = ("NAME", "ARCHITECTURE", "LIBRARY")
+
+
+def shown_origin(origin: Any) -> str:
+    """Where a fabric was defined, without the install path: ``bundled warpknit.yaml:43``
+    for the bundled library, else the file relative to the current directory when it lies
+    below it (as the user named it), else as it is; with the entry's line."""
+    from preform.library import bundled_library_dir
+
+    file = Path(origin.file)
+    for base, prefix in ((bundled_library_dir(), "bundled "), (Path.cwd(), "")):
+        with contextlib.suppress(ValueError, OSError):
+            return f"{prefix}{file.resolve().relative_to(base.resolve())}:{origin.line}"
+    return f"{file}:{origin.line}"
 
 
 def fabric_document(fabric: Any) -> dict[str, Any]:
@@ -333,7 +352,7 @@ def materials_show(name: str, libraries: tuple[str, ...], no_bundled: bool, as_j
 
     if "derived" in doc:
         doc["derived"] = rounded(doc["derived"])
-    click.echo(f"# {lib.origins[name]}")
+    click.echo(f"# {shown_origin(lib.origins[name])}")
     click.echo(f"# derived: {SHOWN_DIGITS} significant digits (--json: all)")
     click.echo(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True).rstrip())
 
@@ -527,7 +546,11 @@ def pipeline() -> None:
     "Default: the bundled default scene.",
 )
 @click.option(
-    "--materials", "materials_glob", default=None, help="Only fabrics whose name matches this glob."
+    "--materials",
+    "materials_glob",
+    multiple=True,
+    metavar="GLOB",
+    help="Only fabrics whose name matches this glob (repeatable: a fabric matching any).",
 )
 @click.option(
     "--fidelity",
@@ -585,7 +608,7 @@ def pipeline_run(
     extra_libraries: tuple[str, ...] = (),
     no_bundled: bool = False,
     scenes: tuple[str, ...] = (),
-    materials_glob: str | None = None,
+    materials_glob: tuple[str, ...] = (),
     fidelity: str | None = None,
     out_dir: str = "preform-results",
     engine: str = "process",
@@ -638,7 +661,12 @@ def pipeline_run(
             make_cases,
             run_cases,
         )
-        from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
+        from preform.pipeline.scene import (
+            SceneError,
+            default_scene_path,
+            missing_scene_message,
+            resolve_scene_path,
+        )
         from preform.pipeline.summary import run_summary
 
         host = _host()
@@ -646,6 +674,9 @@ def pipeline_run(
         for warning in lib.warnings if verbosity >= 0 else ():
             click.echo(f"warning: {warning}", err=True)
         scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
+        missing = [s for s, path in zip(scenes, scene_paths, strict=False) if not path.exists()]
+        if missing:
+            _fail([f"error: {missing_scene_message(s)}" for s in missing] + ["nothing was run."])
         loaded = []
         problems: list[Any] = []
         for path in scene_paths:
