@@ -336,17 +336,23 @@ def run_surface(ctx: CaseContext) -> dict[str, Any]:
     return {"surface": surface}
 
 
-def run_drape(ctx: CaseContext) -> dict[str, Any]:
-    surface = ctx.products["surface"]
-    settings = drape_settings(ctx.scene, surface)
-    knobs = record_knobs(ctx, surface)
-    # The energy fields use the law's tabulated surrogate unless the fidelity asks for the law
-    # itself (energy_table_step_deg 0): within its documented error, far cheaper per cell.
+def summed_law(ctx: CaseContext, knobs: fidelity.Knobs) -> Any:
+    """The law a drape's energy fields and ``total_energy_J`` are summed with: the law's
+    tabulated surrogate unless the fidelity asks for the law itself (energy_table_step_deg 0),
+    within its documented error and far cheaper per cell."""
     exact = ctx.products["shear_law"]
     with np.errstate(all="ignore"):
         law = surrogate(exact, knobs.energy_table_step_deg or None)
     if law is not exact and not law.finite:
         law = exact  # a non-finite law is reported by the law itself, at the angle it fails
+    return law
+
+
+def run_drape(ctx: CaseContext) -> dict[str, Any]:
+    surface = ctx.products["surface"]
+    settings = drape_settings(ctx.scene, surface)
+    knobs = record_knobs(ctx, surface)
+    law = summed_law(ctx, knobs)
     optimum = ctx.products.get("optimum")
     if optimum is not None:
         # the search may also have chosen the orientation, the start or curved generators
@@ -374,6 +380,7 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
         with np.errstate(all="ignore"):
             kinematic = energy_field(result, law)
+        # the same sums as the relaxation reported (preform.optimise.search_steps._run_relax)
         ctx.summary["kinematic_total_energy_J"] = kinematic.total_energy
         result = relaxed_result(result, np.asarray(relaxed, dtype=float), part)
         ctx.summary["result_net"] = "relaxed"

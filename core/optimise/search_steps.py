@@ -45,7 +45,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.steps import drape_settings, judge_wrinkling, record_knobs, start_problem
+from preform.drape.fields import energy_field
+from preform.drape.steps import (
+    drape_settings,
+    judge_wrinkling,
+    record_knobs,
+    relaxed_result,
+    start_problem,
+    summed_law,
+)
 from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
 from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.optimise.search import (
@@ -551,6 +559,10 @@ def _flag_curved_range(ctx: CaseContext, objective: DrapeObjective, curved: Any)
 def _run_relax(
     ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any], options: Mapping[str, Any]
 ) -> None:
+    """Relax the optimum's net (``preform.optimise.relax``) and keep it when it holds less
+    energy than the kinematic net, both summed as the drape step sums ``total_energy_J``: each
+    counted cell by its own share of the part, under the same law (issue 26: the relaxation's
+    objective holds every cell's kinematic share, so it is not the relaxed net's energy)."""
     from preform.optimise.relax import relax_net
 
     kinematic = objective.evaluate(
@@ -570,8 +582,29 @@ def _run_relax(
         max_iterations=int(options.get("max_iterations", 1500)),
     )
     ctx.summary.update(relaxed.summary())
-    # The drape step exports the relaxed net when it drapes the same kinematic net.
-    optimum["relaxed_nodes"] = relaxed.nodes
+    law = summed_law(ctx, record_knobs(ctx, objective.surface))
+    part = objective.drape_kwargs.get("trim")
+    net = relaxed_result(kinematic.result, relaxed.nodes, part)
+    with np.errstate(all="ignore"):
+        before = energy_field(kinematic.result, law).total_energy
+        after = energy_field(net, law).total_energy
+    kept = after < before
+    ctx.summary.update(
+        relaxed_energy_J=after,
+        relaxed_kinematic_energy_J=before,
+        relaxed_relative_saving=1.0 - after / before if before > 0 else 0.0,
+        relaxed_kept=kept,
+    )
+    if kept:
+        # The drape step exports the relaxed net when it drapes the same kinematic net.
+        optimum["relaxed_nodes"] = relaxed.nodes
+    else:
+        ctx.warn(
+            f"the relaxed net holds {after:.6g} J, not less than the kinematic drape's "
+            f"{before:.6g} J (each cell by its own share of the part): the result is the "
+            "kinematic net",
+            cause="relaxation saved nothing",
+        )
 
 
 def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:
