@@ -364,3 +364,40 @@ def test_a_relaxation_that_saves_nothing_leaves_the_kinematic_net(sandbox, tmp_p
     assert summary["result_net"] == "kinematic"
     assert summary["total_energy_J"] == summary["relaxed_kinematic_energy_J"]
     assert any("the result is the kinematic net" in w for w in ctx.warnings)
+
+
+def test_a_curved_saving_resting_on_no_data_is_not_claimed(sandbox, tmp_path):
+    """E-BX-318's law holds its 60° value past its data: curved generators "save" energy by
+    shearing cells past 60°. When more than 1 % of the part's fabric lies there, the saving is
+    said, with that share, but not claimed, and the straight generators stay the result."""
+    lib = sandbox.library(bundled=True)
+    scene, _ = load_scene(
+        coarse_scene(
+            tmp_path,
+            curved_generators={"terms": 2, "mirror_families": True, "max_drapes": 40},
+        ),
+        sandbox.registry,
+    )
+    ctx = CaseContext(
+        fabric=lib.fabric("E-BX-318"), scene=scene, registry=sandbox.registry,
+        case_dir=tmp_path,
+    )  # fmt: skip
+    steps = {s.name: s for s in sandbox.registry.all_steps()}
+    for name in ("surface", "shear_law", "energy_vs_angle", "optimum"):
+        ctx.products.update(steps[name].run(ctx))
+    summary = ctx.summary
+    share = summary["curved_area_share_outside_law_data"]
+    print(
+        share, summary["curved_relative_saving"], summary["curved_max_abs_shear_deg"], ctx.warnings
+    )
+    assert share > search_steps.CURVED_UNMEASURED_SHARE_MAX
+    assert summary["curved_relative_saving"] > 0.05 and summary["curved_max_abs_shear_deg"] > 60
+    assert summary["curved_saving_claimed"] is False
+    optimum = ctx.products["optimum"]
+    assert optimum.get("generators") is None
+    assert optimum["generator_angle_rad"] == pytest.approx(
+        math.radians(summary["optimum_generator_angle_deg"])
+    )
+    (said,) = [w for w in ctx.warnings if "no saving is claimed for curved generators" in w]
+    assert f"{100 * share:.2g} % of the part's fabric" in said
+    assert f"{100 * summary['curved_relative_saving']:.3g} %" in said
