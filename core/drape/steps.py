@@ -332,7 +332,7 @@ def run_surface(ctx: CaseContext) -> dict[str, Any]:
         # what was repaired, and what a raised threshold let through unrepaired
         said = [*hygiene.repairs(), *hygiene.cautions()] if hygiene is not None else []
         for line in said:
-            ctx.warn(f"tool mesh: {line}")
+            ctx.warn(f"tool mesh: {line}", cause="tool mesh")
     return {"surface": surface}
 
 

@@ -327,6 +327,22 @@ def test_a_folding_tool_says_how_its_angles_were_compared(sandbox, tmp_path):
     assert "E(α) jumps at" in warnings
 
 
+def searched(
+    sandbox: Any, tmp_path: Path, fabric: str, then: tuple[str, ...] = (), **search: Any
+) -> CaseContext:
+    """The case context of ``fabric`` on the coarse scene with ``search``, after its search
+    (and the steps ``then``)."""
+    scene, _ = load_scene(coarse_scene(tmp_path, **search), sandbox.registry)
+    lib = sandbox.library(bundled=True)
+    ctx = CaseContext(
+        fabric=lib.fabric(fabric), scene=scene, registry=sandbox.registry, case_dir=tmp_path
+    )
+    steps = {s.name: s for s in sandbox.registry.all_steps()}
+    for name in ("surface", "shear_law", "energy_vs_angle", "optimum", *then):
+        ctx.products.update(steps[name].run(ctx))
+    return ctx
+
+
 def test_a_relaxation_that_saves_nothing_leaves_the_kinematic_net(sandbox, tmp_path, monkeypatch):
     """A relaxed net holding no less energy than the kinematic one (here: the kinematic
     nodes themselves) is not the result; the case says so."""
@@ -342,22 +358,14 @@ def test_a_relaxation_that_saves_nothing_leaves_the_kinematic_net(sandbox, tmp_p
         return dataclasses.replace(done, nodes=kept)
 
     monkeypatch.setattr(relax, "relax_net", unmoved)
-    lib = sandbox.library(bundled=True)
-    scene, _ = load_scene(
-        coarse_scene(
-            tmp_path,
-            generator_angle_deg={"min": 60, "max": 120, "step": 15},
-            relax={"max_rounds": 1, "max_iterations": 5},
-        ),
-        sandbox.registry,
+    ctx = searched(
+        sandbox,
+        tmp_path,
+        "plain-weave-150",
+        ("drape",),
+        generator_angle_deg={"min": 60, "max": 120, "step": 15},
+        relax={"max_rounds": 1, "max_iterations": 5},
     )
-    ctx = CaseContext(
-        fabric=lib.fabric("plain-weave-150"), scene=scene, registry=sandbox.registry,
-        case_dir=tmp_path,
-    )  # fmt: skip
-    steps = {s.name: s for s in sandbox.registry.all_steps()}
-    for name in ("surface", "shear_law", "energy_vs_angle", "optimum", "drape"):
-        ctx.products.update(steps[name].run(ctx))
     summary = ctx.summary
     assert summary["relaxed_kept"] is False and summary["relaxed_relative_saving"] == 0.0
     assert "relaxed_nodes" not in ctx.products["optimum"]
@@ -370,26 +378,14 @@ def test_a_curved_saving_resting_on_no_data_is_not_claimed(sandbox, tmp_path):
     """E-BX-318's law holds its 60° value past its data: curved generators "save" energy by
     shearing cells past 60°. When more than 1 % of the part's fabric lies there, the saving is
     said, with that share, but not claimed, and the straight generators stay the result."""
-    lib = sandbox.library(bundled=True)
-    scene, _ = load_scene(
-        coarse_scene(
-            tmp_path,
-            curved_generators={"terms": 2, "mirror_families": True, "max_drapes": 40},
-        ),
-        sandbox.registry,
+    ctx = searched(
+        sandbox,
+        tmp_path,
+        "E-BX-318",
+        curved_generators={"terms": 2, "mirror_families": True, "max_drapes": 40},
     )
-    ctx = CaseContext(
-        fabric=lib.fabric("E-BX-318"), scene=scene, registry=sandbox.registry,
-        case_dir=tmp_path,
-    )  # fmt: skip
-    steps = {s.name: s for s in sandbox.registry.all_steps()}
-    for name in ("surface", "shear_law", "energy_vs_angle", "optimum"):
-        ctx.products.update(steps[name].run(ctx))
     summary = ctx.summary
     share = summary["curved_area_share_outside_law_data"]
-    print(
-        share, summary["curved_relative_saving"], summary["curved_max_abs_shear_deg"], ctx.warnings
-    )
     assert share > search_steps.CURVED_UNMEASURED_SHARE_MAX
     assert summary["curved_relative_saving"] > 0.05 and summary["curved_max_abs_shear_deg"] > 60
     assert summary["curved_saving_claimed"] is False
