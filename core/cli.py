@@ -30,9 +30,10 @@ LIBRARY_OPTION_HELP = LIBRARY_HELP
 _echo_json = echo_json
 _fail = fail
 
-QUIET_HELP = "Print only the run's summary line and the cases that failed (errors)."
+QUIET_HELP = "pipeline run: print only the summary line and the cases that failed (errors)."
 VERBOSE_HELP = (
-    "Print every warning of every case in full, those about angles a search only sampled too."
+    "pipeline run: print every warning of every case in full, those about angles a search "
+    "only sampled too."
 )
 
 EXIT_CODES_HELP = """\b
