@@ -153,7 +153,7 @@ def _scene_and_data(
     spec: Any, changes: Mapping[tuple[str, ...], Any]
 ) -> tuple[Scene, dict[str, Any]]:
     from preform.pipeline.overrides import changed_data, load_scene_changed, scene_from_mapping
-    from preform.pipeline.scene import Scene, resolve_scene_path
+    from preform.pipeline.scene import Scene, missing_scene_message, resolve_scene_path
 
     registry = _host().registry
     if isinstance(spec, Scene):
@@ -170,10 +170,7 @@ def _scene_and_data(
         )
     path = resolve_scene_path(os.fspath(spec))
     if not path.is_file():
-        raise FileNotFoundError(
-            f"no scene file {os.fspath(spec)!r} and no bundled scene of that name "
-            "(`preform scenes list`)"
-        )
+        raise FileNotFoundError(missing_scene_message(os.fspath(spec)))
     return load_scene_changed(path, registry, changes)
 
 

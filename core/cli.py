@@ -30,6 +30,12 @@ LIBRARY_OPTION_HELP = LIBRARY_HELP
 _echo_json = echo_json
 _fail = fail
 
+QUIET_HELP = "pipeline run: print only the summary line and the cases that failed (errors)."
+VERBOSE_HELP = (
+    "pipeline run: print every warning of every case in full, those about angles a search "
+    "only sampled too."
+)
+
 EXIT_CODES_HELP = """\b
 Exit codes:
   0    done; no case failed
@@ -184,14 +190,25 @@ class PreformGroup(click.Group):
     is_flag=True,
     help="Show the traceback of an unexpected error (also PREFORM_DEBUG=1).",
 )
+@click.option("-q", "--quiet", is_flag=True, help=QUIET_HELP)
+@click.option("-v", "--verbose", is_flag=True, help=VERBOSE_HELP)
 @click.pass_context
-def cli(ctx: click.Context, debug: bool) -> None:
+def cli(ctx: click.Context, debug: bool, quiet: bool, verbose: bool) -> None:
     """preform: fabric-architecture-aware drape simulation for composite preforms.
 
     Lengths are in mm and angles in degrees everywhere you type or read them; --library adds
     to the bundled library (--no-bundled leaves it out); --json prints only JSON on stdout.
     """
     ctx.meta["preform.debug"] = debug
+    ctx.meta["preform.verbosity"] = _verbosity(quiet, verbose)
+
+
+def _verbosity(quiet: bool, verbose: bool, default: int = 0) -> int:
+    """-1 (``-q``), 0 or 1 (``-v``); ``default`` when neither is given (``preform.pipeline
+    .console``)."""
+    if quiet and verbose:
+        raise click.UsageError("-q/--quiet and -v/--verbose exclude each other")
+    return -1 if quiet else (1 if verbose else default)
 
 
 # -- plugins --------------------------------------------------------------------------------
@@ -264,8 +281,27 @@ def materials_list(libraries: tuple[str, ...], no_bundled: bool, as_json: bool) 
     if as_json:
         _echo_json(rows)
         return
-    for row in rows:
-        click.echo(f"{row['name']:<24} {row['architecture']:<12} {row['origin']}")
+    shown = [(r["name"], r["architecture"], shown_origin(lib.origins[r["name"]])) for r in rows]
+    widths = [max([len(h), *(len(row[i]) for row in shown)]) for i, h in enumerate(LIST_HEADER)]
+    for row in [LIST_HEADER, *shown]:
+        click.echo("  ".join(f"{v:<{w}}" for v, w in zip(row, widths, strict=True)).rstrip())
+
+
+#: The columns of ``materials list`` (``--json`` gives each fabric's full origin and source).
+LIST_HEADER = ("NAME", "ARCHITECTURE", "LIBRARY")
+
+
+def shown_origin(origin: Any) -> str:
+    """Where a fabric was defined, without the install path: ``bundled warpknit.yaml:43``
+    for the bundled library, else the file relative to the current directory when it lies
+    below it (as the user named it), else as it is; with the entry's line."""
+    from preform.library import bundled_library_dir
+
+    file = Path(origin.file)
+    for base, prefix in ((bundled_library_dir(), "bundled "), (Path.cwd(), "")):
+        with contextlib.suppress(ValueError, OSError):
+            return f"{prefix}{file.resolve().relative_to(base.resolve())}:{origin.line}"
+    return f"{file}:{origin.line}"
 
 
 def fabric_document(fabric: Any) -> dict[str, Any]:
@@ -317,7 +353,7 @@ def materials_show(name: str, libraries: tuple[str, ...], no_bundled: bool, as_j
 
     if "derived" in doc:
         doc["derived"] = rounded(doc["derived"])
-    click.echo(f"# {lib.origins[name]}")
+    click.echo(f"# {shown_origin(lib.origins[name])}")
     click.echo(f"# derived: {SHOWN_DIGITS} significant digits (--json: all)")
     click.echo(yaml.safe_dump(doc, sort_keys=False, allow_unicode=True).rstrip())
 
@@ -511,7 +547,11 @@ def pipeline() -> None:
     "Default: the bundled default scene.",
 )
 @click.option(
-    "--materials", "materials_glob", default=None, help="Only fabrics whose name matches this glob."
+    "--materials",
+    "materials_glob",
+    multiple=True,
+    metavar="GLOB",
+    help="Only fabrics whose name matches this glob (repeatable: a fabric matching any).",
 )
 @click.option(
     "--fidelity",
@@ -561,13 +601,15 @@ def pipeline() -> None:
 )
 @click.option("--force", is_flag=True, help="Redo cases that already succeeded.")
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
+@click.option("-q", "--quiet", is_flag=True, help=QUIET_HELP)
+@click.option("-v", "--verbose", is_flag=True, help=VERBOSE_HELP)
 @json_option
 def pipeline_run(
     libraries: tuple[str, ...],
     extra_libraries: tuple[str, ...] = (),
     no_bundled: bool = False,
     scenes: tuple[str, ...] = (),
-    materials_glob: str | None = None,
+    materials_glob: tuple[str, ...] = (),
     fidelity: str | None = None,
     out_dir: str = "preform-results",
     engine: str = "process",
@@ -577,6 +619,8 @@ def pipeline_run(
     batch_size: int | None = None,
     force: bool = False,
     explain: bool = False,
+    quiet: bool = False,
+    verbose: bool = False,
     as_json: bool = False,
 ) -> None:
     """Run every (material, scene) case.
@@ -590,7 +634,13 @@ def pipeline_run(
     skipped counts cases kept from an earlier run with identical inputs. Exit code 0 when no
     case failed or timed out, 1 otherwise, 130 when interrupted. --json prints the run's
     summary (every case with its status, reasons, warnings and error) and nothing else.
+
+    The console ends with the counts and one line per case that is not plainly ok, the
+    worst first (every warning in full: -v, summary.json, results.csv); -q keeps the counts
+    and the cases that failed.
     """
+    root = click.get_current_context().find_root()
+    verbosity = _verbosity(quiet, verbose, default=root.meta.get("preform.verbosity", 0))
     # starting the workers, importing the pipeline's modules, reading the library and the
     # scenes and planning the cases is start-up: no garbage collection meanwhile
     # (preform.collector)
@@ -612,14 +662,22 @@ def pipeline_run(
             make_cases,
             run_cases,
         )
-        from preform.pipeline.scene import SceneError, default_scene_path, resolve_scene_path
+        from preform.pipeline.scene import (
+            SceneError,
+            default_scene_path,
+            missing_scene_message,
+            resolve_scene_path,
+        )
         from preform.pipeline.summary import run_summary
 
         host = _host()
         lib = load_library_or_exit((*libraries, *extra_libraries), bundled=not no_bundled)
-        for warning in lib.warnings:
+        for warning in lib.warnings if verbosity >= 0 else ():
             click.echo(f"warning: {warning}", err=True)
         scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
+        missing = [s for s, path in zip(scenes, scene_paths, strict=False) if not path.exists()]
+        if missing:
+            _fail([f"error: {missing_scene_message(s)}" for s in missing] + ["nothing was run."])
         loaded = []
         problems: list[Any] = []
         for path in scene_paths:
@@ -694,48 +752,17 @@ def pipeline_run(
         _fail([f"error: {exc}; nothing was run."])
     except OSError as exc:  # the results directory became unwritable (disk full, ...)
         _fail([f"error: could not write the results into {out}/: {exc}"], code=1)
-    for line in run_report_lines(report):
+    from preform.pipeline.console import PROBLEM_PREFIXES, run_report_lines
+
+    for line in run_report_lines(report, verbosity):
         # with --json, stdout holds the JSON only: the words go to stderr
-        problem = line.startswith(("FAILED", "TIMED OUT", "INTERRUPTED"))
+        problem = line.startswith(PROBLEM_PREFIXES)
         click.echo(line, err=as_json or problem)
     summary = run_summary(report)
     if as_json:
         _echo_json(summary)
     if summary["exit_code"]:
         sys.exit(summary["exit_code"])
-
-
-def run_report_lines(report: Any) -> list[str]:
-    """The end of a run in words: counts by status, then every case that is not plainly ok."""
-    from preform.pipeline.status import MEANING, CaseStatus
-
-    counts = report.counts()
-    lines = [
-        f"{len(report.results)} case(s) -> {report.out_dir}/: "
-        + ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-    ]
-    for r in report.results:
-        kept = " (kept from an earlier run)" if r.reused else ""
-        if r.status == CaseStatus.PARTIAL:
-            covered = r.results.get("covered_fraction")
-            share = f" covers {100 * covered:.1f} % of what the scene asked;" if covered else ""
-            lines.append(f"PARTIAL {r.case_id}{kept}:{share} " + "; ".join(r.reasons))
-        elif r.status == CaseStatus.FAILED:
-            lines.append(f"FAILED {r.case_id}: {r.error}")
-        elif r.status == CaseStatus.TIMED_OUT:
-            lines.append(f"TIMED OUT {r.case_id}: {r.error}")
-        elif r.status == CaseStatus.INTERRUPTED:
-            lines.append(f"INTERRUPTED {r.case_id}: not finished; rerun to compute it")
-        for warning in r.warnings:
-            lines.append(f"WARNING {r.case_id}{kept}: {warning}")
-    shown = sorted({CaseStatus(r.status) for r in report.results} - {CaseStatus.OK})
-    if shown:
-        lines.append("status: " + "; ".join(f"{s.value} = {MEANING[s]}" for s in shown))
-    if report.interrupted:
-        lines.append(
-            "INTERRUPTED: finished cases are kept; run the same command again to do the rest."
-        )
-    return lines
 
 
 for _name, (_target, _short_help) in LAZY_COMMANDS.items():

@@ -20,6 +20,12 @@ if TYPE_CHECKING:
     from preform.registry import Registry
 
 
+#: Key of a case's summary (summary.json) holding what each warning is about: a list of
+#: ``{"warning": index into warnings, "cause", "scan", "area_share", "energy_share"}``, set by
+#: :meth:`CaseContext.warn`; the console groups and orders a case's warnings by it.
+WARNING_CAUSES = "warning_causes"
+
+
 @dataclass
 class CaseContext:
     """What a step sees while one (material, scene) case runs."""
@@ -59,10 +65,35 @@ class CaseContext:
                 value if previous is None else min(float(previous), value)
             )
 
-    def warn(self, message: str) -> None:
-        """Say something the user must know about this case's result, in words."""
-        if message not in self.warnings:
-            self.warnings.append(message)
+    def warn(
+        self,
+        message: str,
+        *,
+        cause: str | None = None,
+        area_share: float | None = None,
+        energy_share: float | None = None,
+        scan: bool = False,
+    ) -> None:
+        """Say something the user must know about this case's result, in words.
+
+        Every warning goes in full to summary.json and the tables. The console's end of a
+        run gives each case one line, naming each ``cause`` once (a few words that read after
+        "N % of the part": "past jamming"; warnings of one cause are counted together) with
+        ``area_share`` (of the part's area it concerns) and ``energy_share`` (of the case's
+        energy) [-, 0..1], the worst first (``preform.pipeline.console``). ``scan``: about
+        angles a search only sampled, not the result it chose; shown with ``-v`` only.
+        """
+        if message in self.warnings:
+            return
+        self.warnings.append(message)
+        if cause is None and area_share is None and energy_share is None and not scan:
+            return
+        note: dict[str, Any] = {"warning": len(self.warnings) - 1, "cause": cause, "scan": scan}
+        if area_share is not None:
+            note["area_share"] = float(area_share)
+        if energy_share is not None:
+            note["energy_share"] = float(energy_share)
+        self.summary.setdefault(WARNING_CAUSES, []).append(note)
 
 
 #: A step's body: reads ``ctx.products`` (its requirements), returns what it provides.

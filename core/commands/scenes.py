@@ -105,13 +105,17 @@ def scenes_show(scene: str, as_json: bool) -> None:
     """A scene (bundled name or file): its YAML, the fidelity knobs in force and its plan."""
     from preform.pipeline import fidelity
     from preform.pipeline.planner import explain
-    from preform.pipeline.scene import SceneError, load_scene, resolve_scene_path
+    from preform.pipeline.scene import (
+        SceneError,
+        load_scene,
+        missing_scene_message,
+        resolve_scene_path,
+    )
 
     registry = _registry()
     path = resolve_scene_path(scene)
     if not path.is_file():
-        names = ", ".join(r["name"] for r in bundled_scenes())
-        fail([f"error: no scene file {scene!r} and no bundled scene of that name ({names})"])
+        fail([f"error: {missing_scene_message(scene)}"])
     try:
         loaded, data = load_scene(path, registry)
     except SceneError as exc:

@@ -30,7 +30,7 @@ from preform.drape.verdict import (
     coverage,
     first_nonfinite_energy,
     law_range,
-    shear_limit_warnings,
+    shear_limit_notes,
 )
 from preform.drape.wrinkling import Wrinkling, wrinkle_limits, wrinkling
 from preform.pipeline import fidelity
@@ -271,16 +271,16 @@ def judge_drape(
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
-        ctx.warn(cover.fold_warning())
+        ctx.warn(cover.fold_warning(), cause="fold zones")
     law = ctx.products["shear_law"]
     block = getattr(ctx.fabric, "shear_law", None)
     if block is None and hasattr(ctx.fabric, "default_shear_law"):
         block = ctx.fabric.default_shear_law()
     limits = law_range(law, block)
-    messages, counts = shear_limit_warnings(result, energy, limits)
+    notes, counts = shear_limit_notes(result, energy, limits)
     ctx.summary.update(counts)
-    for message in messages:
-        ctx.warn(message)
+    for message, about in notes:
+        ctx.warn(message, **about)
     wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
     judge_wrinkling(ctx, wrinkles, cover.covered_fraction)
 
@@ -332,21 +332,27 @@ def run_surface(ctx: CaseContext) -> dict[str, Any]:
         # what was repaired, and what a raised threshold let through unrepaired
         said = [*hygiene.repairs(), *hygiene.cautions()] if hygiene is not None else []
         for line in said:
-            ctx.warn(f"tool mesh: {line}")
+            ctx.warn(f"tool mesh: {line}", cause="tool mesh")
     return {"surface": surface}
+
+
+def summed_law(ctx: CaseContext, knobs: fidelity.Knobs) -> Any:
+    """The law a drape's energy fields and ``total_energy_J`` are summed with: the law's
+    tabulated surrogate unless the fidelity asks for the law itself (energy_table_step_deg 0),
+    within its documented error and far cheaper per cell."""
+    exact = ctx.products["shear_law"]
+    with np.errstate(all="ignore"):
+        law = surrogate(exact, knobs.energy_table_step_deg or None)
+    if law is not exact and not law.finite:
+        law = exact  # a non-finite law is reported by the law itself, at the angle it fails
+    return law
 
 
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
     surface = ctx.products["surface"]
     settings = drape_settings(ctx.scene, surface)
     knobs = record_knobs(ctx, surface)
-    # The energy fields use the law's tabulated surrogate unless the fidelity asks for the law
-    # itself (energy_table_step_deg 0): within its documented error, far cheaper per cell.
-    exact = ctx.products["shear_law"]
-    with np.errstate(all="ignore"):
-        law = surrogate(exact, knobs.energy_table_step_deg or None)
-    if law is not exact and not law.finite:
-        law = exact  # a non-finite law is reported by the law itself, at the angle it fails
+    law = summed_law(ctx, knobs)
     optimum = ctx.products.get("optimum")
     if optimum is not None:
         # the search may also have chosen the orientation, the start or curved generators
@@ -374,6 +380,7 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
         with np.errstate(all="ignore"):
             kinematic = energy_field(result, law)
+        # the same sums as the relaxation reported (preform.optimise.search_steps._run_relax)
         ctx.summary["kinematic_total_energy_J"] = kinematic.total_energy
         result = relaxed_result(result, np.asarray(relaxed, dtype=float), part)
         ctx.summary["result_net"] = "relaxed"

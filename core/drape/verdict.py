@@ -582,6 +582,12 @@ def _further_limits(law: ShearLaw) -> tuple[WrinkleLimit, ...]:
     return stated
 
 
+def _fraction(mask: BoolArray, area: FloatArray, counted: BoolArray) -> float:
+    """The share of the counted area under ``mask`` [-]."""
+    total = float(area[counted].sum())
+    return float(area[mask].sum()) / total if total > 0 else 0.0
+
+
 def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
     total = float(area[counted].sum())
     part = float(area[mask].sum())
@@ -595,8 +601,18 @@ def shear_limit_warnings(
     result: DrapeResult, energy: EnergyField, limits: LawRange
 ) -> tuple[list[str], dict[str, Any]]:
     """Sentences about the counted cells past the law's limits, and their counts for the
-    summary. Counted cells are those the energy sums (``energy_field``); their shares of area
-    and energy are of the part (a cut cell by its area inside it)."""
+    summary (``shear_limit_notes`` without what each is about)."""
+    notes, counts = shear_limit_notes(result, energy, limits)
+    return [message for message, _ in notes], counts
+
+
+def shear_limit_notes(
+    result: DrapeResult, energy: EnergyField, limits: LawRange
+) -> tuple[list[tuple[str, dict[str, Any]]], dict[str, Any]]:
+    """Sentences about the counted cells past the law's limits, each with what it is about
+    (``CaseContext.warn``'s ``cause``, ``area_share``, ``energy_share``), and their counts
+    for the summary. Counted cells are those the energy sums (``energy_field``); their shares
+    of area and energy are of the part (a cut cell by its area inside it)."""
     counted = result.valid & result.in_part
     gamma = np.where(counted, np.asarray(result.shear, dtype=float), 0.0)
     # Shares of the part: a cell cut by its edge counts by its area inside it.
@@ -604,16 +620,19 @@ def shear_limit_warnings(
     area = np.asarray(result.area, dtype=float) * weight
     density = np.asarray(energy.energy_density, dtype=float)
     total = float((density * result.node_spacing**2 * weight)[counted].sum())
-    messages: list[str] = []
+    messages: list[tuple[str, dict[str, Any]]] = []
     counts: dict[str, Any] = {}
     if limits.locking is not None:
         past = np.asarray(energy.past_locking, dtype=bool) & counted
         counts["cells_past_locking"] = int(np.count_nonzero(past))
         if past.any():
             messages.append(
-                f"{_share(past, area, counted)} are sheared past the locking angle "
-                f"{math.degrees(limits.locking):.1f}°: its tows touch and compact there (stiffer; "
-                "it wrinkles only past jamming)"
+                (
+                    f"{_share(past, area, counted)} are sheared past the locking angle "
+                    f"{math.degrees(limits.locking):.1f}°: its tows touch and compact there (stiffer; "
+                    "it wrinkles only past jamming)",
+                    {"cause": "past locking", "area_share": _fraction(past, area, counted)},
+                )
             )
     # Jamming and stitch failure are where the fabric would wrinkle (preform.drape.wrinkling):
     # said with their energy share, where and how far; the same numbers as the wrinkling block.
@@ -625,10 +644,17 @@ def shear_limit_warnings(
         if zone.cells:
             past = counted & zone.limit.past(gamma)
             messages.append(
-                f"{_share(past, area, counted)} are sheared past {zone.limit.name}: "
-                f"{zone.limit.consequence}, so their energy, {100 * zone.energy_share:.3g} % "
-                f"of the total {total:.3g} J, is not a physical energy but the law's "
-                f"continuation past that limit ({zone.where()})"
+                (
+                    f"{_share(past, area, counted)} are sheared past {zone.limit.name}: "
+                    f"{zone.limit.consequence}, so their energy, {100 * zone.energy_share:.3g} % "
+                    f"of the total {total:.3g} J, is not a physical energy but the law's "
+                    f"continuation past that limit ({zone.where()})",
+                    {
+                        "cause": cause.replace("_", " "),
+                        "area_share": zone.area_share,
+                        "energy_share": zone.energy_share,
+                    },
+                )
             )
     beyond_pos = (
         counted & (gamma > limits.data_positive)
@@ -655,7 +681,13 @@ def shear_limit_warnings(
                 "extrapolate": "extrapolates the fitted curve",
             }.get(limits.beyond or "", "is extrapolated")
             messages.append(
-                f"{_share(outside, area, counted)} are sheared beyond the shear law's data "
-                f"range ({' / '.join(ends)}), where the law {how}: their energy is not measured"
+                (
+                    f"{_share(outside, area, counted)} are sheared beyond the shear law's data "
+                    f"range ({' / '.join(ends)}), where the law {how}: their energy is not measured",
+                    {
+                        "cause": "beyond the law's data",
+                        "area_share": _fraction(outside, area, counted),
+                    },
+                )
             )
     return messages, counts

@@ -45,7 +45,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.steps import drape_settings, judge_wrinkling, record_knobs, start_problem
+from preform.drape.fields import energy_field
+from preform.drape.steps import (
+    drape_settings,
+    judge_wrinkling,
+    record_knobs,
+    relaxed_result,
+    start_problem,
+    summed_law,
+)
 from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
 from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.optimise.search import (
@@ -252,7 +260,8 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
                 f"the drape shears cells past {math.degrees(limits.packing):.1f}°, where the "
                 "law's fabric is jammed: E(α) there (up to "
                 f"{worst:.3g} J) is the law's continuation past that physical limit, not a "
-                "physical energy"
+                "physical energy",
+                scan=True,
             )
     ends = [e for e in (limits.data_positive, limits.data_negative) if e is not None]
     if ends:
@@ -265,7 +274,8 @@ def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
                 f"at generator angle(s) {_angles_text([p.generator_angle_deg for p in past])} "
                 f"the drape shears cells beyond the shear law's data range (up to "
                 f"{math.degrees(end):.1f}° in one sense at least): E(α) there rests on the "
-                "law's continuation past its data, not on measurements"
+                "law's continuation past its data, not on measurements",
+                scan=True,
             )
 
 
@@ -276,15 +286,22 @@ def _warn_accounting(ctx: CaseContext, search: AngleSearchResult) -> None:
             f"{1e6 * search.excluded_fabric_area_m2:.0f} mm² of the ply's fabric is left out "
             "of every angle's energy because the net fails to drape it (a fold zone, or fabric "
             "not reached) at some compared angle: the angles are compared on the fabric they "
-            "all drape, so no angle looks cheap because part of the part dropped out of its sum"
+            "all drape, so no angle looks cheap because part of the part dropped out of its sum",
+            cause="fabric left out of the comparison",
         )
     jumps = search.discontinuities
     if jumps:
         shown = "; ".join(jump.words() for jump in jumps[:4])
         more = f"; and {len(jumps) - 4} more" if len(jumps) > 4 else ""
-        ctx.warn(f"E(α) jumps at {len(jumps)} place(s) (no fit straddles one): {shown}{more}")
+        ctx.warn(
+            f"E(α) jumps at {len(jumps)} place(s) (no fit straddles one): {shown}{more}",
+            scan=True,
+        )
     if search.optimum_from != "fit":
-        ctx.warn(f"the least-energy generator angle is a sample, not a fit: {search.optimum_note}")
+        ctx.warn(
+            f"the least-energy generator angle is a sample, not a fit: {search.optimum_note}",
+            cause="optimum not resolved",
+        )
 
 
 def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
@@ -293,7 +310,8 @@ def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
         ctx.warn(
             f"the least-energy generator angle {search.optimum_angle_deg:.4g}° lies at an end "
             f"of the searched range [{lo:.4g}°, {hi:.4g}°]: the true optimum may lie outside "
-            "it; widen search.generator_angle_deg"
+            "it; widen search.generator_angle_deg",
+            cause="optimum at an end of the searched range",
         )
     if search.noise_limited:
         a, b = (math.degrees(v) for v in search.bracket_rad)
@@ -301,7 +319,8 @@ def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
             "the angle refinement stopped noise-limited: the energy's staircase (rim cells "
             "appearing and disappearing as α changes) hid its curvature, so the optimum "
             f"{search.optimum_angle_deg:.4g}° is resolved only to [{a:.4g}°, {b:.4g}°]; a "
-            "finer node spacing resolves it better"
+            "finer node spacing resolves it better",
+            cause="optimum not resolved",
         )
 
 
@@ -326,7 +345,7 @@ def _judge_optimum_drape(
     if not cover.complete:
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
-        ctx.warn(cover.fold_warning())
+        ctx.warn(cover.fold_warning(), cause="fold zones")
     # the status rule on wrinkling, as the drape step gives it (preform.drape.wrinkling)
     result = evaluation.result
     counted = objective.counted(result)
@@ -490,8 +509,8 @@ def _run_curved(
         ),
     )
     ctx.summary.update(result.summary())
-    _flag_curved_range(ctx, objective, result)
-    if result.relative_saving > 0:
+    claimed = _judge_curved_saving(ctx, objective, result)
+    if result.relative_saving > 0 and claimed:
         # The drape step drapes with these when it honours optimum["generators"].
         optimum.update(
             generators=result.generators,
@@ -500,16 +519,26 @@ def _run_curved(
         )
 
 
-def _flag_curved_range(ctx: CaseContext, objective: DrapeObjective, curved: Any) -> None:
-    """Flag a curved-generator optimum whose drape shears cells of the part beyond the law's
-    data (or packing) range: its saving then rests on the law's continuation (e.g. 72° where a
-    warp-knit law holds its 60° value), not on measurements."""
+#: Largest share of the part's fabric a curved-generator optimum may shear beyond the law's
+#: data (or packing) range for its saving to be claimed [-]: past it the saving rests on the
+#: law's continuation, not on measurements (issue 26: E-BX-318's 43.9 % came from cells
+#: sheared to 78° where its law holds its 60° value).
+CURVED_UNMEASURED_SHARE_MAX = 0.01
+
+
+def _judge_curved_saving(ctx: CaseContext, objective: DrapeObjective, curved: Any) -> bool:
+    """Whether a curved-generator optimum's saving is claimed: its drape shears at most
+    ``CURVED_UNMEASURED_SHARE_MAX`` of the part's fabric beyond the law's data (or packing)
+    range. The share is recorded next to the saving (``curved_area_share_outside_law_data``,
+    ``curved_saving_claimed``); a saving not claimed is said in words and the straight
+    generators stay the result."""
     evaluation = objective.evaluate(
         curved.generator_angle_rad, generators=curved.generators, keep_result=True
     )
     result = evaluation.result
     if result is None:
-        return
+        ctx.summary["curved_saving_claimed"] = False
+        return False
     counted = objective.counted(result)
     gamma = np.where(counted, result.shear, 0.0)
     ctx.summary["curved_max_abs_shear_deg"] = float(np.degrees(np.abs(gamma).max()))
@@ -525,21 +554,47 @@ def _flag_curved_range(ctx: CaseContext, objective: DrapeObjective, curved: Any)
     if limits.packing is not None:
         beyond |= counted & (np.abs(gamma) > limits.packing)
     count = int(np.count_nonzero(beyond))
+    # shares of the part's fabric: each counted cell by its share inside the part (d² each)
+    weight = np.asarray(result.part_weight, dtype=float)
+    share = float(weight[beyond].sum() / max(float(weight[counted].sum()), 1e-300))
+    claimed = share <= CURVED_UNMEASURED_SHARE_MAX
     ctx.summary["curved_cells_outside_law_data"] = count
-    if count:
-        share = float(result.part_weight[beyond].sum() / max(result.part_weight.sum(), 1e-300))
+    ctx.summary["curved_area_share_outside_law_data"] = share
+    ctx.summary["curved_saving_claimed"] = claimed
+    if not count:
+        return True
+    where = (
+        f"shears {count} cells ({100 * share:.2g} % of the part's fabric) beyond the shear "
+        f"law's data range, up to {ctx.summary['curved_max_abs_shear_deg']:.1f}°"
+    )
+    if claimed:
         ctx.warn(
-            f"the curved-generator optimum shears {count} cells ({100 * share:.2g} % of the "
-            f"part's fabric) beyond the shear law's data range, up to "
-            f"{ctx.summary['curved_max_abs_shear_deg']:.1f}°: its energy saving of "
-            f"{100 * curved.relative_saving:.3g} % rests on the law's continuation there, "
-            "not on measurements"
+            f"the curved-generator optimum saves {100 * curved.relative_saving:.3g} % of the "
+            f"energy and {where}: that much of the saving rests on the law's continuation "
+            "there, not on measurements",
+            cause="beyond the law's data",
+            area_share=share,
         )
+    else:
+        ctx.warn(
+            f"no saving is claimed for curved generators: their optimum {where}, more than "
+            f"{100 * CURVED_UNMEASURED_SHARE_MAX:g} % of it, where the energy is the law's "
+            f"continuation, not measurements (on it the saving would be "
+            f"{100 * curved.relative_saving:.3g} %, curved_relative_saving); the straight "
+            "generators stay the result",
+            cause="beyond the law's data under curved generators (their saving not claimed)",
+            area_share=share,
+        )
+    return claimed
 
 
 def _run_relax(
     ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any], options: Mapping[str, Any]
 ) -> None:
+    """Relax the optimum's net (``preform.optimise.relax``) and keep it when it holds less
+    energy than the kinematic net, both summed as the drape step sums ``total_energy_J``: each
+    counted cell by its own share of the part, under the same law (issue 26: the relaxation's
+    objective holds every cell's kinematic share, so it is not the relaxed net's energy)."""
     from preform.optimise.relax import relax_net
 
     kinematic = objective.evaluate(
@@ -559,8 +614,29 @@ def _run_relax(
         max_iterations=int(options.get("max_iterations", 1500)),
     )
     ctx.summary.update(relaxed.summary())
-    # The drape step exports the relaxed net when it drapes the same kinematic net.
-    optimum["relaxed_nodes"] = relaxed.nodes
+    law = summed_law(ctx, record_knobs(ctx, objective.surface))
+    part = objective.drape_kwargs.get("trim")
+    net = relaxed_result(kinematic.result, relaxed.nodes, part)
+    with np.errstate(all="ignore"):
+        before = energy_field(kinematic.result, law).total_energy
+        after = energy_field(net, law).total_energy
+    kept = after < before
+    ctx.summary.update(
+        relaxed_energy_J=after,
+        relaxed_kinematic_energy_J=before,
+        relaxed_relative_saving=1.0 - after / before if before > 0 else 0.0,
+        relaxed_kept=kept,
+    )
+    if kept:
+        # The drape step exports the relaxed net when it drapes the same kinematic net.
+        optimum["relaxed_nodes"] = relaxed.nodes
+    else:
+        ctx.warn(
+            f"the relaxed net holds {after:.6g} J, not less than the kinematic drape's "
+            f"{before:.6g} J (each cell by its own share of the part): the result is the "
+            "kinematic net",
+            cause="relaxation saved nothing",
+        )
 
 
 def write_energy_plot_png(ctx: CaseContext) -> dict[str, Any]:

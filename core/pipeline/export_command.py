@@ -128,7 +128,13 @@ def export_command(
     """
     from preform.commands.options import fabric_or_exit, load_library_or_exit
     from preform.pipeline.planner import PlanError, plan
-    from preform.pipeline.scene import SceneError, load_scene, resolve_scene_path, scene_from_data
+    from preform.pipeline.scene import (
+        SceneError,
+        load_scene,
+        missing_scene_message,
+        resolve_scene_path,
+        scene_from_data,
+    )
     from preform.pipeline.status import CaseFailure
     from preform.plugin_manager import default_host
     from preform.step import CaseContext
@@ -138,7 +144,7 @@ def export_command(
     fabric = fabric_or_exit(lib, name)
     scene_path = resolve_scene_path(scene_spec)
     if not scene_path.is_file():
-        fail([f"error: no scene file {scene_spec!r} and no bundled scene of that name"])
+        fail([f"error: {missing_scene_message(scene_spec)}"])
     try:
         _scene, data = load_scene(scene_path, host.registry)
     except SceneError as error:

@@ -365,13 +365,14 @@ def make_cases(
     scenes: Sequence[tuple[Scene, dict[str, Any]]],
     out_dir: Path,
     host: PluginHost,
-    materials_glob: str | None = None,
+    materials_glob: str | Sequence[str] | None = None,
     discover: bool = True,
     timeout_s: float | None = None,
 ) -> list[Case]:
     """Every (material, scene) case, in a stable order.
 
-    ``timeout_s`` is the run's case time limit; a scene's ``limits.case_timeout_s`` wins.
+    ``materials_glob``: a glob, or several (a fabric matching any of them is run); None or
+    empty runs every fabric the scene takes. ``timeout_s`` is the run's case time limit; a scene's ``limits.case_timeout_s`` wins.
     """
     cases = []
     plugin_modules = tuple(
@@ -380,10 +381,11 @@ def make_cases(
         if host.records[name].origin != "entry point"
     )
     folders: dict[str, str] = {}
+    globs = [materials_glob] if isinstance(materials_glob, str) else list(materials_glob or ())
     for scene, scene_data in scenes:
         limit = scene.limits.case_timeout_s or timeout_s
         for fabric in library:
-            if materials_glob and not fnmatch.fnmatchcase(fabric.name, materials_glob):
+            if globs and not any(fnmatch.fnmatchcase(fabric.name, g) for g in globs):
                 continue
             if scene.materials and not fnmatch.fnmatchcase(fabric.name, scene.materials):
                 continue

@@ -368,6 +368,19 @@ def resolve_scene_path(spec: str) -> Path:
     return path
 
 
+def bundled_scene_names() -> list[str]:
+    """The names of the bundled scenes, sorted (``--scene NAME``)."""
+    return sorted(path.stem for path in bundled_scene_dir().glob("*.yaml"))
+
+
+def missing_scene_message(spec: str) -> str:
+    """Why ``spec`` names no scene, with the bundled scenes' names to choose from."""
+    return (
+        f"no scene file {spec!r} and no bundled scene of that name; the bundled scenes: "
+        f"{', '.join(bundled_scene_names())} (`preform scenes list`)"
+    )
+
+
 def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
     """Validate one scene document; raises SceneError with located errors."""
     errors: list[SourceError] = []

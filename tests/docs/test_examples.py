@@ -131,12 +131,55 @@ def test_every_example_of_the_page_runs(page: Path, folder: Path):
             assert block.body.strip() in source.read_text(), f"{block.id} not in {source}"
         elif block.lang == "python":
             exec(compile(block.body, block.id, "exec"), namespace)
-        elif block.lang == "bash":
+        elif block.lang == "bash" and page.name != "README.md":  # README: one test a command
             run_bash(block, folder)
         elif block.lang == "yaml":
             check_yaml(block, folder)
         elif block.lang == "toml":
             tomllib.loads(block.body)
+
+
+#: README commands that take more than a few seconds (a library-wide drape, a CAD tool): run
+#: with ``pytest -m slow`` (and by CI), the rest of the tour in the default tier.
+SLOW_TOUR = (
+    "preform pipeline run$",  # the default study, this command alone ($: nothing after it)
+    "preform pipeline run --scene hemisphere$",
+    "preform pipeline run --scene shear",
+    "preform pipeline run --scene hat-stiffener-min-energy",
+)
+
+
+def slow_tour(command: str) -> bool:
+    return any(
+        command == s.removesuffix("$") if s.endswith("$") else command.startswith(s + " ")
+        for s in SLOW_TOUR
+    )
+
+
+def readme_commands() -> list[str]:
+    """Every ``preform ...`` line of README.md's bash blocks, as written."""
+    found = []
+    for block in blocks(ROOT / "README.md"):
+        if block.lang != "bash":
+            continue
+        for line in block.body.replace("\\\n", " ").splitlines():
+            for part in line.split("&&"):
+                words = shlex.split(part, comments=True)
+                if words and words[0] == "preform":
+                    found.append(part.split(" #")[0].strip())
+                elif words:
+                    assert words[0] in SETUP, f"README: {part!r} is neither preform nor set-up"
+    return found
+
+
+@pytest.mark.parametrize(
+    "command",
+    [pytest.param(c, marks=[pytest.mark.slow] if slow_tour(c) else []) for c in readme_commands()],
+    ids=lambda c: c.removeprefix("preform ")[:60],
+)
+def test_the_readme_tour_command_runs(command: str, folder: Path):
+    """Each command of the README, in a fresh folder with docs/examples/ (exit code 0)."""
+    run_preform(command, folder)
 
 
 def test_the_readme_tour_runs_commands_and_is_not_skipped():
@@ -146,6 +189,9 @@ def test_the_readme_tour_runs_commands_and_is_not_skipped():
         line for b in tour for line in b.body.splitlines() if line.lstrip().startswith("preform ")
     ]
     assert len(commands) >= 10
+    assert len(readme_commands()) >= len(commands)
+    slow = [c for c in readme_commands() if slow_tour(c)]
+    assert len(slow) == len(SLOW_TOUR)  # each slow entry names a command that is there
     api = [b for b in blocks(ROOT / "docs" / "api.md") if b.lang == "python"]
     assert len(api) >= 5
 
