@@ -24,7 +24,9 @@ def stack_figure(
     x, y = maps.points_mm[:, 0], maps.points_mm[:, 1]
     # marker area about one station's own area on the page
     span = max(float(np.ptp(x)) if len(x) else 1.0, float(np.ptp(y)) if len(y) else 1.0, 1e-9)
-    size = float(np.clip(2600.0 * np.median(maps.area_mm2) / span**2, 0.5, 30.0))
+    # a square marker one station wide: ~420 px of axes span the plot [pt² = (px · 72/dpi)²]
+    side_pt = np.sqrt(np.median(maps.area_mm2)) * 420.0 / span * 72.0 / fig.dpi
+    size = float(np.clip(1.3 * side_pt**2, 0.5, 60.0))
     left, right = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     total = maps.total_thickness_mm
     shown = left.scatter(x, y, c=total, s=size, marker="s", linewidths=0, cmap="viridis")

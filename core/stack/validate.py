@@ -58,7 +58,8 @@ def layup_problems(scene: Scene, registry: Registry, err: Any) -> list[SourceErr
             problem = start_problem(surface, (x * MM, y * MM))
             if problem is not None:
                 at = ("layup", "plies", k, "start_point_mm")
-                errors.append(err(at, f"layup.plies[{k}].start_point_mm", problem))
+                label = f"layup.plies[{k}].start_point_mm"
+                errors.append(err(at, label, problem.replace("start.point_mm", label)))
     if errors:
         return errors
     # the per-ply outputs, planned on the first ply's scene (every ply's plans the same steps
