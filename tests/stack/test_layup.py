@@ -166,3 +166,86 @@ def test_layup_scene_errors_are_located(tmp_path: Path) -> None:
     (error,) = _errors(tmp_path, second="start_point_mm: [500, 0]")
     assert error.startswith("8:33: layup.plies[1].start_point_mm: the start point"), error
     assert error.endswith("move layup.plies[1].start_point_mm onto it"), error
+
+
+def _plate_stl(path: Path, half_mm: float = 60.0, n: int = 24) -> Path:
+    from preform.plugins.surfaces.mesh import TriangleMesh, write_stl
+
+    s = np.linspace(-half_mm, half_mm, n + 1) * 1e-3
+    xx, yy = np.meshgrid(s, s, indexing="ij")
+    points = np.column_stack([xx.ravel(), yy.ravel(), np.zeros(xx.size)])
+    index = np.arange(points.shape[0]).reshape(xx.shape)
+    a, b = index[:-1, :-1].ravel(), index[1:, :-1].ravel()
+    c, d = index[1:, 1:].ravel(), index[:-1, 1:].ravel()
+    faces = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    write_stl(path, TriangleMesh(points, faces))
+    return path
+
+
+def test_a_mesh_tool_is_offset_place_by_place_over_a_drop_off(tmp_path: Path) -> None:
+    """Ply 1 covers x < 0 only (a drop-off); ply 2 lies on the plate mesh raised by ply 1's
+    thickness over x < 0 and not raised over x > 0 (the vertex-normal offset)."""
+    tool = _plate_stl(tmp_path / "plate.stl")
+    scene = {
+        "name": "plate-drop-off",
+        "tool": {"surface": "mesh", "file": str(tool), "units": "mm"},
+        "ply": {"node_spacing_mm": 5.0, "size_mm": [100, 100]},
+        "start": {"point_mm": [0, 0]},
+        "layup": {
+            "plies": [
+                {
+                    "fabric": "plain-weave-600",
+                    "thickness_mm": T_MM,
+                    "part_outline_mm": [[-70, -70], [0, -70], [0, 70], [-70, 70]],
+                },
+                {"fabric": "plain-weave-600", "thickness_mm": T_MM, "orientation_deg": 90},
+            ],
+            "ply_outputs": ["drape"],
+        },
+        "outputs": ["layup"],
+    }
+    stack = preform.layup(scene)
+    assert stack.ok, stack.error or stack.reasons
+    assert stack.summary["stack_offset_method"] == "vertex normals (mesh)"
+    assert stack.plies[1]["offset_mm"] == pytest.approx(T_MM, abs=1e-9)
+    nodes = stack.stack.layers[1].result.nodes * 1e3
+    nodes = nodes[np.isfinite(nodes[..., 0])]
+    # the drop-off's edge is known to a cell of ply 1's net (5 mm) and the offset ramps over a
+    # cell of the plate mesh (5 mm): away from both, the offset is exact
+    margin = 5.0 + 120.0 / 24
+    left, right = nodes[:, 0] < -margin - 1e-9, nodes[:, 0] > margin + 1e-9
+    assert left.sum() > 50 and right.sum() > 50
+    assert np.allclose(nodes[left, 2], T_MM, atol=1e-9)
+    assert np.allclose(nodes[right, 2], 0.0, atol=1e-9)
+
+
+def test_stack_sections_map_every_ply_onto_the_fe_mesh_tool_side_first(tmp_path: Path) -> None:
+    from preform.pipeline.scene import bundled_scene_dir
+
+    skin = bundled_scene_dir().parent / "tools" / "hemisphere_skin.inp"
+    scene = {
+        **SMALL,
+        "export": {"mesh": str(skin), "reference_direction": [1, 0, 0]},
+        "outputs": ["layup", "stack_sections"],
+    }
+    stack = preform.layup(scene, out_dir=tmp_path)
+    assert stack.status == "ok", stack.error or stack.reasons
+    sections = stack.products["stack_sections"]
+    assert [p.name for p in sections.plies] == [layer.name for layer in stack.stack.layers]
+    assert [p.material for p in sections.plies] == [
+        "plain-weave-600",
+        "plain-weave-600",
+        "satin-4hs-crowfoot",
+    ]
+    first, second = sections.plies[0].mapping, sections.plies[1].mapping
+    near_pole = first.covered & second.covered & (np.hypot(*first.centroid_mm[:, :2].T) < 15.0)
+    assert near_pole.sum() >= 3
+    # the 90° ply's first family is the 0° ply's turned by 90° about the normal (near the
+    # pole, where the drape has hardly sheared)
+    turn = (second.angle_u_deg - first.angle_u_deg)[near_pole]
+    assert np.allclose(np.mod(turn, 360.0), 90.0, atol=2.0)
+    assert np.allclose(second.thickness_mm[near_pole], T_MM, atol=1e-9)
+    table = np.genfromtxt(stack.case_dir / "stack_elements.csv", delimiter=",", names=True)
+    covered = np.sum([p.mapping.covered for p in sections.plies], axis=0)
+    assert np.array_equal(table["plies_present"], covered)
+    assert np.allclose(table["total_thickness_mm"], covered * T_MM, atol=1e-9)
