@@ -97,17 +97,48 @@ class PlyAt:
 
 def ply_at(layer: PlyLayer, points_mm: FloatArray, max_gap_mm: float | FloatArray) -> PlyAt:
     """``layer`` read at ``points_mm`` (k, 3) [mm] (module docstring); ``max_gap_mm`` [mm] the
-    largest normal gap (one, or one per point) at which the ply counts as there."""
+    largest normal gap (one, or one per point) at which the ply counts as there.
+
+    A point whose nearest cell (by centroid) holds it is read there: its coordinates in the
+    cell's parallelogram (the mean edges a, b and the normal n, solved once per point) lie
+    within half a cell of the centre and its gap within the limit. The others, near the net's
+    edge or where the nearest centroid is a neighbour's, are found exactly
+    (``closest_on_net``: sixteen triangle tests a point)."""
+    from scipy.spatial import cKDTree
+
     points = np.asarray(points_mm, dtype=float).reshape(-1, 3)
     k = len(points)
     region = layer.region
+    gap_limit = np.broadcast_to(np.asarray(max_gap_mm, dtype=float), (k,))
     none = PlyAt(np.zeros(k, bool), np.zeros(k), np.full(k, np.nan), np.zeros(k, bool))
     if not region.any() or k == 0:
         return none
-    hit = closest_on_net(layer.result, points, region)
-    d_mm = MM_PER_M * float(layer.result.node_spacing)
-    present = (hit.tangential_mm <= EDGE_TOLERANCE * d_mm) & (hit.gap_mm <= max_gap_mm)
-    ci, cj = hit.cell_i, hit.cell_j
+    result = layer.result
+    d_mm = MM_PER_M * float(result.node_spacing)
+    ci_all, cj_all = np.nonzero(region)
+    centres = MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all]
+    _, nearest = cKDTree(centres).query(points)
+    ci, cj = ci_all[nearest], cj_all[nearest]
+    nodes = MM_PER_M * np.asarray(result.nodes, dtype=float)
+    x00, x10 = nodes[ci, cj], nodes[ci + 1, cj]
+    x01, x11 = nodes[ci, cj + 1], nodes[ci + 1, cj + 1]
+    a = 0.5 * ((x10 - x00) + (x11 - x01))
+    b = 0.5 * ((x01 - x00) + (x11 - x10))
+    n = np.cross(a, b)
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    frame = np.stack([a, b, n], axis=2)  # columns a, b, n
+    ok = np.abs(np.linalg.det(frame)) > 1e-12 * d_mm**2
+    local = np.full((k, 3), np.inf)
+    local[ok] = np.linalg.solve(frame[ok], (points - centres[nearest])[ok][..., None])[..., 0]
+    present = (np.abs(local[:, 0]) <= 0.5) & (np.abs(local[:, 1]) <= 0.5)
+    present &= np.abs(local[:, 2]) <= gap_limit
+    near = np.linalg.norm(points - centres[nearest], axis=1) <= 2.0 * d_mm + gap_limit
+    doubt = ~present & near
+    if doubt.any():
+        hit = closest_on_net(result, points[doubt], region)
+        inside = (hit.tangential_mm <= EDGE_TOLERANCE * d_mm) & (hit.gap_mm <= gap_limit[doubt])
+        present[doubt] = inside
+        ci[doubt], cj[doubt] = hit.cell_i, hit.cell_j
     thickness = np.where(present, layer.thickness_mm[ci, cj], 0.0)
     fraction = np.where(present, layer.fibre_volume_fraction[ci, cj], np.nan)
     wrinkles = present & layer.wrinkles[ci, cj]
@@ -237,7 +268,7 @@ def stations(layers: Sequence[PlyLayer]) -> tuple[FloatArray, FloatArray]:
     layer = layers[reference_ply(layers)]
     region = layer.region
     centres = MM_PER_M * np.asarray(layer.result.centroid, dtype=float)[region]
-    area = (
-        np.asarray(layer.result.area, dtype=float) * np.asarray(layer.result.part_weight)
-    )[region] * MM_PER_M**2
+    area = (np.asarray(layer.result.area, dtype=float) * np.asarray(layer.result.part_weight))[
+        region
+    ] * MM_PER_M**2
     return centres, area

@@ -31,6 +31,8 @@ def layup_problems(scene: Scene, registry: Registry, err: Any) -> list[SourceErr
     start = scene.start
     if start is not None:
         for key in sorted(start.model_fields_set & {"orientation_deg", "generator_angle_deg"}):
+            if getattr(start, key) == type(start).model_fields[key].default:
+                continue  # the default, said again (a dumped scene), changes nothing
             errors.append(
                 err(
                     ("start", key),

@@ -249,3 +249,29 @@ def test_stack_sections_map_every_ply_onto_the_fe_mesh_tool_side_first(tmp_path:
     covered = np.sum([p.mapping.covered for p in sections.plies], axis=0)
     assert np.array_equal(table["plies_present"], covered)
     assert np.allclose(table["total_thickness_mm"], covered * T_MM, atol=1e-9)
+
+
+def test_reading_a_ply_at_points_agrees_with_the_exact_closest_point_rule(
+    small: preform.Layup,
+) -> None:
+    """ply_at's shortcut (the nearest cell's parallelogram) against the exact rule alone
+    (closest_on_net for every point), on points scattered over and beyond the plies."""
+    from preform.export.fe_mapping import EDGE_TOLERANCE, closest_on_net
+    from preform.stack.maps import ply_at
+
+    rng = np.random.default_rng(7)
+    plan = rng.uniform(-45.0, 45.0, size=(3000, 2))
+    r = np.hypot(plan[:, 0], plan[:, 1])
+    lift = rng.uniform(0.0, 1.2, size=len(plan))  # anywhere within the stack's height
+    points = np.column_stack([plan, np.sqrt(R_MM**2 - r**2) + lift])
+    for layer in small.stack.layers:
+        gap = 4.0 + 1.5
+        fast = ply_at(layer, points, gap)
+        hit = closest_on_net(layer.result, points, layer.region)
+        exact = (hit.tangential_mm <= EDGE_TOLERANCE * 4.0) & (hit.gap_mm <= gap)
+        # the two may differ only where a cell's bow makes its parallelogram straddle the
+        # edge of the exact rule's tolerance: a handful of points on the net's edge
+        assert np.count_nonzero(fast.present != exact) <= 0.002 * len(points)
+        both = fast.present & exact
+        assert np.allclose(fast.thickness_mm[both], T_MM, atol=1e-9)
+        assert exact.sum() > 500
