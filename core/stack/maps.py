@@ -192,7 +192,7 @@ class StackMaps:
         some = count > 0
         out: dict[str, Any] = {
             "stack_plies": n,
-            "stack_stations": int(len(total)),
+            "stack_stations": len(total),
             "stack_area_mm2": float(area[some].sum()),
             "stack_area_all_plies_mm2": float(area[count == n].sum()),
             "stack_plies_present_min": int(count[some].min()) if some.any() else 0,

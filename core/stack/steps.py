@@ -170,9 +170,7 @@ def run_layup(ctx: CaseContext) -> dict[str, Any]:
     fabrics = ctx.products.get("layup_fabrics") or {ctx.fabric.name: ctx.fabric}
     tool = ctx.products["surface"]
     names = layup.ply_names()
-    mesh_points = (
-        np.asarray(tool.vertices, dtype=float) / MM if hasattr(tool, "vertices") else None
-    )
+    mesh_points = np.asarray(tool.vertices, dtype=float) / MM if hasattr(tool, "vertices") else None
     layers: list[PlyLayer] = []
     kept: list[dict[str, Any]] = []
     records: list[dict[str, Any]] = []
@@ -206,9 +204,7 @@ def run_layup(ctx: CaseContext) -> dict[str, Any]:
         try:
             record["step_times_s"] = _run_ply(ply_ctx)
             ply_ctx.products["thickness"] = _thickness_model(ply_ctx)
-            layers.append(
-                _layer(ply_ctx, name, float(ply.orientation_deg), offset_mm)
-            )
+            layers.append(_layer(ply_ctx, name, float(ply.orientation_deg), offset_mm))
             status = layers[-1].status
         except CaseFailure as exc:
             status, error = CaseStatus.FAILED.value, str(exc)

@@ -59,9 +59,14 @@ def layup_problems(scene: Scene, registry: Registry, err: Any) -> list[SourceErr
             x, y = ply.start_point_mm
             problem = start_problem(surface, (x * MM, y * MM))
             if problem is not None:
-                at = ("layup", "plies", k, "start_point_mm")
                 label = f"layup.plies[{k}].start_point_mm"
-                errors.append(err(at, label, problem.replace("start.point_mm", label)))
+                errors.append(
+                    err(
+                        ("layup", "plies", k, "start_point_mm"),
+                        label,
+                        problem.replace("start.point_mm", label),
+                    )
+                )
     if errors:
         return errors
     # the per-ply outputs, planned on the first ply's scene (every ply's plans the same steps
@@ -72,11 +77,11 @@ def layup_problems(scene: Scene, registry: Registry, err: Any) -> list[SourceErr
             plan(ply_scene(scene, k, registry), registry)
         except PlanError as exc:
             for index, message in exc.problems:
-                at: tuple[str | int, ...] = ("layup", "ply_outputs")
+                where: tuple[str | int, ...] = ("layup", "ply_outputs")
                 label = "layup.ply_outputs"
                 if index is not None:
-                    at, label = (*at, index), f"{label}[{index}]"
-                errors.append(err(at, label, message))
+                    where, label = (*where, index), f"{label}[{index}]"
+                errors.append(err(where, label, message))
         except ValueError as exc:
             errors.append(err(("layup", "plies", k), f"layup.plies[{k}]", str(exc)))
     for index, output in enumerate(scene.outputs):

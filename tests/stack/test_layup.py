@@ -50,9 +50,7 @@ def test_ply_k_is_draped_on_the_sphere_of_radius_r_plus_k_t(small: preform.Layup
         assert np.abs(radius - (R_MM + k * T_MM)).max() < 1e-9
         assert small.plies[k]["offset_mm"] == pytest.approx(k * T_MM, abs=1e-12)
         # the 0/90/45 convention: the first family leaves the pole along the ply angle
-        assert np.degrees(layer.result.orientation) == pytest.approx(
-            [0.0, 90.0, 45.0][k], abs=1e-9
-        )
+        assert np.degrees(layer.result.orientation) == pytest.approx([0.0, 90.0, 45.0][k], abs=1e-9)
 
 
 def test_the_stack_total_is_the_sum_of_its_plies(small: preform.Layup) -> None:
@@ -143,7 +141,12 @@ outputs: [layup, {output}]
 
 
 def _errors(tmp_path: Path, **fields: str) -> list[str]:
-    values = {"start": "", "second": "orientation_deg: 90", "ply_output": "vtu", "output": "stack_csv"}
+    values = {
+        "start": "",
+        "second": "orientation_deg: 90",
+        "ply_output": "vtu",
+        "output": "stack_csv",
+    }
     values.update(fields)
     path = tmp_path / "bad.yaml"
     path.write_text(LAYUP_YAML.format(**values))
