@@ -82,16 +82,12 @@ class LayupPly(BaseModel):
     @field_validator("part_outline_mm")
     @classmethod
     def _outline(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
-        if v is None:
-            return v
-        if len(v) < 3:
+        if v is not None and len(v) < 3:
             raise ValueError("a ply's part outline needs at least 3 vertices")
-        from preform.drape.polygon import outline_problem
+        # the scene's own check of an outline (imported here: the scene imports this module)
+        from preform.pipeline.scene import _simple_outline
 
-        problem = outline_problem(v, "mm")
-        if problem is not None:
-            raise ValueError(problem)
-        return v
+        return _simple_outline(v)
 
 
 class LayupSection(BaseModel):
