@@ -9,7 +9,9 @@ against:
 - a layup of its first ply only (the same step, no offset, a stack of one).
 
 Everything runs once before timing (imports, numba compilation, the fabrics' sheared-cell
-tables); then each is timed best of ``--repeat``, alternated. What the stack adds on top of
+tables); then each is timed (CPU time of this process, pinned to one core: a shared
+machine's other work inflates wall time by more than the differences measured here) best of
+``--repeat``, alternated. What the stack adds on top of
 its drapes is the offsets and the stack maps: their times are the layup's own ``step_times_s``.
 
     python benchmarks/bench_layup.py [--fidelity draft] [--repeat 3]
@@ -31,9 +33,11 @@ if hasattr(os, "sched_setaffinity"):
 
 
 def timed(call: Any) -> float:
-    start = time.perf_counter()
+    """CPU time of ``call`` [s]: this process's own (pinned to one core), so other work on a
+    shared machine does not count; file writes' waits for the disk do not either."""
+    start = time.process_time()
     call()
-    return time.perf_counter() - start
+    return time.process_time() - start
 
 
 def main() -> None:
@@ -93,7 +97,10 @@ def main() -> None:
         best_bare = min(best_bare, timed(stack_bare))
     last = stack()
     mean_alone = sum(best_alone) / len(best_alone)
-    print(f"scene hemisphere-layup, fidelity {args.fidelity}, best of {args.repeat}, one core")
+    print(
+        f"scene hemisphere-layup, fidelity {args.fidelity}, CPU time, best of {args.repeat}, "
+        "one core"
+    )
     for k, t in enumerate(best_alone):
         ply = layup.plies[k]
         print(f"  ply {k + 1} alone ({ply.fabric}, {ply.orientation_deg:g} deg): {t:7.3f} s")
@@ -106,8 +113,8 @@ def main() -> None:
     print(f"  stack / sum of plies alone:       {best_stack / sum(best_alone):7.2f} x")
     steps = last.summary.get("step_times_s", {})
     plies = sum(sum(p.get("step_times_s", {}).values()) for p in last.plies)
-    print(f"  the stack's steps: {', '.join(f'{k} {v:.3f} s' for k, v in steps.items())}")
-    print(f"  of the layup step, the plies' own steps: {plies:.3f} s")
+    print(f"  the stack's steps (wall): {', '.join(f'{k} {v:.3f} s' for k, v in steps.items())}")
+    print(f"  of the layup step, the plies' own steps (wall): {plies:.3f} s")
 
 
 if __name__ == "__main__":
