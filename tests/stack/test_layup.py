@@ -278,3 +278,33 @@ def test_reading_a_ply_at_points_agrees_with_the_exact_closest_point_rule(
         both = fast.present & exact
         assert np.allclose(fast.thickness_mm[both], T_MM, atol=1e-9)
         assert exact.sum() > 500
+
+
+def test_pipeline_run_runs_a_layup_scene_as_one_case_and_reuses_it(tmp_path: Path) -> None:
+    import csv
+    import json
+
+    import yaml
+    from click.testing import CliRunner
+
+    from preform.cli import cli
+
+    scene = tmp_path / "small.yaml"
+    scene.write_text(yaml.safe_dump(SMALL, sort_keys=False))
+    out = tmp_path / "results"
+    args = ["pipeline", "run", "--scene", str(scene), "--engine", "serial", "--out", str(out)]
+    result = CliRunner().invoke(cli, args)
+    assert result.exit_code == 0, result.output
+    (row,) = list(csv.DictReader((out / "results.csv").open()))
+    assert row["material"] == "plain-weave-600+satin-4hs-crowfoot"
+    assert row["status"] == "ok"
+    summary = json.loads((out / "small-stack" / "stack" / "summary.json").read_text())
+    assert summary["stack"] == "all 3 plies ok"
+    assert [p["name"] for p in summary["plies"]] == [
+        "ply-1-plain-weave-600",
+        "ply-2-plain-weave-600",
+        "ply-3-satin-4hs-crowfoot",
+    ]
+    again = CliRunner().invoke(cli, args)
+    assert again.exit_code == 0, again.output
+    assert "skipped" in again.output
