@@ -563,7 +563,9 @@ class Layup(CaseRun):
     @property
     def plies(self) -> list[dict[str, Any]]:
         """One record per ply, tool side first: name, fabric, orientation_deg, offset_mm
-        (the tool's offset under it), status, reasons, warnings, generator_angle_deg, ..."""
+        (the tool's offset under it), status, reasons, warnings, generator_angle_deg, ...
+        For a failed stack, the plies draped before it stopped (the failing one included
+        when its drape ran)."""
         return [dict(p) for p in self.summary.get("plies", [])]
 
     @property
@@ -645,6 +647,9 @@ def layup(
     first = products.get("layup_fabrics", {}).get(scene_.layup.plies[0].fabric)
     fab = first if first is not None else lib.fabric(scene_.layup.plies[0].fabric)
     record = summary if isinstance(summary, dict) else {}
+    if "plies" not in record and kept and "plies" in kept[0].summary:
+        # a failed case's summary.json keeps no results: the plies draped before it stopped
+        record = {**record, "plies": kept[0].summary["plies"]}
     return Layup(
         fab, scene_, result, record, products, Path(case.case_dir) if out_dir is not None else None
     )

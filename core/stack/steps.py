@@ -157,7 +157,7 @@ def _offset_for(
                     )
             made = offset_tool(tool, h_mm * MM)
     except OffsetError as error:
-        raise CaseFailure(f"ply {len(layers) + 1}: {error}") from None
+        raise CaseFailure(str(error)) from None
     return made.surface, made.distance_max_m / MM, made.method, notes
 
 
@@ -177,7 +177,13 @@ def run_layup(ctx: CaseContext) -> dict[str, Any]:
     method = "none"
     for k, ply in enumerate(layup.plies):
         name = names[k]
-        surface, offset_mm, how, notes = _offset_for(tool, layers, mesh_points)
+        try:
+            surface, offset_mm, how, notes = _offset_for(tool, layers, mesh_points)
+        except CaseFailure as error:
+            ctx.summary["plies"] = records
+            raise CaseFailure(
+                f"ply {k + 1} of {len(layup.plies)} ({name}) cannot be placed: {error}"
+            ) from None
         if k:
             method = how
         for note in notes:

@@ -308,3 +308,43 @@ def test_pipeline_run_runs_a_layup_scene_as_one_case_and_reuses_it(tmp_path: Pat
     again = CliRunner().invoke(cli, args)
     assert again.exit_code == 0, again.output
     assert "skipped" in again.output
+
+
+def test_a_ply_that_cannot_be_placed_fails_the_stack_naming_it() -> None:
+    """A cone has no exact offset: ply 1 drapes on it, ply 2 cannot, and the stack fails
+    saying which ply and what to do."""
+    scene = {
+        **SMALL,
+        "tool": {"surface": "cone", "base_radius_mm": 100, "height_mm": 60},
+        "start": {"point_mm": [0, 0]},
+    }
+    stack = preform.layup(scene)
+    assert stack.status == "failed"
+    assert stack.error is not None
+    assert stack.error.startswith(
+        "ply 2 of 3 (ply-2-plain-weave-600) cannot be placed: the tool (Cone) has no exact offset"
+    ), stack.error
+    assert "give the tool as a mesh" in stack.error
+    assert [p["status"] for p in stack.plies] == ["ok"]
+
+
+def test_a_least_energy_ply_searches_its_generator_angle_at_its_own_orientation() -> None:
+    scene = {
+        **SMALL,
+        "search": {"generator_angle_deg": {"min": 60, "max": 120}, "scan_step_deg": 10},
+        "layup": {
+            "plies": [
+                {"fabric": "E-BX-318", "orientation_deg": 30, "generator_angle_deg": "least_energy"},
+                {"fabric": "plain-weave-600", "orientation_deg": 0, "thickness_mm": T_MM},
+            ],
+            "ply_outputs": ["drape"],
+        },
+    }
+    stack = preform.layup(scene)
+    assert stack.status in ("ok", "partial"), stack.error
+    first, second = stack.plies
+    # the search ran and chose an angle in its range; the fixed ply kept 90°
+    assert 60.0 <= first["generator_angle_deg"] <= 120.0
+    assert first["generator_angle_deg"] != pytest.approx(90.0, abs=1e-6)
+    assert second["generator_angle_deg"] == pytest.approx(90.0, abs=1e-9)
+    assert np.degrees(stack.stack.layers[0].result.orientation) == pytest.approx(30.0, abs=1e-9)
