@@ -334,7 +334,11 @@ def test_a_least_energy_ply_searches_its_generator_angle_at_its_own_orientation(
         "search": {"generator_angle_deg": {"min": 60, "max": 120}, "scan_step_deg": 10},
         "layup": {
             "plies": [
-                {"fabric": "E-BX-318", "orientation_deg": 30, "generator_angle_deg": "least_energy"},
+                {
+                    "fabric": "E-BX-318",
+                    "orientation_deg": 30,
+                    "generator_angle_deg": "least_energy",
+                },
                 {"fabric": "plain-weave-600", "orientation_deg": 0, "thickness_mm": T_MM},
             ],
             "ply_outputs": ["drape"],
