@@ -107,11 +107,12 @@ def explain(scene: Scene, registry: Registry) -> list[str]:
         lines.append(
             f"{step.name} (v{step.version}): needs {reqs} -> provides {', '.join(step.provides)}"
         )
-    if getattr(scene, "layup", None) is not None:
+    layup = getattr(scene, "layup", None)
+    if layup is not None:
         # each ply runs its own plan inside the layup step (preform.stack.steps)
         from preform.stack.plies import ply_scene
 
-        for k, name in enumerate(scene.layup.ply_names()):
+        for k, name in enumerate(layup.ply_names()):
             steps = plan(ply_scene(scene, k, registry), registry)
             names = ", ".join(s.name for s in steps if s.name != "surface")
             under = "the tool offset by the plies below" if k else "the tool"

@@ -179,10 +179,10 @@ def run_layup(ctx: CaseContext) -> dict[str, Any]:
         name = names[k]
         try:
             surface, offset_mm, how, notes = _offset_for(tool, layers, mesh_points)
-        except CaseFailure as error:
+        except CaseFailure as unplaced:
             ctx.summary["plies"] = records
             raise CaseFailure(
-                f"ply {k + 1} of {len(layup.plies)} ({name}) cannot be placed: {error}"
+                f"ply {k + 1} of {len(layup.plies)} ({name}) cannot be placed: {unplaced}"
             ) from None
         if k:
             method = how
