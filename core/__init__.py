@@ -8,7 +8,7 @@ The public API; everything else is reached through its module. In mm and degrees
     best = preform.least_energy("E-BX-318")
     run = preform.run(scenes=["shear"], out_dir="results")
 
-The functions and result classes of ``preform.api`` (``drape``, ``least_energy``, ``run``,
+The functions and result classes of ``preform.api`` (``drape``, ``least_energy``, ``layup``, ``run``,
 ``scene``, ``fabric``, ``load_library``, ``Drape``, ``LeastEnergy``, ``RunResult``) are imported
 on first use, so ``import preform`` stays fast (see ``docs/api.md``).
 """
@@ -21,11 +21,13 @@ if TYPE_CHECKING:
     from preform.api import (
         CaseRun,
         Drape,
+        Layup,
         LeastEnergy,
         RunResult,
         calibrate,
         drape,
         fabric,
+        layup,
         least_energy,
         load_library,
         run,
@@ -44,10 +46,12 @@ _API = frozenset(
     {
         "CaseRun",
         "Drape",
+        "Layup",
         "LeastEnergy",
         "RunResult",
         "calibrate",
         "fabric",
+        "layup",
         "least_energy",
         "load_library",
         "run",
@@ -100,6 +104,7 @@ __all__ = [
     "CaseStatus",
     "Drape",
     "FabricBase",
+    "Layup",
     "LeastEnergy",
     "Location",
     "PluginHost",
@@ -115,6 +120,7 @@ __all__ = [
     "fabric",
     "force_per_length_N_per_mm",
     "hookimpl",
+    "layup",
     "least_energy",
     "load_library",
     "run",

@@ -21,6 +21,7 @@ stays inside the steps. Nothing here imports numpy, pandas or matplotlib before 
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import tempfile
 from collections.abc import Mapping, Sequence
@@ -547,6 +548,113 @@ def least_energy(
     scene_, data = _scene_and_data(scene, changes)
     result, summary, products, case_dir = _execute(fab, scene_, data, out_dir)
     return LeastEnergy(fab, scene_, result, summary, products, case_dir)
+
+
+# -- a layup -----------------------------------------------------------------------------------
+
+LAYUP_SCENE = "hemisphere-layup"
+
+
+@dataclass(repr=False)
+class Layup(CaseRun):
+    """A draped stack (:func:`layup`): the pipeline's status of the stack (``ok`` only when
+    every ply is), each ply's record (``plies``) and the stack's maps (``to_pandas()``:
+    one row per station, mm and [-]; ``plot()``: thickness and plies present). ``fabric`` is
+    the tool-side ply's."""
+
+    @property
+    def plies(self) -> list[dict[str, Any]]:
+        """One record per ply, tool side first: name, fabric, orientation_deg, offset_mm
+        (the tool's offset under it), status, reasons, warnings, generator_angle_deg, ...
+        For a failed stack, the plies draped before it stopped (the failing one included
+        when its drape ran)."""
+        return [dict(p) for p in self.summary.get("plies", [])]
+
+    @property
+    def stack(self) -> Any:
+        """The ``layup`` product (``preform.stack.steps.Stack``: draped plies, maps)."""
+        return self._product("layup")
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The stack at its stations: x_mm, y_mm, z_mm, area_mm2, total_thickness_mm,
+        fibre_volume_fraction, plies_present, plies_wrinkling, thickness_mm_<ply>."""
+        import pandas as pd
+
+        maps = self.stack.maps
+        frame = pd.DataFrame(maps.points_mm, columns=["x_mm", "y_mm", "z_mm"])
+        frame["area_mm2"] = maps.area_mm2
+        frame["total_thickness_mm"] = maps.total_thickness_mm
+        frame["fibre_volume_fraction"] = maps.stack_fibre_volume_fraction
+        frame["plies_present"] = maps.plies_present
+        frame["plies_wrinkling"] = maps.plies_wrinkling
+        for k, name in enumerate(maps.ply_names):
+            frame[f"thickness_mm_{name}"] = maps.thickness_mm[:, k]
+        return frame
+
+    def plot(self, path: PathLike | None = None) -> Figure:
+        """The stack's total thickness and plies present from above; saved to ``path``."""
+        from preform.export.fig_stack import stack_figure
+
+        return stack_figure(self.stack.maps, path, title=self.scene.name)
+
+    def _headline(self) -> str:
+        words = self.summary.get("stack")
+        return f", {words}" if words and not self.error else super()._headline()
+
+
+def layup(
+    scene: Any = LAYUP_SCENE,
+    *,
+    plies: Sequence[Mapping[str, Any]] | None = None,
+    library: Library | None = None,
+    out_dir: PathLike | None = None,
+    **scene_keywords: Any,
+) -> Layup:
+    """Drape a stack of plies, each on the tool offset by the plies below (``preform.stack``).
+
+    ``scene`` (default: the bundled ``hemisphere-layup``, [0/45/-45/90] of plain-weave-600 and
+    a satin) gives the tool, ply size and layup; ``plies`` replaces its plies, tool side
+    first, each a mapping in mm and degrees as in a scene (``{"fabric": "plain-weave-600",
+    "orientation_deg": 45, "generator_angle_deg": 90 | "least_energy", "start_point_mm":
+    (x, y), "thickness_mm": t0, "part_outline_mm": [...]}``); the keyword arguments change the
+    scene as :func:`scene` does (``fidelity="draft"``, ``node_spacing_mm=5``, ``tool=...``;
+    not the start's orientation or angle, which are each ply's). The fabrics come from
+    ``library`` (default :func:`load_library`). ``out_dir`` keeps the case folder (a
+    sub-folder per ply). Returns a :class:`Layup`; a failed stack is returned, not raised.
+    """
+    from preform.library import Library as LibraryType
+    from preform.pipeline.runner import execute_case
+    from preform.stack.cases import layup_case
+
+    if library is not None and not isinstance(library, LibraryType):
+        raise TypeError(f"library must be a loaded library or None, got {type(library).__name__}")
+    lib = library or load_library()
+    changes = _changes(scene_keywords)
+    if plies is not None:
+        changes[("layup", "plies")] = _plain([dict(p) for p in plies])
+    scene_, data = _scene_and_data(scene, changes)
+    if scene_.layup is None:
+        raise ValueError(f"scene {scene_.name!r} has no layup section (see docs/scenes.md)")
+    host = _host()
+    kept: list[CaseContext] = []
+    with tempfile.TemporaryDirectory(prefix="preform-") as scratch:
+        root = Path(out_dir) if out_dir is not None else Path(scratch)
+        case = layup_case(lib, scene_, data, root, host)
+        case = dataclasses.replace(case, timeout_s=scene_.limits.case_timeout_s)
+        result = execute_case(case, host, on_context=kept.append)
+        from preform.pipeline.rundir import read_json
+
+        summary = read_json(Path(case.case_dir) / "summary.json")
+    products = dict(kept[0].products) if kept else {}
+    first = products.get("layup_fabrics", {}).get(scene_.layup.plies[0].fabric)
+    fab = first if first is not None else lib.fabric(scene_.layup.plies[0].fabric)
+    record = summary if isinstance(summary, dict) else {}
+    if "plies" not in record and kept and "plies" in kept[0].summary:
+        # a failed case's summary.json keeps no results: the plies draped before it stopped
+        record = {**record, "plies": kept[0].summary["plies"]}
+    return Layup(
+        fab, scene_, result, record, products, Path(case.case_dir) if out_dir is not None else None
+    )
 
 
 # -- a run over a library -----------------------------------------------------------------------

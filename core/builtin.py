@@ -25,6 +25,8 @@ STEPS: tuple[tuple[str, str], ...] = (
     ("energy_vs_angle", "preform.optimise.search_steps:STEPS"),
     ("optimum", "preform.optimise.search_steps:STEPS"),
     ("mesh_mapping", "preform.export.export_steps:STEPS"),
+    ("layup", "preform.stack.steps:STEPS"),
+    ("stack_sections", "preform.stack.steps:STEPS"),
 )
 
 #: Exporters (steps writing files), as STEPS.
@@ -46,6 +48,12 @@ EXPORTERS: tuple[tuple[str, str], ...] = (
     ("ansys_macro", "preform.export.export_steps:EXPORTERS"),
     ("calculix_include", "preform.export.export_steps:EXPORTERS"),
     ("cut_pattern", "preform.export.export_steps:EXPORTERS"),
+    ("stack_csv", "preform.stack.steps:EXPORTERS"),
+    ("stack_thickness_png", "preform.stack.steps:EXPORTERS"),
+    ("stack_abaqus", "preform.stack.steps:EXPORTERS"),
+    ("stack_calculix", "preform.stack.steps:EXPORTERS"),
+    ("stack_lsdyna", "preform.stack.steps:EXPORTERS"),
+    ("stack_ansys", "preform.stack.steps:EXPORTERS"),
 )
 
 #: Shear laws: (name, params model, builder), as import paths.

@@ -80,6 +80,8 @@ class Case:
     #: The run computing it (set by ``run_cases``; written into its summary.json, so a lost
     #: batch's finished cases can be told from an earlier run's).
     run_id: str = ""
+    #: A layup scene's fabrics, (name, data) each (``preform.stack``): its case drapes them all.
+    layup_fabrics: tuple[tuple[str, dict[str, Any]], ...] = ()
 
 
 @dataclass
@@ -301,6 +303,10 @@ def execute_case(
         scene = scene_from_data(case.scene_data, case.scene_base_dir, registry)
         case_dir.mkdir(parents=True, exist_ok=True)
         ctx = CaseContext(fabric=fabric, scene=scene, registry=registry, case_dir=case_dir)
+        if case.layup_fabrics:
+            ctx.products["layup_fabrics"] = {
+                name: fabric_from_data(data, registry) for name, data in case.layup_fabrics
+            }
         if case.timeout_s is not None:
             ctx.summary["limit_case_timeout_s"] = case.timeout_s
         for step in plan(scene, registry):
@@ -384,6 +390,16 @@ def make_cases(
     globs = [materials_glob] if isinstance(materials_glob, str) else list(materials_glob or ())
     for scene, scene_data in scenes:
         limit = scene.limits.case_timeout_s or timeout_s
+        if scene.layup is not None:
+            # one case per layup scene: it drapes the fabrics its plies name (preform.stack)
+            from preform.stack.cases import layup_case
+
+            try:
+                case = layup_case(library, scene, scene_data, out_dir, host)
+            except ValueError as error:
+                raise CaseSetError(str(error)) from None
+            cases.append(replace(case, plugins=plugin_modules, discover=discover, timeout_s=limit))
+            continue
         for fabric in library:
             if globs and not any(fnmatch.fnmatchcase(fabric.name, g) for g in globs):
                 continue

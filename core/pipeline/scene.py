@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
 from preform.pipeline.export_section import ExportSection
+from preform.pipeline.layup_section import LayupSection
 from preform.registry import LazyLoadError, Registry
 from preform.validation import located_errors
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
@@ -314,6 +315,11 @@ class Scene(BaseModel):
     export: ExportSection | None = Field(
         default=None, description="Mapping onto your FE mesh and the cutting pattern."
     )
+    layup: LayupSection | None = Field(
+        default=None,
+        description="A stack of plies, tool side first, each draped on the tool offset by the "
+        "plies below (preform.stack); one case per scene, not per fabric.",
+    )
     outputs: list[str] = Field(min_length=1, description="Products and files to produce.")
     #: Directory of the scene file (resolves relative tool mesh paths); not from YAML.
     _base_dir: str = PrivateAttr(default=".")
@@ -425,6 +431,10 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
                     errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
     if not errors:
         errors += _preflight(scene, err)
+    if not errors and scene.layup is not None:
+        from preform.stack.validate import layup_problems
+
+        errors += layup_problems(scene, registry, err)
     from preform.pipeline.planner import PlanError, plan
 
     try:

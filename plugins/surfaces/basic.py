@@ -84,6 +84,12 @@ class Plane:
     def __repr__(self) -> str:
         return f"Plane(size_m={tuple(2 * self.half)}, centre_m={tuple(self.centre)})"
 
+    def offset(self, distance_m: float) -> Plane:
+        """The plate moved ``distance_m`` [m] along its normal (+z): its exact offset surface
+        (the layup's next ply lies on it, ``preform.drape.offset``). Its plan size is kept."""
+        size = (float(2.0 * self.half[0]), float(2.0 * self.half[1]))
+        return Plane(size, centre_m=self.centre + np.array([0.0, 0.0, float(distance_m)]))
+
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """The plate for the compiled kernels: (PLANE, (centre x, y, z, half size x, y)) [m]."""
         return PLANE, np.array([*self.centre, *self.half], dtype=float)
@@ -204,6 +210,11 @@ class Sphere:
         """
         return _compiled_place_nodes(self, a, b, opposite, spacing)
 
+    def offset(self, distance_m: float) -> Sphere:
+        """The concentric sphere of radius R + ``distance_m`` [m]: the exact offset surface
+        (outward normals, ``preform.drape.offset``)."""
+        return Sphere(self.radius + float(distance_m), centre_m=self.centre)
+
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """The sphere for the compiled net kernels: (SPHERE, (centre x, y, z, radius)) [m]."""
         return SPHERE, np.array([*self.centre, self.radius], dtype=float)
@@ -264,6 +275,14 @@ class Hemisphere(Sphere):
         extra = f", run_off_m={self.run_off}" if self.run_off else ""
         return f"Hemisphere(radius_m={self.radius}, centre_m={tuple(self.centre)}{extra})"
 
+    def offset(self, distance_m: float) -> Hemisphere:
+        """The concentric hemisphere of radius R + ``distance_m`` [m], its exact offset
+        (``preform.drape.offset``); the run-off below the rim keeps its angular extent, so the
+        offset tool continues as far round the sphere as this one."""
+        radius = self.radius + float(distance_m)
+        run_off = self.run_off * radius / self.radius if self.run_off else None
+        return Hemisphere(radius, centre_m=self.centre, run_off_m=run_off)
+
     def part(self) -> HeightCut:
         """The part this tool makes: the hemisphere above its rim, z ≥ centre z (area 2πR²)."""
         return HeightCut(float(self.centre[2]), area_m2=2.0 * np.pi * self.radius**2)
@@ -316,6 +335,13 @@ class Cylinder:
         return (
             f"Cylinder(radius_m={self.radius}, length_m={self.length}, axis={self.axis!r}, "
             f"centre_m={tuple(self.centre)})"
+        )
+
+    def offset(self, distance_m: float) -> Cylinder:
+        """The coaxial cylinder of radius R + ``distance_m`` [m] and the same length: the exact
+        offset of the lateral surface (``preform.drape.offset``)."""
+        return Cylinder(
+            self.radius + float(distance_m), self.length, self.axis, centre_m=self.centre
         )
 
     def compiled_queries(self) -> tuple[int, FloatArray]:

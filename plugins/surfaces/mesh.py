@@ -241,6 +241,18 @@ class TriangleMesh:
         self._bounding_radius = float(np.max(np.linalg.norm(corners - centroids[:, None], axis=2)))
         self._build_plan_grid()
 
+    def moved(self, vertices: FloatArray) -> TriangleMesh:
+        """This mesh with its vertices (n, 3) [m] moved (the same faces, normals and knobs):
+        a tool offset along its vertex normals (``preform.drape.offset``)."""
+        return TriangleMesh(
+            vertices,
+            self.faces,
+            merge_tolerance_rel=0.0,
+            smooth_normals=self.smooth_normals,
+            initial_candidates=self._initial_candidates,
+            feature_angle_deg=self.feature_angle_deg,
+        )
+
     #: Whether the arrays come already checked (a ``ToolMesh``'s come from ``repair``, which
     #: ran the same checks), so construction does not pay for them twice.
     _surface_checked = False

@@ -115,6 +115,25 @@ class ToolMesh(TriangleMesh):
         self.hygiene = repaired.report
         self.source = source
 
+    def moved(self, vertices: FloatArray) -> ToolMesh:
+        """This tool with its vertices (n, 3) [m] moved: the same triangles, face labels,
+        names, source and hygiene record (a tool offset along its vertex normals,
+        ``preform.drape.offset``; ``part.faces`` selects the same faces of it)."""
+        repaired = RepairedMesh(
+            np.asarray(vertices, dtype=float),
+            self.faces,
+            np.arange(self.faces.shape[0], dtype=np.int64),
+            self.hygiene,
+        )
+        return ToolMesh(
+            repaired,
+            self.face_label,
+            self.face_names,
+            self.source,
+            feature_angle_deg=self.feature_angle_deg,
+            smooth_normals=self.smooth_normals,
+        )
+
     @property
     def n_faces(self) -> int:
         """Number of distinct faces (CAD faces, OBJ groups) [-]."""

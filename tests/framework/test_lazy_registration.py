@@ -41,10 +41,11 @@ def test_every_builtin_lazy_entry_loads_and_is_what_it_declares(builtin_host):
     from preform.plugins.warpknit.stitch_law import SHEAR_LAWS as STITCH_YARN
     from preform.plugins.woven.shear import SHEAR_LAWS as WOVEN_LAWS
     from preform.shear.laws import SHEAR_LAWS as CORE_LAWS
+    from preform.stack import steps as stack_steps
 
     registry = builtin_host.registry
     assert all(r.error is None and not r.problems for r in builtin_host.records.values())
-    modules = (core_steps, drape_steps, preform_steps, search_steps, export_steps)
+    modules = (core_steps, drape_steps, preform_steps, search_steps, export_steps, stack_steps)
     for kind, listing in (("steps", "STEPS"), ("exporters", "EXPORTERS")):
         expected = {s.name: s for m in modules for s in getattr(m, listing, ())}
         assert registry.names(kind) == sorted(expected)

@@ -1,0 +1,67 @@
+"""One drape scene per ply of a layup (``preform.pipeline.layup_section``): the scene's tool,
+part, ply size, node spacing, fidelity and limits with the ply's start, orientation, generator
+angle, part outline and outputs set. Scenes are mm and degrees, as everywhere."""
+
+from __future__ import annotations
+
+import copy
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from preform.pipeline.layup_section import LayupPly, LayupSection
+    from preform.pipeline.scene import Scene
+    from preform.registry import Registry
+
+
+def layup_of(scene: Scene) -> LayupSection:
+    """The scene's layup section; a ValueError for a scene without one."""
+    if scene.layup is None:
+        raise ValueError(f"scene {scene.name!r} has no layup section")
+    return scene.layup
+
+
+def plan_orientation_deg(layup: LayupSection, ply: LayupPly) -> float:
+    """Plan direction of the ply's first fibre family at its start [deg from x]: the
+    reference direction plus the ply angle (``preform.pipeline.layup_section``)."""
+    return float(layup.reference_direction_deg) + float(ply.orientation_deg)
+
+
+def ply_scene_data(scene: Scene, index: int) -> dict[str, Any]:
+    """The drape scene data of ply ``index`` (0 on the tool side) of ``scene``'s layup."""
+    layup = layup_of(scene)
+    ply = layup.plies[index]
+    data = copy.deepcopy(scene.model_dump(mode="json", exclude_none=True))
+    data.pop("layup", None)
+    data["name"] = f"{scene.name}/{layup.ply_names()[index]}"
+    start = data.get("start") or {}
+    point = ply.start_point_mm if ply.start_point_mm is not None else start.get("point_mm")
+    data["start"] = {
+        "point_mm": list(point) if point is not None else [0.0, 0.0],
+        "orientation_deg": plan_orientation_deg(layup, ply),
+        "generators": start.get("generators", "geodesic"),
+    }
+    if ply.generator_angle_deg == "least_energy":
+        data["search"] = data.get("search") or {}
+    else:
+        data["start"]["generator_angle_deg"] = float(ply.generator_angle_deg)
+        data.pop("search", None)
+    data.setdefault("ply", {})
+    if ply.part_outline_mm is not None:
+        part = dict(data.get("part") or {})
+        part["plan_outline_mm"] = [list(p) for p in ply.part_outline_mm]
+        data["part"] = part
+    if ply.thickness_mm is not None:
+        export = dict(data.get("export") or {})
+        export["nominal_thickness_mm"] = float(ply.thickness_mm)
+        data["export"] = export
+    data["outputs"] = list(layup.ply_outputs)
+    data.pop("materials", None)
+    return data
+
+
+def ply_scene(scene: Scene, index: int, registry: Registry) -> Scene:
+    """Ply ``index``'s drape scene, validated as a scene (its tool block against the
+    registered surfaces), resolving paths against the layup scene's folder."""
+    from preform.pipeline.scene import scene_from_data
+
+    return scene_from_data(ply_scene_data(scene, index), scene.base_dir, registry)
