@@ -20,14 +20,17 @@ __version__ = "0.1.0"
 if TYPE_CHECKING:
     from preform.api import (
         CaseRun,
+        Compared,
         Drape,
         LeastEnergy,
         RunResult,
         calibrate,
+        compare_drape,
         drape,
         fabric,
         least_energy,
         load_library,
+        read_measurement,
         run,
         scene,
     )
@@ -43,13 +46,16 @@ if TYPE_CHECKING:
 _API = frozenset(
     {
         "CaseRun",
+        "Compared",
         "Drape",
         "LeastEnergy",
         "RunResult",
         "calibrate",
+        "compare_drape",
         "fabric",
         "least_energy",
         "load_library",
+        "read_measurement",
         "run",
         "scene",
     }
@@ -98,6 +104,7 @@ __all__ = [
     "CaseFailure",
     "CaseRun",
     "CaseStatus",
+    "Compared",
     "Drape",
     "FabricBase",
     "LeastEnergy",
@@ -110,6 +117,7 @@ __all__ = [
     "Step",
     "__version__",
     "calibrate",
+    "compare_drape",
     "default_host",
     "drape",
     "fabric",
@@ -117,6 +125,7 @@ __all__ = [
     "hookimpl",
     "least_energy",
     "load_library",
+    "read_measurement",
     "run",
     "scene",
 ]

@@ -89,3 +89,69 @@ def cell_samples(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     u /= np.linalg.norm(u, axis=-1, keepdims=True)
     v /= np.linalg.norm(v, axis=-1, keepdims=True)
     return centroid[ok], u[ok], v[ok], np.argwhere(ok)
+
+
+def tangent_angle_deg(points: np.ndarray, fibres: np.ndarray, reference=(1.0, 0.0, 0.0)):
+    """In-plane angle [deg] of ``fibres`` at ``points`` on a sphere centred at the origin,
+    from the reference direction projected into the tangent plane, signed about the outward
+    (radial) normal, wrapped to (−90, 90] (a fibre is a line)."""
+    n = points / np.linalg.norm(points, axis=1, keepdims=True)
+    ref = np.broadcast_to(np.asarray(reference, dtype=float), points.shape)
+    ref = ref - np.sum(ref * n, axis=1, keepdims=True) * n
+    ref /= np.linalg.norm(ref, axis=1, keepdims=True)
+    sin = np.sum(np.cross(ref, fibres) * n, axis=1)
+    cos = np.sum(ref * fibres, axis=1)
+    angle = np.degrees(np.arctan2(sin, cos))
+    return 90.0 - np.mod(90.0 - angle, 180.0)
+
+
+#: The bundled example measurement (docs/examples/measured_hemisphere.csv): the set-up of the
+#: synthetic preform, how many points, the noise and the seed.
+EXAMPLE = {
+    "start_mm": (4.0, -3.0),
+    "orientation_deg": 2.0,
+    "generator_angle_deg": 86.0,
+    "points": 200,
+    "noise_deg": 1.5,
+    "seed": 2026,
+}
+
+
+def example_csv() -> str:
+    """The text of docs/examples/measured_hemisphere.csv: this module's net on the bundled
+    hemisphere scene's tool (R = 100 mm, spacing 2.5 mm) at :data:`EXAMPLE`'s set-up, fibre
+    angles at cell centres with Gaussian noise, rounded to 0.01 mm and 0.01°."""
+    e = EXAMPLE
+    radius, spacing = 0.1, 0.0025
+    nodes = sphere_net(
+        radius, spacing, 60, (e["start_mm"][0] * 1e-3, e["start_mm"][1] * 1e-3),
+        math.radians(e["orientation_deg"]), math.radians(e["generator_angle_deg"]),
+    )  # fmt: skip
+    centre, u, v, _ = cell_samples(nodes)
+    keep = centre[:, 2] > 0.005
+    centre, u, v = centre[keep], u[keep], v[keep]
+    rng = np.random.default_rng(e["seed"])
+    pick = np.sort(rng.choice(len(centre), e["points"], replace=False))
+    centre, u, v = centre[pick], u[pick], v[pick]
+    angle_u = tangent_angle_deg(centre, u) + rng.normal(0.0, e["noise_deg"], len(pick))
+    angle_v = tangent_angle_deg(centre, v) + rng.normal(0.0, e["noise_deg"], len(pick))
+    lines = [
+        "# preform example measurement: SYNTHETIC, not measured. Made by the independent",
+        "# pin-jointed net of preform's tests (tests/compare/sphere_net.py, example_csv) on the",
+        "# bundled hemisphere scene's tool (R = 100 mm, node spacing 2.5 mm) with the start at",
+        f"# ({e['start_mm'][0]:g}, {e['start_mm'][1]:g}) mm, orientation "
+        f"{e['orientation_deg']:g} deg and generator angle {e['generator_angle_deg']:g} deg "
+        "(the scene says",
+        f"# (0, 0), 0 and 90), with {e['noise_deg']:g} deg Gaussian noise on every angle "
+        f"(seed {e['seed']}).",
+        "# Angles: in the tool's tangent plane from the reference direction, counter-clockwise",
+        "# seen from outside; u is the first generator's fibre family.",
+        "# reference_direction: 1 0 0",
+        "x_mm,y_mm,z_mm,angle_u_deg,angle_v_deg,uncertainty_deg,region",
+    ]
+    for p, a, b in zip(centre * 1e3, angle_u, angle_v, strict=True):
+        region = "crown" if p[2] > 70.0 else "flank"
+        lines.append(
+            f"{p[0]:.2f},{p[1]:.2f},{p[2]:.2f},{a:.2f},{b:.2f},{e['noise_deg']:g},{region}"
+        )
+    return "\n".join(lines) + "\n"
