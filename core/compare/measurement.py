@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
 
 MM = 1e-3
 #: Length units the point columns may carry, and their size in metres.
@@ -93,23 +94,23 @@ class Measurement:
 
     @property
     def count(self) -> int:
-        return int(len(self.points))
+        return len(self.points)
 
     @property
-    def has_u(self) -> FloatArray:
+    def has_u(self) -> BoolArray:
         """Points where the u family was measured (a vector or an angle)."""
         return np.asarray(
             np.all(np.isfinite(self.direction_u), axis=1) | np.isfinite(self.angle_u_deg)
         )
 
     @property
-    def has_v(self) -> FloatArray:
+    def has_v(self) -> BoolArray:
         return np.asarray(
             np.all(np.isfinite(self.direction_v), axis=1) | np.isfinite(self.angle_v_deg)
         )
 
     @property
-    def has_shear_only(self) -> FloatArray:
+    def has_shear_only(self) -> BoolArray:
         return np.asarray(np.isfinite(self.shear_deg) & ~self.has_u & ~self.has_v)
 
     def sigma_deg(self) -> FloatArray:
@@ -285,9 +286,7 @@ def _read_csv(path: Path) -> Measurement:
         raise MeasurementError([f"{path}: no header row and no data"])
     header_line, header_text = body[0]
     header = [h.strip() for h in next(csv.reader([header_text]))]
-    unit = next(
-        (u for u in LENGTH_UNITS if all(f"{c}_{u}" in header for c in "xyz")), None
-    )
+    unit = next((u for u in LENGTH_UNITS if all(f"{c}_{u}" in header for c in "xyz")), None)
     if unit is None:
         raise MeasurementError(
             [f"{path}:{header_line}: the header needs point columns x_mm, y_mm, z_mm (or x_m, "
@@ -309,9 +308,7 @@ def _read_csv(path: Path) -> Measurement:
         origin.append(f"{path.name}:{number}")
         cells = next(csv.reader([text]))
         if len(cells) != len(header):
-            errors.append(
-                f"{path}:{number}: {len(cells)} value(s) for {len(header)} column(s)"
-            )
+            errors.append(f"{path}:{number}: {len(cells)} value(s) for {len(header)} column(s)")
             continue
         for name, cell in zip(header, cells, strict=True):
             cell = cell.strip()
