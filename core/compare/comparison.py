@@ -31,7 +31,7 @@ Everything a user reads is in mm and degrees.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -144,18 +144,10 @@ def _fold_cells(result: DrapeResult) -> BoolArray:
 
 
 @dataclass(frozen=True)
-class Comparison:
-    """A drape against a measurement, one row per measured point (mm, degrees).
+class PointAngles:
+    """Measured and predicted angles at each point and their differences [deg], one row per
+    point."""
 
-    Errors are NaN where the point is not compared (off the tool, off the net) or the
-    quantity was not measured; flags say which."""
-
-    measurement: Measurement
-    #: Measured points (n, 3) [mm].
-    point_mm: FloatArray
-    #: Distance to the tool [mm] (NaN without a tool) and to the net, normal to it [mm].
-    tool_gap_mm: FloatArray
-    net_gap_mm: FloatArray
     #: Predicted in-plane angles of the u and v fibres to the reference direction [deg], and
     #: predicted signed shear [deg].
     predicted_angle_u_deg: FloatArray
@@ -169,6 +161,21 @@ class Comparison:
     error_u_deg: FloatArray
     error_v_deg: FloatArray
     error_shear_deg: FloatArray
+
+
+@dataclass(frozen=True)
+class Comparison(PointAngles):
+    """A drape against a measurement, one row per measured point (mm, degrees).
+
+    Errors are NaN where the point is not compared (off the tool, off the net) or the
+    quantity was not measured; flags say which."""
+
+    measurement: Measurement
+    #: Measured points (n, 3) [mm].
+    point_mm: FloatArray
+    #: Distance to the tool [mm] (NaN without a tool) and to the net, normal to it [mm].
+    tool_gap_mm: FloatArray
+    net_gap_mm: FloatArray
     off_tool: BoolArray
     off_net: BoolArray
     outside_part: BoolArray
@@ -297,22 +304,13 @@ class Comparison:
 
 
 @dataclass(frozen=True)
-class Evaluation:
+class Evaluation(PointAngles):
     """The raw per-point numbers of a comparison [deg], for every point whether or not it is on
     the net (past the net's edge the interpolation extends the edge cells): what the inverse
     search minimises. :class:`Comparison` is the reported, masked form."""
 
     hit: NetHit
     on_net: BoolArray
-    predicted_angle_u_deg: FloatArray
-    predicted_angle_v_deg: FloatArray
-    predicted_shear_deg: FloatArray
-    measured_angle_u_deg: FloatArray
-    measured_angle_v_deg: FloatArray
-    measured_shear_deg: FloatArray
-    error_u_deg: FloatArray
-    error_v_deg: FloatArray
-    error_shear_deg: FloatArray
 
 
 def evaluate(
@@ -423,15 +421,13 @@ def compare(
         point_mm=points_mm,
         tool_gap_mm=tool.distance_mm,
         net_gap_mm=np.where(tool.off_tool, nan, hit.gap_mm),
-        predicted_angle_u_deg=only(ev.predicted_angle_u_deg),
-        predicted_angle_v_deg=only(ev.predicted_angle_v_deg),
-        predicted_shear_deg=only(ev.predicted_shear_deg),
-        measured_angle_u_deg=ev.measured_angle_u_deg,
-        measured_angle_v_deg=ev.measured_angle_v_deg,
-        measured_shear_deg=ev.measured_shear_deg,
-        error_u_deg=only(ev.error_u_deg),
-        error_v_deg=only(ev.error_v_deg),
-        error_shear_deg=only(ev.error_shear_deg),
+        # what was measured stays whatever the net; what the net predicts only where compared
+        **{
+            f.name: getattr(ev, f.name)
+            if f.name.startswith("measured")
+            else only(getattr(ev, f.name))
+            for f in fields(PointAngles)
+        },
         off_tool=tool.off_tool,
         off_net=~ev.on_net & ~tool.off_tool,
         outside_part=cell_flag(~np.asarray(result.in_part, dtype=bool)),
