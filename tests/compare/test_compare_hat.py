@@ -12,6 +12,7 @@ import pytest
 from preform.compare import SetUp, compare, explain, measurement
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
+from preform.drape.result import NodeStatus
 from preform.plugins.surfaces.mesh import read_obj
 
 HAT = read_obj(
@@ -96,3 +97,35 @@ def test_the_search_recovers_the_shifted_start():
     assert abs(e.best.orientation_deg - TRUTH.orientation_deg) < 0.05
     assert e.after.statistics()["angle_max_deg"] < 0.01
     assert e.explained
+
+
+def test_points_beside_a_fold_are_flagged():
+    """Where the net folds at the mould's walls, the points on the cells around the failed
+    nodes and the fabric lost behind them (not reached) are flagged near_fold; points three
+    cells or more from all of those are not."""
+    r = TRUTH_NET
+    cells = np.argwhere(r.valid)
+    found = compare(r, measurement(r.centroid[cells[:, 0], cells[:, 1]] * 1e3,
+                                   direction_u=r.fibre_u[cells[:, 0], cells[:, 1]]),
+                    surface=HAT)  # fmt: skip
+    mapped = found.compared & (found.cell_i == cells[:, 0]) & (found.cell_j == cells[:, 1])
+
+    def cells_from(nodes: np.ndarray) -> np.ndarray:
+        """Each cell's distance to the nearest of ``nodes`` (k, 2), in nodes beyond its
+        corners (its corners are i..i+1, j..j+1)."""
+        di = np.maximum(
+            nodes[None, :, 0] - cells[:, None, 0] - 1, cells[:, None, 0] - nodes[None, :, 0]
+        )
+        dj = np.maximum(
+            nodes[None, :, 1] - cells[:, None, 1] - 1, cells[:, None, 1] - nodes[None, :, 1]
+        )
+        return np.min(np.maximum(di, dj), axis=1)  # fmt: skip
+
+    failed = np.argwhere(np.isin(r.status, (NodeStatus.FOLDED, NodeStatus.NO_INTERSECTION)))
+    lost = np.argwhere(np.isin(r.status, (NodeStatus.FOLDED, NodeStatus.NO_INTERSECTION,
+                                          NodeStatus.NOT_REACHED)))  # fmt: skip
+    assert len(failed)
+    beside = (cells_from(failed) == 1) & mapped  # a corner next to a failed node
+    assert beside.any() and found.near_fold[beside].all()
+    assert not found.near_fold[cells_from(lost) >= 3].any()
+    assert found.summary()["points_near_fold"] == int(found.near_fold.sum())
