@@ -139,7 +139,8 @@ def compare_command(
         )  # fmt: skip
     except MeasurementError as error:
         raise InputError("\n".join(error.errors)) from error
-    except (SceneError, FileNotFoundError) as error:
+    except (SceneError, FileNotFoundError, ValueError) as error:
+        # a scene the search cannot vary (polyline generators), a --max-gap-mm of 0, ...
         raise InputError(str(error)) from error
     except CaseFailure as error:
         click.echo(f"error: the drape has no result: {error}", err=True)
