@@ -20,16 +20,19 @@ __version__ = "0.1.0"
 if TYPE_CHECKING:
     from preform.api import (
         CaseRun,
+        Compared,
         Drape,
         Layup,
         LeastEnergy,
         RunResult,
         calibrate,
+        compare_drape,
         drape,
         fabric,
         layup,
         least_energy,
         load_library,
+        read_measurement,
         run,
         scene,
     )
@@ -45,15 +48,18 @@ if TYPE_CHECKING:
 _API = frozenset(
     {
         "CaseRun",
+        "Compared",
         "Drape",
         "Layup",
         "LeastEnergy",
         "RunResult",
         "calibrate",
+        "compare_drape",
         "fabric",
         "layup",
         "least_energy",
         "load_library",
+        "read_measurement",
         "run",
         "scene",
     }
@@ -102,6 +108,7 @@ __all__ = [
     "CaseFailure",
     "CaseRun",
     "CaseStatus",
+    "Compared",
     "Drape",
     "FabricBase",
     "Layup",
@@ -115,6 +122,7 @@ __all__ = [
     "Step",
     "__version__",
     "calibrate",
+    "compare_drape",
     "default_host",
     "drape",
     "fabric",
@@ -123,6 +131,7 @@ __all__ = [
     "layup",
     "least_energy",
     "load_library",
+    "read_measurement",
     "run",
     "scene",
 ]

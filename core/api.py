@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from preform.compare.measurement import Measurement
     from preform.library import Library
     from preform.material import FabricBase
     from preform.pipeline.runner import CaseResult, RunReport
@@ -804,13 +805,16 @@ def run(
 __all__ = [
     "SCENE_KEYWORDS",
     "CaseRun",
+    "Compared",
     "Drape",
     "LeastEnergy",
     "RunResult",
+    "compare_drape",
     "drape",
     "fabric",
     "least_energy",
     "load_library",
+    "read_measurement",
     "run",
     "scene",
 ]
@@ -903,3 +907,143 @@ def calibrate(
         data_sha256=digest,
         weights=weights,
     )
+
+
+# -- a drape against a measurement ---------------------------------------------------------------
+
+
+def read_measurement(path: PathLike, *, unit: str = "mm") -> Measurement:
+    """Read measured fibre angles (docs/compare.md): a CSV (points in ``x_mm, y_mm, z_mm`` or
+    ``x_m, ...``; fibre vectors ``u_x..``, ``v_x..``; ``angle_u_deg``, ``angle_v_deg``,
+    ``shear_deg``, ``uncertainty_deg``, ``region``) or a point cloud meshio reads (PLY, VTK,
+    VTU) with ``fibre_u``/``fibre_v`` vectors in its point data, its coordinates in ``unit``
+    (``mm`` or ``m``). Raises ``preform.compare.MeasurementError`` listing every located
+    problem."""
+    from preform.compare.measurement import read_measurement as read
+
+    return read(path, unit=unit)
+
+
+@dataclass(repr=False)
+class Compared:
+    """A drape against a measurement (:func:`compare_drape`), in mm and degrees."""
+
+    #: The drape compared (the pipeline's case: status, summary).
+    drape: CaseRun
+    #: Per-point errors and flags (``preform.compare.Comparison``).
+    comparison: Any
+    #: The inverse search's answer (``preform.compare.Explanation``), None when not asked.
+    explanation: Any = None
+
+    @property
+    def status(self) -> str:
+        return self.drape.status
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """The comparison's summary (counts, flags, rms / max / percentiles, by region), and
+        the inverse search's under ``explain``."""
+        out: dict[str, Any] = {"drape_status": self.drape.status, **self.comparison.summary()}
+        if self.explanation is not None:
+            out["explain"] = self.explanation.summary()
+        return out
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per measured point (the drape as given; ``explanation.after.to_pandas()``
+        is the table at the best set-up)."""
+        return self.comparison.to_pandas()
+
+    def plot(self, path: PathLike | None = None) -> Figure:
+        """The error map (plan view and 3D), saved to ``path`` when given."""
+        from preform.export.fig_compare import error_map_figure
+
+        result = self.drape._product("drape").result
+        return error_map_figure(self.comparison, result, path, title=self.drape.case.case_id)
+
+    def to_vtu(self, path: PathLike) -> Path:
+        """The measured points with their errors and flags, for ParaView."""
+        from preform.export.compare_vtu import write_comparison_vtu
+
+        write_comparison_vtu(self.comparison, path)
+        return Path(path)
+
+    def __repr__(self) -> str:
+        return f"<Compared {self.drape.case.case_id}: {self.comparison.words()}>"
+
+
+def _set_up(scene_: Scene) -> Any:
+    from preform.compare.inverse import SetUp
+
+    start = scene_.start
+    assert start is not None
+    return SetUp(
+        float(start.point_mm[0]),
+        float(start.point_mm[1]),
+        float(start.orientation_deg),
+        float(start.generator_angle_deg),
+    )
+
+
+def compare_drape(
+    fabric: Any,
+    measurement: Any,
+    scene: Any = DRAPE_SCENE,
+    *,
+    library: Library | None = None,
+    explain: bool = False,
+    vary: Sequence[str] = ("start", "orientation", "generator_angle"),
+    max_gap_mm: float | None = None,
+    unit: str = "mm",
+    **scene_keywords: Any,
+) -> Compared:
+    """Compare a drape with measured fibre angles, and (``explain``) search the set-up that
+    best explains them (docs/compare.md).
+
+    ``fabric``: a fabric (name or object), draped by :func:`drape` with ``scene`` and the
+    scene keywords; or a :class:`Drape` / :class:`LeastEnergy` already run (compared as it
+    is: a relaxed or curved-generator optimum too). ``measurement``: a file
+    (:func:`read_measurement`, ``unit`` for a point cloud) or a
+    ``preform.compare.Measurement``. ``max_gap_mm``: farthest a point may lie from the tool
+    and the net [mm] (default the node spacing). ``vary``: what the inverse search varies
+    (``start``, ``orientation``, ``generator_angle``), from the scene's set-up.
+
+    Raises ``preform.compare.MeasurementError`` for a bad file and ``UnitSlipError`` when
+    the points are in another unit than they say; ``CaseFailure`` when the drape has no
+    result."""
+    import numpy as np
+
+    from preform.compare.comparison import compare
+    from preform.compare.measurement import Measurement
+
+    if isinstance(fabric, CaseRun):
+        case = fabric.drape if isinstance(fabric, LeastEnergy) else fabric
+    else:
+        case = drape(fabric, scene, library=library, **scene_keywords)
+    draped = case._product("drape")
+    surface = case._product("surface")
+    found = (
+        measurement
+        if isinstance(measurement, Measurement)
+        else read_measurement(measurement, unit=unit)
+    )
+    comparison = compare(
+        draped.result, found, surface=surface, energy=draped.energy, max_gap_mm=max_gap_mm
+    )
+    explanation = None
+    if explain:
+        from preform.compare.inverse import explain as search
+        from preform.drape.fields import energy_field
+        from preform.drape.steps import drape_settings
+
+        law = case._product("shear_law")
+        settings = drape_settings(case.scene, surface)
+
+        def energy_of(result: Any) -> Any:
+            with np.errstate(all="ignore"):
+                return energy_field(result, law)
+
+        explanation = search(
+            found, surface, settings, _set_up(case.scene), vary=vary,
+            max_gap_mm=max_gap_mm, energy_of=energy_of,
+        )  # fmt: skip
+    return Compared(case, comparison, explanation)

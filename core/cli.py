@@ -78,6 +78,10 @@ LAZY_COMMANDS: dict[str, tuple[str, str]] = {
         "preform.commands.calibrate:calibrate_command",
         "Fit constants of fabric FABRIC's law to a shear test (DATA.csv: displacement, force).",
     ),
+    "compare": (
+        "preform.commands.compare:compare_command",
+        "Compare fabric FABRIC's drape with measured fibre angles (MEASUREMENT).",
+    ),
     "validate": (
         "preform.validation_suite.runner:validate_command",
         "Compare the model with published measured shear curves: figures and a table.",

@@ -95,6 +95,10 @@ COMMANDS: dict[str, dict[str, object]] = {
             2, "unknown constant path 'shear_law.nosuch'",
         ),
     },
+    "compare": {
+        "json": ["compare", "plain-weave-600", "{tmp}/measured_hemisphere.csv", "--json"],
+        "error": (["compare", "plain-weave-600", "{tmp}/frame.csv"], 2, "x_mm, y_mm, z_mm"),
+    },
     "validate": {
         "json": ["validate", "--out", "{tmp}/validation", "--json"],
         "error": (["validate", "--nosuch"], 2, "No such option"),
