@@ -7,9 +7,10 @@ processor time compiling the same kernels. :func:`ensure_compiled`, which ``pref
 run`` calls before its cases start, does it once instead: when the kernels of these sources are
 not yet known to be compiled, one process takes a lock, prints one line on stderr
 ("compiling drape kernels, once per install, ~N s"), compiles them by running a small
-least-energy case of the default study, marks the key compiled and prints the time it took;
-any other process that asks meanwhile waits for the lock and then loads the kernels from the
-cache. Afterwards the check costs reading and hashing the kernels' sources (a few ms), and no
+least-energy case of the default study (on two cores or more with a helper process that
+compiles, meanwhile, the kernels the case calls after its drape), marks the key compiled and
+prints the time it took; any other process that asks meanwhile waits for the lock and then
+loads the kernels from the cache. Afterwards the check costs reading and hashing the kernels' sources (a few ms), and no
 numba import.
 
 The small case compiles every kernel the default study calls; a study that calls others (a
@@ -21,6 +22,9 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import os
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -48,6 +52,9 @@ TYPICAL_COMPILE_S = 25.0
 _WARM_FABRIC = "E-BX-318"
 _WARM_SPACING_MM = 30.0
 _WARM_OUTPUTS = ["energy_vs_angle", "optimum", "drape", "cells_csv"]
+
+#: The command-line flag of the helper process (:func:`_start_helper`).
+HELPER_FLAG = "--helper"
 
 
 def compiled_key() -> str:
@@ -131,17 +138,55 @@ def _compile(root: Path, stream: IO[str] | None) -> float | None:
         def on_end(self, event: Any) -> None:
             pass
 
+    helper = _start_helper()
     try:
         with event.install_listener("numba:compile", FirstCompile()):
             _small_case()
     except Exception as exc:  # the run's own cases meet it again and record it
         _say(stream, f"drape kernels not compiled ahead ({type(exc).__name__}: {exc})")
         return None
+    finally:
+        if helper is not None:
+            helper.terminate()  # what it still does is no longer needed here
+            helper.wait()
     if not started:
         return None
     seconds = time.perf_counter() - started[0]
     _say(stream, f"drape kernels compiled in {seconds:.1f} s (cache: {root})")
     return seconds
+
+
+def _start_helper() -> subprocess.Popen[bytes] | None:
+    """On two cores or more, a second process that compiles the kernels the small case
+    calls after its drape (shear fields, coverage, the shear-law surrogate) while this one
+    compiles the drape's fill: its drape runs the fill as plain Python (:func:`_help`). What
+    it compiles first is loaded from the cache here; what this process reaches first, the
+    helper compiles in vain (its results are the same). Nothing depends on it: this process
+    runs the whole small case either way."""
+    if (os.cpu_count() or 1) < 2:
+        return None
+    with contextlib.suppress(OSError):
+        return subprocess.Popen(
+            [sys.executable, "-m", __name__, HELPER_FLAG],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    return None
+
+
+def _help() -> None:
+    """The helper's work: the small case with the net kernels run as Python (their numba
+    dispatchers swapped for the functions they compile), so its drape compiles no fill and
+    it goes on at once to the kernels after it."""
+    from numba.core.registry import CPUDispatcher
+
+    from preform.drape import net_kernels
+
+    for name, value in list(vars(net_kernels).items()):
+        if isinstance(value, CPUDispatcher):
+            setattr(net_kernels, name, value.py_func)
+    _small_case()
 
 
 def _small_case() -> None:
@@ -162,8 +207,9 @@ def _small_case() -> None:
 
 def main() -> None:
     """``python -m preform.drape.kernel_compile``: compile now (e.g. after installing)."""
-    import sys
-
+    if sys.argv[1:] == [HELPER_FLAG]:
+        _help()
+        return
     seconds = ensure_compiled(sys.stderr)
     if seconds is None:
         print(f"preform: drape kernels already compiled ({ready_marker()})", file=sys.stderr)

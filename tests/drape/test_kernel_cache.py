@@ -212,6 +212,8 @@ def test_every_kernel_module_declares_the_preform_modules_compiled_into_it(path:
     assert hasattr(module, "COMPILED_IN"), name
     assert set(module.COMPILED_IN) == imported, f"{name}: COMPILED_IN vs imports"
     assert "cache_by_content(__name__)" in path.read_text()
+    # as the key reads it (by pattern, not by import)
+    assert declared_compiled_in(path.read_bytes()) == tuple(module.COMPILED_IN)
     assert set(compiled_in([name])) >= {name, *imported}
     assert kernel_cache._BY_CONTENT[name].name == f"{name}-{source_key(name)}"
 

@@ -31,6 +31,7 @@ def small_case():
     time.sleep({sleep})
 
 kernel_compile._small_case = small_case
+kernel_compile._start_helper = lambda: None  # the real small case's helper: its own test
 print(kernel_compile.ensure_compiled(sys.stderr))
 """
 
@@ -104,6 +105,20 @@ def test_the_compiled_key_moves_with_any_warmed_kernels_key(monkeypatch):
     other = kernel_compile.compiled_key()
     monkeypatch.setattr(kernel_compile, "source_key", lambda m: "0" if "verdict" in m else "1")
     assert len({key, other, kernel_compile.compiled_key()}) == 3
+
+
+@pytest.mark.slow
+def test_the_helper_compiles_what_comes_after_the_drape_and_not_the_fill(tmp_path):
+    """The helper runs the net kernels as Python: its cache holds the field, coverage and
+    surrogate kernels the small case calls, and no fill."""
+    env = {**os.environ, CACHE_ENV: str(tmp_path)}
+    command = [sys.executable, "-m", "preform.drape.kernel_compile", kernel_compile.HELPER_FLAG]
+    subprocess.run(command, env=env, check=True, capture_output=True, timeout=600)
+    assert list(tmp_path.glob("preform.drape.field_kernels-*/field_kernels.node_shear-*.nbi"))
+    assert list(tmp_path.glob("preform.drape.verdict_kernels-*/*.nbi"))
+    assert list(tmp_path.glob("preform.shear.surrogate_kernels-*/*.nbi"))
+    assert not list(tmp_path.glob("preform.drape.net_kernels-*/*fill_fronts*.nbi"))
+    assert not list(tmp_path.glob("compiled-*"))  # the helper marks nothing
 
 
 @pytest.mark.slow
