@@ -176,9 +176,9 @@ def _start_helper() -> subprocess.Popen[bytes] | None:
 
 
 def _help() -> None:
-    """The helper's work: the small case with the net kernels run as Python (their numba
-    dispatchers swapped for the functions they compile), so its drape compiles no fill and
-    it goes on at once to the kernels after it."""
+    """The helper's work: one drape of the small case's scene and fabric with the net
+    kernels run as Python (their numba dispatchers swapped for the functions they compile),
+    so it compiles no fill and goes on at once to the kernels after the drape."""
     from numba.core.registry import CPUDispatcher
 
     from preform.drape import net_kernels
@@ -186,7 +186,10 @@ def _help() -> None:
     for name, value in list(vars(net_kernels).items()):
         if isinstance(value, CPUDispatcher):
             setattr(net_kernels, name, value.py_func)
-    _small_case()
+    from preform import api
+
+    # one drape, not the search: the same kernels after it, a fraction of the Python fills
+    api.drape(_WARM_FABRIC, node_spacing_mm=_WARM_SPACING_MM, outputs=["drape", "cells_csv"])
 
 
 def _small_case() -> None:
