@@ -81,9 +81,10 @@ def ensure_compiled(stream: IO[str] | None = None) -> float | None:
     with _one_at_a_time(root / f"lock-{marker.name}", stream):
         if marker.exists():  # compiled by the process we waited for
             return None
-        seconds = _compile(root, stream)
+        ran, seconds = _compile(root, stream)
+        if ran:  # compiled here, or all loaded (compiled earlier at first use): known now
+            marker.write_text(f"{seconds or 0.0:.1f}\n")
         if seconds is not None:
-            marker.write_text(f"{seconds:.1f}\n")
             (root / "last-compile-seconds").write_text(f"{seconds:.1f}\n")
     return seconds
 
@@ -120,10 +121,11 @@ def _estimate(root: Path) -> float:
     return TYPICAL_COMPILE_S
 
 
-def _compile(root: Path, stream: IO[str] | None) -> float | None:
-    """Run the small case, saying so when numba starts compiling; the seconds from the
-    first compile to the end, or None when everything came from the cache or the case
-    failed (then the kernels it did not reach compile at their first call, as before)."""
+def _compile(root: Path, stream: IO[str] | None) -> tuple[bool, float | None]:
+    """Run the small case, saying so when numba starts compiling. Returns whether it ran
+    through (when it failed, the kernels it did not reach compile at their first call, as
+    before) and the seconds from the first compile to its end (None: nothing compiled,
+    everything came from the cache)."""
     from numba.core import event
 
     started: list[float] = []
@@ -144,16 +146,16 @@ def _compile(root: Path, stream: IO[str] | None) -> float | None:
             _small_case()
     except Exception as exc:  # the run's own cases meet it again and record it
         _say(stream, f"drape kernels not compiled ahead ({type(exc).__name__}: {exc})")
-        return None
+        return False, None
     finally:
         if helper is not None:
             helper.terminate()  # what it still does is no longer needed here
             helper.wait()
     if not started:
-        return None
+        return True, None
     seconds = time.perf_counter() - started[0]
     _say(stream, f"drape kernels compiled in {seconds:.1f} s (cache: {root})")
-    return seconds
+    return True, seconds
 
 
 def _start_helper() -> subprocess.Popen[bytes] | None:

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import io
 import os
 import subprocess
 import sys
@@ -90,6 +91,23 @@ def test_a_failed_small_case_is_said_and_not_marked(tmp_path):
     assert out == "None"
     assert "drape kernels not compiled ahead (RuntimeError: no library)" in err
     assert not list(tmp_path.glob("compiled-*"))
+
+
+def test_kernels_compiled_at_first_use_are_marked_without_a_word(tmp_path, monkeypatch):
+    """Kernels already in the cache (compiled at their first call by an earlier process, the
+    API, a test): the small case compiles nothing, nothing is said, and the key is marked so
+    that the next run does not run the small case again."""
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path))
+    ran: list[int] = []
+    monkeypatch.setattr(kernel_compile, "_small_case", lambda: ran.append(1))
+    monkeypatch.setattr(kernel_compile, "_start_helper", lambda: None)
+    said = io.StringIO()
+    assert kernel_compile.ensure_compiled(said) is None
+    assert said.getvalue() == "" and ran == [1]
+    assert kernel_compile.ready_marker().read_text() == "0.0\n"
+    assert not (tmp_path / "last-compile-seconds").exists()
+    assert kernel_compile.ensure_compiled(said) is None
+    assert ran == [1]  # marked: not run again
 
 
 def test_the_estimate_is_the_last_compiles_time(tmp_path, monkeypatch):
