@@ -53,7 +53,9 @@ _WARM_FABRIC = "E-BX-318"
 _WARM_SPACING_MM = 30.0
 _WARM_OUTPUTS = ["energy_vs_angle", "optimum", "drape", "cells_csv"]
 
-#: The command-line flag of the helper process (:func:`_start_helper`).
+#: The helper process (:func:`_start_helper`): this module (by name: as ``python -m`` it is
+#: ``__main__``) with this flag and the pid of the process it helps.
+HELPER_MODULE = "preform.drape.kernel_compile"
 HELPER_FLAG = "--helper"
 
 
@@ -169,7 +171,7 @@ def _start_helper() -> subprocess.Popen[bytes] | None:
         return None
     with contextlib.suppress(OSError):
         return subprocess.Popen(
-            [sys.executable, "-m", __name__, HELPER_FLAG],
+            [sys.executable, "-m", HELPER_MODULE, HELPER_FLAG, str(os.getpid())],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -212,7 +214,11 @@ def _small_case() -> None:
 
 def main() -> None:
     """``python -m preform.drape.kernel_compile``: compile now (e.g. after installing)."""
-    if sys.argv[1:] == [HELPER_FLAG]:
+    if sys.argv[1:2] == [HELPER_FLAG]:
+        from preform.pipeline.engines import watch_parent
+
+        if sys.argv[2:]:  # ends with the process it helps (a kill -9 leaves nothing behind)
+            watch_parent(int(sys.argv[2]))
         _help()
         return
     seconds = ensure_compiled(sys.stderr)

@@ -125,12 +125,24 @@ def test_the_compiled_key_moves_with_any_warmed_kernels_key(monkeypatch):
     assert len({key, other, kernel_compile.compiled_key()}) == 3
 
 
+def test_the_helper_ends_with_the_process_it_helps(tmp_path):
+    """Started for a process that is gone (a kill -9 of the ``preform`` process), the
+    helper exits at once and compiles nothing."""
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    env = {**os.environ, CACHE_ENV: str(tmp_path)}
+    command = [sys.executable, "-m", kernel_compile.HELPER_MODULE, kernel_compile.HELPER_FLAG]
+    done = subprocess.run([*command, str(gone.pid)], env=env, capture_output=True, timeout=60)
+    assert (done.returncode, done.stderr) == (1, b"")  # the watch's exit, not an error's
+    assert not list(tmp_path.glob("*/*.nbi"))
+
+
 @pytest.mark.slow
 def test_the_helper_compiles_what_comes_after_the_drape_and_not_the_fill(tmp_path):
     """The helper runs the net kernels as Python: its cache holds the field, coverage and
     surrogate kernels the small case calls, and no fill."""
     env = {**os.environ, CACHE_ENV: str(tmp_path)}
-    command = [sys.executable, "-m", "preform.drape.kernel_compile", kernel_compile.HELPER_FLAG]
+    command = [sys.executable, "-m", kernel_compile.HELPER_MODULE, kernel_compile.HELPER_FLAG]
     subprocess.run(command, env=env, check=True, capture_output=True, timeout=600)
     assert list(tmp_path.glob("preform.drape.field_kernels-*/field_kernels.node_shear-*.nbi"))
     assert list(tmp_path.glob("preform.drape.verdict_kernels-*/*.nbi"))
