@@ -10,8 +10,8 @@ not yet known to be compiled, one process takes a lock, prints one line on stder
 least-energy case of the default study (on two cores or more with a helper process that
 compiles, meanwhile, the kernels the case calls after its drape), marks the key compiled and
 prints the time it took; any other process that asks meanwhile waits for the lock and then
-loads the kernels from the cache. Afterwards the check costs reading and hashing the kernels' sources (a few ms), and no
-numba import.
+loads the kernels from the cache. Afterwards the check costs reading and hashing the kernels'
+sources (10-30 ms at load 11), and no numba import.
 
 The small case compiles every kernel the default study calls; a study that calls others (a
 mesh tool's queries, a run that marches generators on another tool) compiles those at their
