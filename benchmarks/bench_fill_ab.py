@@ -63,7 +63,8 @@ def export(rev: str, into: Path) -> Path:
 
 
 def run(path: Path | None, cache: Path, n: int) -> tuple[float, float]:
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    # a revision before issue 26 caches by NUMBA_CACHE_DIR, one after by PREFORM_KERNEL_CACHE
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PREFORM_KERNEL_CACHE=str(cache))
     if path is not None:
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(path), env.get("PYTHONPATH")]))
     done = subprocess.run(

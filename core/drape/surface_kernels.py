@@ -29,13 +29,14 @@ from preform.drape.compiled_surface import (
     PLANE,
     TRIMMED_SPHERE,
 )
-from preform.drape.kernel_cache import drop_stale
+from preform.drape.kernel_cache import cache_by_content
 from preform.drape.result import NodeStatus
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
-#: a cached kernel older than one of them is compiled again (``preform.drape.kernel_cache``).
+#: their sources are part of the key these kernels are cached under
+#: (``preform.drape.kernel_cache``).
 COMPILED_IN = ("preform.drape.compiled_surface", "preform.drape.result")
-drop_stale(__name__)
+cache_by_content(__name__)
 
 FloatArray = NDArray[np.float64]
 

@@ -34,13 +34,14 @@ import math
 import numba
 import numpy as np
 
-from preform.drape.kernel_cache import drop_stale
+from preform.drape.kernel_cache import cache_by_content
 from preform.drape.result import NodeStatus
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
-#: a cached kernel older than one of them is compiled again (``preform.drape.kernel_cache``).
+#: their sources are part of the key these kernels are cached under
+#: (``preform.drape.kernel_cache``).
 COMPILED_IN = ("preform.drape.result",)
-drop_stale(__name__)
+cache_by_content(__name__)
 
 _PLACED = int(NodeStatus.PLACED)
 _OFF_TOOL = int(NodeStatus.OFF_TOOL)

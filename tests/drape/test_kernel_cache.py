@@ -1,6 +1,7 @@
-"""Cached compiled kernels follow every source compiled into them (``preform.drape.kernel_cache``):
-numba alone checks only a kernel's own file, so a changed constant of another module kept its
-old value in the machine code."""
+"""Compiled kernels are cached under a key of every source compiled into them
+(``preform.drape.kernel_cache``): an edit anywhere is a new key (numba alone checks only a
+kernel's own file, so a changed constant of another module kept its old value in the machine
+code), the same sources elsewhere (a reinstall) are the same key and compile nothing."""
 
 from __future__ import annotations
 
@@ -8,84 +9,177 @@ import ast
 import importlib
 import importlib.util
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
-import types
+import time
 from pathlib import Path
 
 import pytest
 
-from preform.drape.kernel_cache import compiled_in, drop_stale
+from preform.drape import kernel_cache
+from preform.drape.kernel_cache import (
+    CACHE_ENV,
+    compiled_in,
+    declared_compiled_in,
+    source_key,
+    user_cache_root,
+)
 
 REPO = Path(__file__).resolve().parents[2]
 KERNEL_FILES = sorted([*REPO.glob("core/**/*_kernels.py"), *REPO.glob("plugins/**/*_kernels.py")])
 
 
-def fake_module(monkeypatch: pytest.MonkeyPatch, name: str, path: Path, compiled=None):
-    module = types.ModuleType(name)
-    module.__file__ = str(path)
-    if compiled is not None:
-        module.COMPILED_IN = compiled
-    path.write_text("# fake\n")
-    monkeypatch.setitem(sys.modules, name, module)
-    return module
+def write_package(root: Path, value: int = 1, kernel_extra: str = "") -> Path:
+    """A package ``kpkg`` under ``root``: a kernel module compiling in a constant of
+    ``kpkg.constants``, which compiles in one of ``kpkg.deep`` (two steps down)."""
+    package = root / "kpkg"
+    package.mkdir(parents=True, exist_ok=True)
+    (package / "__init__.py").write_text("")
+    (package / "deep.py").write_text("OFFSET = 0\n")
+    (package / "constants.py").write_text(
+        f'from kpkg.deep import OFFSET\nCOMPILED_IN = ("kpkg.deep",)\nVALUE = {value} + OFFSET\n'
+    )
+    (package / "kern.py").write_text(KERNEL + kernel_extra)
+    return package
 
 
-def cache_files(cache: Path, stem: str, kernel: str, data: int) -> list[Path]:
-    base = f"{stem}.{kernel}-10.py311"
-    files = [cache / f"{base}.nbi", *(cache / f"{base}.{k}.nbc" for k in range(1, data + 1))]
-    for f in files:
-        f.write_bytes(b"x")
-    return files
+KERNEL = """
+import numba
+from kpkg.constants import VALUE
+from preform.drape.kernel_cache import cache_by_content
+
+COMPILED_IN = ("kpkg.constants",)
+cache_by_content(__name__)
+
+@numba.njit(cache=True)
+def value():
+    return VALUE
+"""
+
+PROBE = """
+from numba.core import event
+compiles = []
+
+class Count(event.Listener):
+    def on_start(self, ev):
+        compiles.append(ev.data["dispatcher"].py_func.__name__)
+
+    def on_end(self, ev):
+        pass
+
+with event.install_listener("numba:compile", Count()):
+    import kpkg.kern as k
+    print(k.value(), len(compiles))
+"""
 
 
-def age(paths: list[Path], mtime: float) -> None:
-    for p in paths:
-        os.utime(p, (mtime, mtime))
+def run_kernel(root: Path, cache: Path) -> tuple[str, int]:
+    """The kernel's value and how many functions numba compiled, in a fresh process."""
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(root), *sys.path]),
+        CACHE_ENV: str(cache),
+    }
+    env.pop("NUMBA_CACHE_DIR", None)
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE], capture_output=True, text=True, env=env, check=True
+    )
+    value, compiles = done.stdout.split()
+    return value, int(compiles)
 
 
-def test_only_the_kernels_older_than_a_source_compiled_in_are_dropped(tmp_path, monkeypatch):
-    cache = tmp_path / "__pycache__"
-    cache.mkdir()
-    deep = fake_module(monkeypatch, "fakepkg.deep", tmp_path / "deep.py")
-    dep = fake_module(monkeypatch, "fakepkg.dep", tmp_path / "dep.py", ("fakepkg.deep",))
-    fake_module(monkeypatch, "fakepkg.kern", tmp_path / "kern.py", ("fakepkg.dep",))
-    fake_module(monkeypatch, "fakepkg.other", tmp_path / "other.py", ())
-    old = cache_files(cache, "kern", "old", 2)
-    new = cache_files(cache, "kern", "new", 1)
-    others = cache_files(cache, "other", "old", 1)
-    age([Path(str(deep.__file__)), Path(str(dep.__file__))], 1_000_000.0)
-    age(old + others, 900_000.0)  # compiled before the sources last changed
-    age(new, 1_100_000.0)  # compiled after
-    # the older kernel goes with all its data; the newer one and another module's stay
-    assert sorted(drop_stale("fakepkg.kern")) == sorted(old)
-    assert all(p.exists() for p in new + others)
-    assert drop_stale("fakepkg.kern") == []
-    # the source two steps down (compiled into dep, which is compiled into kern) changes
-    age([Path(str(deep.__file__))], 1_200_000.0)
-    assert sorted(drop_stale("fakepkg.kern")) == sorted(new)
-    assert all(p.exists() for p in others)  # another module's caches are its own business
+def test_a_second_process_and_a_reinstall_load_the_kernel_compile_nothing(tmp_path):
+    """The truth is numba's own count of compiles: 1 in the first process, 0 in a second
+    one, and 0 for the same sources written anew elsewhere (a reinstall: new files, new
+    modification times, another path)."""
+    cache = tmp_path / "cache"
+    first = tmp_path / "install-1"
+    write_package(first)
+    assert run_kernel(first, cache) == ("1", 1)
+    indexes = list(cache.glob("kpkg.kern-*/kern.value-*.nbi"))
+    assert len(indexes) == 1  # numba's index, in the content-keyed folder
+    assert run_kernel(first, cache) == ("1", 0)
+    time.sleep(0.01)
+    second = tmp_path / "install-2"
+    shutil.copytree(first / "kpkg", second / "kpkg", copy_function=shutil.copyfile)
+    assert run_kernel(second, cache) == ("1", 0)
+    assert list(cache.glob("kpkg.kern-*/kern.value-*.nbi")) == indexes
 
 
-def test_fresh_caches_are_kept_and_a_missing_cache_folder_is_no_error(tmp_path, monkeypatch):
-    dep = fake_module(monkeypatch, "fakepkg2.dep", tmp_path / "dep.py")
-    fake_module(monkeypatch, "fakepkg2.kern", tmp_path / "kern.py", ("fakepkg2.dep",))
-    assert drop_stale("fakepkg2.kern") == []  # no __pycache__ at all
-    cache = tmp_path / "__pycache__"
-    cache.mkdir()
-    kept = cache_files(cache, "kern", "k", 3)
-    age([Path(str(dep.__file__))], 1_000_000.0)
-    age(kept, 1_000_001.0)
-    assert drop_stale("fakepkg2.kern") == []
-    assert all(p.exists() for p in kept)
+@pytest.mark.parametrize("edited", ["kern.py", "constants.py", "deep.py"])
+def test_an_edited_source_compiled_in_is_a_new_key_and_runs_new_code(tmp_path, edited):
+    """Editing the kernel's file, a module compiled into it, or one compiled into that one
+    (followed through its COMPILED_IN) runs the new code; numba alone would have kept the
+    cached value for the two other files."""
+    cache = tmp_path / "cache"
+    package = write_package(tmp_path)
+    assert run_kernel(tmp_path, cache) == ("1", 1)
+    path = package / edited
+    text = path.read_text()
+    path.write_text(
+        {
+            "kern.py": text.replace("return VALUE", "return VALUE + 10"),
+            "constants.py": text.replace("VALUE = 1", "VALUE = 2"),
+            "deep.py": "OFFSET = 5\n",
+        }[edited]
+    )
+    old = path.stat().st_mtime - 100.0  # older than the cache: a modification time says nothing
+    os.utime(path, (old, old))
+    expected = {"kern.py": "11", "constants.py": "2", "deep.py": "6"}[edited]
+    assert run_kernel(tmp_path, cache) == (expected, 1)
+    assert len(list(cache.glob("kpkg.kern-*"))) == 2  # the old key's folder is left alone
 
 
-def test_compiled_in_follows_the_declarations_and_stops_at_cycles(monkeypatch, tmp_path):
-    fake_module(monkeypatch, "cyc.a", tmp_path / "a.py", ("cyc.b",))
-    fake_module(monkeypatch, "cyc.b", tmp_path / "b.py", ("cyc.a", "cyc.c"))
-    fake_module(monkeypatch, "cyc.c", tmp_path / "c.py")
-    assert compiled_in(["cyc.a"]) == {"cyc.a", "cyc.b", "cyc.c"}
+def test_the_key_follows_sources_and_toolchain_not_file_times(tmp_path, monkeypatch):
+    package = write_package(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for name in ("kpkg", "kpkg.kern", "kpkg.constants", "kpkg.deep"):
+        monkeypatch.delitem(sys.modules, name, raising=False)
+    importlib.invalidate_caches()
+    key = source_key("kpkg.kern")
+    assert len(key) == 16 and int(key, 16) >= 0
+    os.utime(package / "kern.py", (1e9, 1e9))
+    assert source_key("kpkg.kern") == key
+    (package / "deep.py").write_text("OFFSET = 0  # a comment is an edit too\n")
+    changed = source_key("kpkg.kern")
+    assert changed != key
+    assert source_key("kpkg.constants") != source_key("kpkg.kern")
+    kernel_cache._toolchain.cache_clear()
+    monkeypatch.setattr(kernel_cache, "_version", lambda name: "0.0-other")
+    try:
+        assert source_key("kpkg.kern") != changed  # another numba or numpy
+    finally:
+        kernel_cache._toolchain.cache_clear()
+
+
+def test_compiled_in_follows_the_declarations_and_stops_at_cycles(tmp_path, monkeypatch):
+    package = tmp_path / "cyc"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "a.py").write_text('COMPILED_IN = ("cyc.b",)\n')
+    (package / "b.py").write_text('COMPILED_IN: tuple[str, ...] = ("cyc.a", "cyc.c")\n')
+    (package / "c.py").write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    importlib.invalidate_caches()
+    assert set(compiled_in(["cyc.a"])) == {"cyc.a", "cyc.b", "cyc.c"}
+    assert "cyc.a" not in sys.modules  # read, not imported
+    assert declared_compiled_in(b"X = 1\n") == ()
+
+
+def test_the_cache_root_is_the_environments_else_the_users(tmp_path, monkeypatch):
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "mine"))
+    assert kernel_cache.cache_root() == tmp_path / "mine"
+    monkeypatch.delenv(CACHE_ENV)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    if sys.platform.startswith("linux"):
+        assert user_cache_root() == tmp_path / "xdg" / "preform" / "kernels"
+        assert kernel_cache.cache_root() == user_cache_root()
+    blocked = tmp_path / "file"
+    blocked.write_text("")  # a file where the folder should be: not writable
+    monkeypatch.setattr(kernel_cache, "user_cache_root", lambda: blocked / "kernels")
+    assert kernel_cache.cache_root().name.startswith("preform-kernels-")
 
 
 def preform_imports(path: Path) -> set[str]:
@@ -108,58 +202,41 @@ def preform_imports(path: Path) -> set[str]:
 @pytest.mark.parametrize("path", KERNEL_FILES, ids=lambda p: p.name)
 def test_every_kernel_module_declares_the_preform_modules_compiled_into_it(path: Path):
     """A kernel module that imports another preform module compiles it in (an inlined function
-    or a frozen constant): it must say so, and drop its stale caches when imported."""
+    or a frozen constant): it must say so, the key of its cache must cover it, and its kernels
+    must be cached by content."""
     rel = path.relative_to(REPO).with_suffix("")
     parts = rel.parts
     name = ".".join(("preform", *parts[1:]) if parts[0] == "core" else ("preform", *parts))
     module = importlib.import_module(name)
     imported = preform_imports(path)
-    declared = set(getattr(module, "COMPILED_IN", ()))
-    assert declared == imported, f"{name}: COMPILED_IN {sorted(declared)} vs {sorted(imported)}"
-    if imported:
-        assert "drop_stale(__name__)" in path.read_text()
+    assert hasattr(module, "COMPILED_IN"), name
+    assert set(module.COMPILED_IN) == imported, f"{name}: COMPILED_IN vs imports"
+    assert "cache_by_content(__name__)" in path.read_text()
+    # as the key reads it (by pattern, not by import)
+    assert declared_compiled_in(path.read_bytes()) == tuple(module.COMPILED_IN)
+    assert set(compiled_in([name])) >= {name, *imported}
+    assert kernel_cache._BY_CONTENT[name].name == f"{name}-{source_key(name)}"
 
 
-KERNEL = """
-import numba
-from kpkg.constants import VALUE
-from preform.drape.kernel_cache import drop_stale
+def test_a_kernel_module_written_as_before_keeps_numbas_own_cache(tmp_path):
+    """Kernels of modules that did not ask are numba's business: placed as numba places
+    them, never in the content-keyed folders."""
+    (tmp_path / "plain.py").write_text(
+        textwrap.dedent(
+            """
+            import numba
+            import preform.drape.net_kernels  # installs the locator
 
-COMPILED_IN = ("kpkg.constants",)
-{drop}
-
-@numba.njit(cache=True)
-def value():
-    return VALUE
-"""
-
-
-def run_kernel(root: Path) -> str:
-    code = "import kpkg.kern as k; print(k.value())"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(root), *sys.path])}
+            @numba.njit(cache=True)
+            def one():
+                return 1
+            """
+        )
+    )
+    cache = tmp_path / "cache"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}
+    env[CACHE_ENV] = str(cache)
     env.pop("NUMBA_CACHE_DIR", None)
-    done = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
-    )
-    return done.stdout.strip()
-
-
-@pytest.mark.parametrize("drop", [True, False], ids=["with drop_stale", "numba alone"])
-def test_a_changed_constant_of_another_module_reaches_the_cached_kernel(tmp_path, drop):
-    """The truth: a kernel compiled with a constant of another module, cached, then the
-    constant changed in its own file. With ``drop_stale`` the next process runs the new value;
-    numba alone keeps running the old one (the defect this module exists for)."""
-    package = tmp_path / "kpkg"
-    package.mkdir()
-    (package / "__init__.py").write_text("")
-    (package / "constants.py").write_text("VALUE = 1\n")
-    (package / "kern.py").write_text(
-        textwrap.dedent(KERNEL).format(drop="drop_stale(__name__)" if drop else "")
-    )
-    assert run_kernel(tmp_path) == "1"
-    assert list((package / "__pycache__").glob("kern.*.nbi"))  # cached
-    constants = package / "constants.py"
-    constants.write_text("VALUE = 2\n")
-    later = (package / "kern.py").stat().st_mtime + 10.0
-    os.utime(constants, (later, later))
-    assert run_kernel(tmp_path) == ("2" if drop else "1")
+    subprocess.run([sys.executable, "-c", "import plain; print(plain.one())"], env=env, check=True)
+    assert list((tmp_path / "__pycache__").glob("plain.one-*.nbi"))
+    assert not list(cache.glob("plain*"))
