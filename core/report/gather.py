@@ -1,0 +1,363 @@
+"""What a run folder holds, read for the report: the run, every case's row and record, and the
+files a page can show (pictures, the draped net, shear curves).
+
+Reads only the folder (``manifest.json``, ``results.csv``, each case's ``summary.json`` and the
+files it lists), so ``preform report DIR`` rebuilds the page the run wrote. A file that is
+missing or unreadable is not an error of the report: the case says what is missing, in words.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from preform.pipeline.status import CaseStatus
+
+#: The order cases are shown in: what needs reading first (no result, then an incomplete one).
+STATUS_ORDER: tuple[str, ...] = (
+    CaseStatus.FAILED.value,
+    CaseStatus.TIMED_OUT.value,
+    CaseStatus.INTERRUPTED.value,
+    CaseStatus.PARTIAL.value,
+    CaseStatus.PENDING.value,
+    CaseStatus.OK.value,
+)
+#: Pictures a case may hold that the page shows inline, by file name: (caption, MIME type).
+PICTURES: dict[str, tuple[str, str]] = {
+    "fibre_pattern.png": ("fibre pattern (top view with tows, 3-D view by shear)", "image/png"),
+    "cut_pattern.svg": ("cut pattern (mm; seam allowance, fibre marks)", "image/svg+xml"),
+    "flat_pattern.svg": ("flat pattern (mm)", "image/svg+xml"),
+    "unit_cell.png": ("unit cell", "image/png"),
+}
+#: A picture larger than this is linked, not embedded, so one huge file cannot bloat the page
+#: [bytes].
+PICTURE_MAX_BYTES = 3_000_000
+#: Cells of a draped net the 3-D view keeps at most: the net is thinned to every k-th cell in
+#: both fibre directions until it fits. About 4 000 cells of a 10-case report add some 2 MB.
+NET_MAX_CELLS = 4000
+#: Marked cells (wrinkle, fold, past a limit) of one net at most.
+MARKS_MAX = 2000
+
+
+def status_rank(status: str) -> int:
+    """Where a status sorts: failed first, ok last, an unknown word just before ok."""
+    return STATUS_ORDER.index(status) if status in STATUS_ORDER else len(STATUS_ORDER) - 1
+
+
+@dataclass
+class Net:
+    """A draped net thinned for the 3-D view, from cells.csv's cell centres [mm].
+
+    ``triangles`` join the centres of neighbouring kept cells (each quad of the thinned grid in
+    two), so the surface runs through the cell centres, half a cell inside the net's edge.
+    """
+
+    x_mm: list[float]
+    y_mm: list[float]
+    z_mm: list[float]
+    shear_deg: list[float]
+    triangles: list[tuple[int, int, int]]
+    #: Every k-th cell kept in each fibre direction.
+    stride: int
+    cells_total: int
+    #: Cells past a limit of the fabric or folded: x, y, z [mm] and why, in words.
+    marks: list[tuple[float, float, float, str]] = field(default_factory=list)
+    marks_total: int = 0
+
+
+@dataclass
+class Case:
+    case_id: str
+    scene: str
+    material: str
+    status: str
+    #: The case's folder, relative to the run folder ('' when the folder is unknown).
+    folder: str
+    #: results.csv's row, as the text in the file.
+    row: dict[str, str]
+    #: summary.json (empty when missing).
+    summary: dict[str, Any]
+    error: str
+    reasons: list[str]
+    warnings: list[str]
+    files: list[str]
+    #: (file name, caption, MIME type, bytes) of the pictures to embed.
+    pictures: list[tuple[str, str, str, bytes]] = field(default_factory=list)
+    net: Net | None = None
+    #: Why there is no 3-D view, in words (when ``net`` is None).
+    net_note: str = ""
+    shear_curve: dict[str, Any] | None = None
+    #: Things the page could not read, in words.
+    problems: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Run:
+    name: str
+    manifest: dict[str, Any]
+    #: The last run recorded in the manifest (settings, inputs, plugins, times, counts).
+    last_run: dict[str, Any]
+    columns: list[str]
+    cases: list[Case]
+    #: preform bench tradeoff's table when the folder holds one: its columns and rows (text).
+    tradeoff: tuple[list[str], list[dict[str, str]]] | None = None
+    problems: list[str] = field(default_factory=list)
+
+    def counts(self) -> dict[str, int]:
+        """Cases in the folder by status."""
+        out: dict[str, int] = {}
+        for case in self.cases:
+            out[case.status] = out.get(case.status, 0) + 1
+        return dict(sorted(out.items(), key=lambda kv: status_rank(kv[0])))
+
+    def scenes(self) -> list[str]:
+        return sorted({c.scene for c in self.cases})
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def read_table(path: Path) -> tuple[list[str], list[dict[str, str]]] | None:
+    """A CSV file's header and rows as text, or None when it is missing or unreadable."""
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            reader = csv.DictReader(f)
+            rows = [dict(r) for r in reader]
+            return list(reader.fieldnames or []), rows
+    except (OSError, csv.Error, UnicodeDecodeError):
+        return None
+
+
+def _strings(value: Any) -> list[str]:
+    return [str(v) for v in value] if isinstance(value, list) else []
+
+
+def _float(text: Any) -> float | None:
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
+
+
+def read_net(path: Path) -> tuple[Net | None, str]:
+    """The draped net of a case's cells.csv, thinned to at most ``NET_MAX_CELLS`` cells; or
+    None and why."""
+    table = read_table(path)
+    if table is None:
+        return None, f"{path.name} could not be read"
+    columns, rows = table
+    needed = {"i", "j", "x_mm", "y_mm", "z_mm", "shear_deg"}
+    if not needed <= set(columns):
+        return None, f"{path.name} lacks the columns {', '.join(sorted(needed - set(columns)))}"
+    cells: dict[tuple[int, int], tuple[float, float, float, float]] = {}
+    flagged: list[tuple[int, int, str]] = []
+    for row in rows:
+        values = [_float(row[k]) for k in ("x_mm", "y_mm", "z_mm", "shear_deg")]
+        try:
+            ij = (int(row["i"]), int(row["j"]))
+        except (TypeError, ValueError):
+            continue
+        why = [
+            label
+            for key, label in (
+                ("wrinkling", "wrinkling"),
+                ("past_jamming", "past jamming"),
+                ("past_failure", "past stitch failure"),
+            )
+            if row.get(key) == "True"
+        ]
+        if row.get("status") == "FOLDED":
+            why.insert(0, "folded")
+        if any(v is None for v in values):
+            continue
+        x, y, z, g = (float(v) for v in values if v is not None)
+        cells[ij] = (x, y, z, g)
+        if why:
+            flagged.append((*ij, ", ".join(why)))
+    if not cells:
+        return None, f"{path.name} holds no placed cell"
+    stride = max(1, math.ceil(math.sqrt(len(cells) / NET_MAX_CELLS)))
+    index: dict[tuple[int, int], int] = {}
+    xs: list[float] = []
+    ys: list[float] = []
+    zs: list[float] = []
+    gs: list[float] = []
+    for (i, j), (x, y, z, g) in sorted(cells.items()):
+        if i % stride or j % stride:
+            continue
+        index[(i, j)] = len(xs)
+        xs.append(round(x, 2))
+        ys.append(round(y, 2))
+        zs.append(round(z, 2))
+        gs.append(round(g, 2))
+    triangles: list[tuple[int, int, int]] = []
+    for (i, j), a in index.items():
+        b = index.get((i + stride, j))
+        c = index.get((i + stride, j + stride))
+        d = index.get((i, j + stride))
+        if b is not None and c is not None:
+            triangles.append((a, b, c))
+        if c is not None and d is not None:
+            triangles.append((a, c, d))
+        elif b is not None and d is not None and c is None:
+            triangles.append((a, b, d))
+    mark_stride = max(1, math.ceil(len(flagged) / MARKS_MAX))
+    marks = [
+        (round(cells[(i, j)][0], 2), round(cells[(i, j)][1], 2), round(cells[(i, j)][2], 2), why)
+        for i, j, why in flagged[::mark_stride]
+    ]
+    net = Net(xs, ys, zs, gs, triangles, stride, len(cells), marks, len(flagged))
+    return net, ""
+
+
+def _case_folder(record: dict[str, Any], manifest_cases: dict[str, Any], case_id: str) -> str:
+    entry = manifest_cases.get(case_id)
+    if isinstance(entry, dict) and isinstance(entry.get("case_dir"), str):
+        return str(entry["case_dir"])
+    from preform.pipeline.runner import folder_name
+
+    return f"{folder_name(str(record.get('scene')))}/{folder_name(str(record.get('material')))}"
+
+
+def _inside(root: Path, relative: str) -> Path | None:
+    """``root / relative`` when it stays inside ``root`` (a record's file list is data)."""
+    path = (root / relative).resolve()
+    try:
+        path.relative_to(root.resolve())
+    except ValueError:
+        return None
+    return path
+
+
+def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -> Case:
+    case_id = f"{row.get('scene', '')}/{row.get('material', '')}"
+    folder = _case_folder(row, manifest_cases, case_id)
+    case_dir = _inside(root, folder) if folder else None
+    summary = _read_json(case_dir / "summary.json") if case_dir else None
+    problems = []
+    if not isinstance(summary, dict):
+        problems.append(f"{folder}/summary.json is missing or unreadable")
+        summary = {}
+    case = Case(
+        case_id=case_id,
+        scene=row.get("scene", ""),
+        material=row.get("material", ""),
+        status=row.get("status", "") or "unknown",
+        folder=folder,
+        row=row,
+        summary=summary,
+        error=row.get("error", ""),
+        reasons=_strings(summary.get("reasons"))
+        or [r for r in row.get("reasons", "").split("; ") if r],
+        warnings=_strings(summary.get("warnings"))
+        or [w for w in row.get("warnings", "").split("; ") if w],
+        files=_strings(summary.get("files")),
+        problems=problems,
+    )
+    if case_dir is None:
+        return case
+    for name in case.files:
+        path = _inside(case_dir, name)
+        if path is None:
+            continue
+        if name in PICTURES:
+            caption, mime = PICTURES[name]
+            try:
+                size = path.stat().st_size
+                if size <= PICTURE_MAX_BYTES:
+                    case.pictures.append((name, caption, mime, path.read_bytes()))
+            except OSError:
+                case.problems.append(f"{name} is listed but cannot be read")
+        elif name == "shear_curve.json":
+            curve = _read_json(path)
+            if isinstance(curve, dict):
+                case.shear_curve = curve
+            else:
+                case.problems.append(f"{name} is missing or unreadable")
+    if "cells.csv" in case.files:
+        case.net, case.net_note = read_net(case_dir / "cells.csv")
+    else:
+        case.net_note = "no 3-D view: the scene did not ask for cells.csv (output cells_csv)"
+    return case
+
+
+def _pending_cases(manifest_cases: dict[str, Any], known: set[str]) -> list[Case]:
+    """Cases the manifest names that have no row yet (a run still going, or one that died)."""
+    out = []
+    for case_id, entry in sorted(manifest_cases.items()):
+        if case_id in known or not isinstance(entry, dict):
+            continue
+        scene, _, material = case_id.partition("/")
+        out.append(
+            Case(
+                case_id=case_id,
+                scene=scene,
+                material=material,
+                status=str(entry.get("status") or CaseStatus.PENDING.value),
+                folder=str(entry.get("case_dir") or ""),
+                row={},
+                summary={},
+                error=str(entry.get("error") or ""),
+                reasons=_strings(entry.get("reasons")),
+                warnings=_strings(entry.get("warnings")),
+                files=[],
+            )
+        )
+    return out
+
+
+def read_run(root: Path) -> Run:
+    """Everything the report shows of the run folder ``root``, cases failed first."""
+    root = Path(root)
+    problems = []
+    manifest = _read_json(root / "manifest.json")
+    if not isinstance(manifest, dict):
+        problems.append("manifest.json is missing or unreadable: the run's settings are unknown")
+        manifest = {}
+    runs = manifest.get("runs")
+    last_run = runs[-1] if isinstance(runs, list) and runs and isinstance(runs[-1], dict) else {}
+    manifest_cases = manifest.get("cases") if isinstance(manifest.get("cases"), dict) else {}
+    assert isinstance(manifest_cases, dict)
+    table = read_table(root / "results.csv")
+    if table is None:
+        problems.append("results.csv is missing or unreadable: no case can be shown")
+        table = ([], [])
+    columns, rows = table
+    cases = [read_case(root, row, manifest_cases) for row in rows]
+    cases += _pending_cases(manifest_cases, {c.case_id for c in cases})
+    cases.sort(key=lambda c: (status_rank(c.status), c.case_id))
+    tradeoff = read_table(root / "tradeoff.csv")
+    return Run(root.resolve().name, manifest, last_run, columns, cases, tradeoff, problems)
+
+
+#: Numbers, with their sign, decimals and exponent, in a warning's words.
+_NUMBER = re.compile(r"[-−+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
+
+
+def cause_of(text: str) -> str:
+    """A warning's cause: its words up to the first colon or parenthesis, numbers as '#', so
+    the same warning of many cases (with their own numbers) groups under one heading."""
+    head = re.split(r"[:(]", text, maxsplit=1)[0]
+    head = _NUMBER.sub("#", head)
+    head = re.sub(r"#°?(?:, #°?)+(?: and # more)?", "#…", head)
+    return re.sub(r"\s+", " ", head).strip(" ,;")
+
+
+def warnings_by_cause(cases: list[Case]) -> dict[str, list[tuple[str, str]]]:
+    """(case id, warning) of every case grouped by ``cause_of``, causes by how many cases
+    they touch, then alphabetically."""
+    groups: dict[str, list[tuple[str, str]]] = {}
+    for case in cases:
+        for warning in case.warnings:
+            groups.setdefault(cause_of(warning), []).append((case.case_id, warning))
+    return dict(sorted(groups.items(), key=lambda kv: (-len(kv[1]), kv[0])))
