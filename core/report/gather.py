@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from preform.pipeline.status import CaseStatus
 
 #: The order cases are shown in: what needs reading first (no result, then an incomplete one).
@@ -61,7 +63,8 @@ class Net:
     y_mm: list[float]
     z_mm: list[float]
     shear_deg: list[float]
-    triangles: list[tuple[int, int, int]]
+    #: Vertex indices [a, b, c] of each triangle.
+    triangles: list[list[int]]
     #: Every k-th cell kept in each fibre direction.
     stride: int
     cells_total: int
@@ -152,71 +155,73 @@ def _float(text: Any) -> float | None:
 def read_net(path: Path) -> tuple[Net | None, str]:
     """The draped net of a case's cells.csv, thinned to at most ``NET_MAX_CELLS`` cells; or
     None and why."""
-    table = read_table(path)
-    if table is None:
-        return None, f"{path.name} could not be read"
-    columns, rows = table
-    needed = {"i", "j", "x_mm", "y_mm", "z_mm", "shear_deg"}
-    if not needed <= set(columns):
-        return None, f"{path.name} lacks the columns {', '.join(sorted(needed - set(columns)))}"
-    cells: dict[tuple[int, int], tuple[float, float, float, float]] = {}
-    flagged: list[tuple[int, int, str]] = []
-    for row in rows:
-        values = [_float(row[k]) for k in ("x_mm", "y_mm", "z_mm", "shear_deg")]
-        try:
-            ij = (int(row["i"]), int(row["j"]))
-        except (TypeError, ValueError):
-            continue
-        why = [
-            label
-            for key, label in (
-                ("wrinkling", "wrinkling"),
-                ("past_jamming", "past jamming"),
-                ("past_failure", "past stitch failure"),
-            )
-            if row.get(key) == "True"
-        ]
-        if row.get("status") == "FOLDED":
-            why.insert(0, "folded")
-        if any(v is None for v in values):
-            continue
-        x, y, z, g = (float(v) for v in values if v is not None)
-        cells[ij] = (x, y, z, g)
-        if why:
-            flagged.append((*ij, ", ".join(why)))
-    if not cells:
+    import pandas as pd  # its C parser: a default study's nets are 200 000 rows
+
+    needed = ("i", "j", "x_mm", "y_mm", "z_mm", "shear_deg")
+    flags = {"wrinkling": "wrinkling", "past_jamming": "past jamming"}
+    flags["past_failure"] = "past stitch failure"
+    wanted = {*needed, *flags, "status"}
+    try:
+        table = pd.read_csv(
+            path,
+            usecols=lambda c: c in wanted,
+            dtype={**dict.fromkeys(needed, float), **dict.fromkeys((*flags, "status"), str)},
+        )
+    except (OSError, ValueError, UnicodeDecodeError) as exc:
+        return None, f"{path.name} could not be read ({type(exc).__name__})"
+    missing = [k for k in needed if k not in table.columns]
+    if missing:
+        return None, f"{path.name} lacks the columns {', '.join(missing)}"
+    i, j, x, y, z, g = (table[k].to_numpy(dtype=float) for k in needed)
+    placed = np.isfinite(i) & np.isfinite(j) & np.isfinite(x) & np.isfinite(y)
+    placed &= np.isfinite(z) & np.isfinite(g) & (i >= 0) & (j >= 0)
+    if not placed.any():
         return None, f"{path.name} holds no placed cell"
-    stride = max(1, math.ceil(math.sqrt(len(cells) / NET_MAX_CELLS)))
-    index: dict[tuple[int, int], int] = {}
-    xs: list[float] = []
-    ys: list[float] = []
-    zs: list[float] = []
-    gs: list[float] = []
-    for (i, j), (x, y, z, g) in sorted(cells.items()):
-        if i % stride or j % stride:
-            continue
-        index[(i, j)] = len(xs)
-        xs.append(round(x, 2))
-        ys.append(round(y, 2))
-        zs.append(round(z, 2))
-        gs.append(round(g, 2))
-    triangles: list[tuple[int, int, int]] = []
-    for (i, j), a in index.items():
-        b = index.get((i + stride, j))
-        c = index.get((i + stride, j + stride))
-        d = index.get((i, j + stride))
-        if b is not None and c is not None:
-            triangles.append((a, b, c))
-        if c is not None and d is not None:
-            triangles.append((a, c, d))
-        elif b is not None and d is not None and c is None:
-            triangles.append((a, b, d))
-    mark_stride = max(1, math.ceil(len(flagged) / MARKS_MAX))
-    marks = [
-        (round(cells[(i, j)][0], 2), round(cells[(i, j)][1], 2), round(cells[(i, j)][2], 2), why)
-        for i, j, why in flagged[::mark_stride]
+    labels: list[np.ndarray] = []
+    names: list[str] = []
+    if "status" in table.columns:
+        labels.append((table["status"] == "FOLDED").to_numpy())
+        names.append("folded")
+    for key, label in flags.items():
+        if key in table.columns:
+            labels.append((table[key] == "True").to_numpy())
+            names.append(label)
+    hits = np.stack(labels, axis=1) if labels else np.zeros((len(table), 0), dtype=bool)
+    why = np.full(len(table), "", dtype=object)
+    for k in np.flatnonzero(hits.any(axis=1)):  # few: the cells past a limit
+        why[k] = ", ".join(n for n, hit in zip(names, hits[k], strict=True) if hit)
+    ii, jj = i[placed].astype(np.int64), j[placed].astype(np.int64)
+    total = int(placed.sum())
+    stride = max(1, math.ceil(math.sqrt(total / NET_MAX_CELLS)))
+    kept = (ii % stride == 0) & (jj % stride == 0)
+    # the kept cells on a grid of their own, in (i, j) order: -1 where no cell is kept
+    order = np.lexsort((jj[kept], ii[kept]))
+    gi, gj = ii[kept][order] // stride, jj[kept][order] // stride
+    grid = np.full((int(gi.max()) + 2, int(gj.max()) + 2), -1, dtype=np.int64)
+    grid[gi, gj] = np.arange(len(gi))
+    a, b = grid[:-1, :-1], grid[1:, :-1]
+    c, d = grid[1:, 1:], grid[:-1, 1:]
+    # each quad of kept cells in two triangles; a quad missing its far corner keeps one
+    tris = [
+        np.stack([a, b, c], axis=-1)[(a >= 0) & (b >= 0) & (c >= 0)],
+        np.stack([a, c, d], axis=-1)[(a >= 0) & (c >= 0) & (d >= 0)],
+        np.stack([a, b, d], axis=-1)[(a >= 0) & (b >= 0) & (d >= 0) & (c < 0)],
     ]
-    net = Net(xs, ys, zs, gs, triangles, stride, len(cells), marks, len(flagged))
+    triangles = np.concatenate(tris).tolist()
+
+    def rounded(values: np.ndarray) -> list[float]:
+        return [float(v) for v in np.round(values[placed][kept][order], 2)]
+
+    flagged = np.flatnonzero(placed & (why != ""))
+    step = max(1, math.ceil(len(flagged) / MARKS_MAX))
+    marks = [
+        (round(float(x[k]), 2), round(float(y[k]), 2), round(float(z[k]), 2), str(why[k]))
+        for k in flagged[::step]
+    ]
+    net = Net(
+        rounded(x), rounded(y), rounded(z), rounded(g), triangles, stride, total, marks,
+        len(flagged),
+    )  # fmt: skip
     return net, ""
 
 

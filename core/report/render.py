@@ -318,17 +318,13 @@ def _case_section(case: Case, columns: list[str], figs: _Figures) -> str:
     if case.net is not None:
         net = case.net
         thinned = (
-            f"every {net.stride}th cell in each fibre direction of {net.cells_total} placed"
+            f"one cell in {net.stride} along each fibre direction, of {net.cells_total} placed"
             if net.stride > 1
             else f"all {net.cells_total} placed cells"
         )
         marks = (
             f"; {net.marks_total} cells wrinkle, fold or lie past a limit (crosses"
-            + (
-                f", every {net.marks_total // max(len(net.marks), 1)}th shown"
-                if len(net.marks) < net.marks_total
-                else ""
-            )
+            + (f", {len(net.marks)} of them shown" if len(net.marks) < net.marks_total else "")
             + ")"
             if net.marks_total
             else "; no cell wrinkles, folds or lies past a limit"
