@@ -661,6 +661,8 @@ def _write_report_page(report: RunReport) -> None:
         report.report_file = write_report(report.out_dir)
     except Exception as exc:  # a page must not lose the run's results
         report.report_error = f"{type(exc).__name__}: {exc}"
+    except KeyboardInterrupt:  # every case is recorded: only the page is left to write
+        report.report_error = "interrupted; `preform report DIR` writes it"
 
 
 def execute_batch(cases: Sequence[Case]) -> list[CaseResult]:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from preform.report.gather import Case, Net
+from preform.report.gather import CaseData, Net
 
 #: Shear colour scale of the 3-D view (plotly's perceptually uniform "Viridis").
 SHEAR_COLOURS = "Viridis"
@@ -30,7 +30,26 @@ def _pairs(value: Any) -> list[tuple[float, float]]:
     return out
 
 
-def energy_vs_angle(scene: str, cases: list[Case]) -> dict[str, Any] | None:
+def _plot_2d(
+    data: list[dict[str, Any]], title: str, x_title: str, y_axis: dict[str, Any]
+) -> dict[str, Any] | None:
+    """A figure of curves against one axis, or None when there is no curve."""
+    if not data:
+        return None
+    return {
+        "data": data,
+        "layout": {
+            "title": {"text": title},
+            "xaxis": {"title": {"text": x_title}},
+            "yaxis": y_axis,
+            "margin": _MARGIN,
+            "height": 440,
+            "hovermode": "closest",
+        },
+    }
+
+
+def energy_vs_angle(scene: str, cases: list[CaseData]) -> dict[str, Any] | None:
     """E(α) of every fabric of a scene on one plot (the paper's Fig. 10), each optimum marked;
     an angle whose drape cannot be made (mostly wrinkle energy) drawn as an open marker."""
     data: list[dict[str, Any]] = []
@@ -75,22 +94,15 @@ def energy_vs_angle(scene: str, cases: list[Case]) -> dict[str, Any] | None:
                     "E = %{y:.4g} J<extra></extra>",
                 }
             )
-    if not data:
-        return None
-    return {
-        "data": data,
-        "layout": {
-            "title": {"text": f"{scene}: strain energy against generator angle"},
-            "xaxis": {"title": {"text": "generator angle α (°)"}},
-            "yaxis": {"title": {"text": "shear strain energy E (J)"}, "type": "log"},
-            "margin": _MARGIN,
-            "height": 460,
-            "hovermode": "closest",
-        },
-    }
+    return _plot_2d(
+        data,
+        f"{scene}: strain energy against generator angle",
+        "generator angle α (°)",
+        {"title": {"text": "shear strain energy E (J)"}, "type": "log"},
+    )
 
 
-def shear_curves(scene: str, cases: list[Case], quantity: str) -> dict[str, Any] | None:
+def shear_curves(scene: str, cases: list[CaseData], quantity: str) -> dict[str, Any] | None:
     """Shear curves of every fabric of a scene (the paper's Figs 8 and 9): ``quantity`` is
     ``force_N_per_mm`` (picture-frame force per unit side length) or ``energy_J_per_m2``; both
     senses against the size of the shear angle, the negative sense dashed."""
@@ -125,22 +137,15 @@ def shear_curves(scene: str, cases: list[Case], quantity: str) -> dict[str, Any]
                         "<br>%{y:.4g}<extra></extra>",
                     }
                 )
-    if not data:
-        return None
-    return {
-        "data": data,
-        "layout": {
-            "title": {"text": f"{scene}: {title} against shear angle"},
-            "xaxis": {"title": {"text": "shear angle |γ| (°)"}},
-            "yaxis": {"title": {"text": axis}},
-            "margin": _MARGIN,
-            "height": 420,
-            "hovermode": "closest",
-        },
-    }
+    return _plot_2d(
+        data,
+        f"{scene}: {title} against shear angle",
+        "shear angle |γ| (°)",
+        {"title": {"text": axis}},
+    )
 
 
-def drape_3d(case: Case, net: Net) -> dict[str, Any]:
+def drape_3d(case: CaseData, net: Net) -> dict[str, Any]:
     """The draped net in 3-D, coloured by shear angle; cells past a limit of the fabric (or
     folded) marked with crosses."""
     i, j, k = (list(t) for t in zip(*net.triangles, strict=True)) if net.triangles else ([], [], [])

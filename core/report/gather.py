@@ -74,7 +74,7 @@ class Net:
 
 
 @dataclass
-class Case:
+class CaseData:
     case_id: str
     scene: str
     material: str
@@ -106,7 +106,7 @@ class Run:
     #: The last run recorded in the manifest (settings, inputs, plugins, times, counts).
     last_run: dict[str, Any]
     columns: list[str]
-    cases: list[Case]
+    cases: list[CaseData]
     #: preform bench tradeoff's table when the folder holds one: its columns and rows (text).
     tradeoff: tuple[list[str], list[dict[str, str]]] | None = None
     problems: list[str] = field(default_factory=list)
@@ -244,7 +244,7 @@ def _inside(root: Path, relative: str) -> Path | None:
     return path
 
 
-def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -> Case:
+def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -> CaseData:
     case_id = f"{row.get('scene', '')}/{row.get('material', '')}"
     folder = _case_folder(row, manifest_cases, case_id)
     case_dir = _inside(root, folder) if folder else None
@@ -253,7 +253,7 @@ def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -
     if not isinstance(summary, dict):
         problems.append(f"{folder}/summary.json is missing or unreadable")
         summary = {}
-    case = Case(
+    case = CaseData(
         case_id=case_id,
         scene=row.get("scene", ""),
         material=row.get("material", ""),
@@ -296,7 +296,7 @@ def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -
     return case
 
 
-def _pending_cases(manifest_cases: dict[str, Any], known: set[str]) -> list[Case]:
+def _pending_cases(manifest_cases: dict[str, Any], known: set[str]) -> list[CaseData]:
     """Cases the manifest names that have no row yet (a run still going, or one that died)."""
     out = []
     for case_id, entry in sorted(manifest_cases.items()):
@@ -304,7 +304,7 @@ def _pending_cases(manifest_cases: dict[str, Any], known: set[str]) -> list[Case
             continue
         scene, _, material = case_id.partition("/")
         out.append(
-            Case(
+            CaseData(
                 case_id=case_id,
                 scene=scene,
                 material=material,
@@ -358,7 +358,7 @@ def cause_of(text: str) -> str:
     return re.sub(r"\s+", " ", head).strip(" ,;")
 
 
-def warnings_by_cause(cases: list[Case]) -> dict[str, list[tuple[str, str]]]:
+def warnings_by_cause(cases: list[CaseData]) -> dict[str, list[tuple[str, str]]]:
     """(case id, warning) of every case grouped by ``cause_of``, causes by how many cases
     they touch, then alphabetically."""
     groups: dict[str, list[tuple[str, str]]] = {}

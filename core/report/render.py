@@ -21,7 +21,7 @@ from urllib.parse import quote
 from preform import __version__
 from preform.pipeline.status import MEANING, CaseStatus
 from preform.report import figures
-from preform.report.gather import Case, Run, cause_of, warnings_by_cause
+from preform.report.gather import CaseData, Run, cause_of, warnings_by_cause
 
 #: Columns of the results table (those results.csv has), in this order; every column is in
 #: each case's own table.
@@ -188,7 +188,7 @@ def _run_section(run: Run) -> str:
     )
 
 
-def _attention_section(cases: list[Case]) -> str:
+def _attention_section(cases: list[CaseData]) -> str:
     """Cases that are not plainly ok, failed first, with why."""
     items = []
     for case in cases:
@@ -214,7 +214,7 @@ def _attention_section(cases: list[Case]) -> str:
     )
 
 
-def _warnings_section(cases: list[Case]) -> str:
+def _warnings_section(cases: list[CaseData]) -> str:
     groups = warnings_by_cause(cases)
     if not groups:
         return ""
@@ -285,7 +285,7 @@ def _scene_sections(run: Run, figs: _Figures) -> str:
     return "".join(parts)
 
 
-def _trade_table(case: Case) -> str:
+def _trade_table(case: CaseData) -> str:
     table = case.summary.get("energy_vs_angle_table")
     if not isinstance(table, list) or not table:
         return ""
@@ -304,7 +304,7 @@ def _trade_table(case: Case) -> str:
     )
 
 
-def _case_section(case: Case, columns: list[str], figs: _Figures) -> str:
+def _case_section(case: CaseData, columns: list[str], figs: _Figures) -> str:
     status = _esc(case.status)
     headline = []
     for col, fmt in (("optimum_generator_angle_deg", "α* = {}°"), ("optimum_energy_J", "E = {} J")):
@@ -426,12 +426,13 @@ def render_page(run: Run, plotly_js: str | None) -> str:
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f'<meta name="generator" content="preform {_esc(__version__)}">'
         f"<title>preform run report: {_esc(run.name)}</title>"
-        f"<style>{_asset('page.css')}</style>{plotly}</head><body>"
+        f"<style>{_asset('page.css')}</style></head><body>"
         f"<header><h1>preform run report: {_esc(run.name)}</h1><nav>{nav}</nav></header>"
         f"<main>{body}</main>"
         f"<footer>Written by preform {_esc(__version__)} from the files of this folder only; "
         "<code>preform report DIR</code> writes the same page again.</footer>"
-        f"<script>{_asset('page.js')}</script></body></html>\n"
+        # plotly.js last: the tables show while it is read
+        f"{plotly}<script>{_asset('page.js')}</script></body></html>\n"
     )
 
 

@@ -318,3 +318,40 @@ def test_a_fine_net_adds_little_to_the_page(tmp_path, run_maker):
     stay far below the 15 MB the issue allows."""
     root = run_maker(tmp_path / "run", n_grid=160)
     assert len(render_page(read_run(root), "").encode()) < 400_000
+
+
+def test_a_report_that_cannot_be_written_never_fails_the_run(tmp_path, monkeypatch):
+    import preform.report
+
+    def broken(run_dir, run=None):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(preform.report, "write_report", broken)
+    out = tmp_path / "run"
+    args = ["pipeline", "run", "--scene", "shear", "--materials", "plain-weave-150"]
+    result = CliRunner().invoke(cli, [*args, "--engine", "serial", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "warning: report.html was not written: OSError" in result.stderr
+    assert (out / "results.csv").is_file() and not (out / REPORT_NAME).exists()
+
+
+def test_a_file_list_cannot_reach_outside_the_folder(made_run):
+    """summary.json is data: a listed picture that leads outside the run folder (by its name
+    or by a symbolic link) is not read into the page."""
+    import base64
+
+    secret = made_run.parent / "secret.png"
+    secret.write_bytes(b"\x89PNG secret")
+    case_dir = made_run / "dome" / "plain-weave-600"
+    (case_dir / "fibre_pattern.png").symlink_to(secret)
+    summary = json.loads((case_dir / "summary.json").read_text())
+    summary["files"] = ["../../../secret.png", "fibre_pattern.png", "cells.csv"]
+    (case_dir / "summary.json").write_text(json.dumps(summary))
+    text = build_report(made_run)
+    assert base64.b64encode(secret.read_bytes()).decode() not in text
+    case = next(c for c in read_run(made_run).cases if c.case_id == "dome/plain-weave-600")
+    assert case.pictures == [] and case.net is not None
+    # the same picture inside the folder is shown
+    (case_dir / "fibre_pattern.png").unlink()
+    (case_dir / "fibre_pattern.png").write_bytes(secret.read_bytes())
+    assert base64.b64encode(secret.read_bytes()).decode() in build_report(made_run)
