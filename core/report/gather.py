@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from preform.pipeline.status import CaseStatus
+from preform.pipeline.status import REUSABLE, CaseStatus
 
 #: The order cases are shown in: what needs reading first (no result, then an incomplete one).
 STATUS_ORDER: tuple[str, ...] = (
@@ -292,7 +292,11 @@ def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -
     if "cells.csv" in case.files:
         case.net, case.net_note = read_net(case_dir / "cells.csv")
     else:
-        case.net_note = "no 3-D view: the scene did not ask for cells.csv (output cells_csv)"
+        case.net_note = (
+            "no 3-D view: the scene did not ask for cells.csv (output cells_csv)"
+            if case.status in REUSABLE
+            else f"no 3-D view: the case ended {case.status} without a drape"
+        )
     return case
 
 

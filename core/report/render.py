@@ -124,9 +124,10 @@ def _run_section(run: Run) -> str:
     fidelities = sorted({c.row.get("fidelity", "") for c in run.cases} - {""})
     facts = [
         ("folder", run.name),
-        ("started", str(last.get("started", "unknown"))),
-        ("finished", str(last.get("finished", "not finished"))),
-        ("run status", str(last.get("status", "unknown"))),
+        ("runs into it", str(len(run.manifest.get("runs") or []))),
+        ("last run started", str(last.get("started", "unknown"))),
+        ("last run finished", str(last.get("finished", "not finished"))),
+        ("last run's status", str(last.get("status", "unknown"))),
         ("preform (run)", str(last.get("preform_version", "unknown"))),
         ("engine", str(settings.get("engine", "unknown"))),
         ("workers", str(settings.get("workers") or "all cores")),
@@ -172,7 +173,7 @@ def _run_section(run: Run) -> str:
         + "</p>"
         + (f'<p class="legend">{legend}</p>' if legend else "")
         + (
-            '<h3>Inputs</h3><table class="inputs"><tr><th>kind</th><th>path</th>'
+            '<h3>Inputs of the last run</h3><table class="inputs"><tr><th>kind</th><th>path</th>'
             f"<th>SHA-256</th></tr>{''.join(files)}</table>"
             if files
             else ""
@@ -247,7 +248,10 @@ def _results_section(run: Run) -> str:
             else:
                 cells.append(_cell(col, text))
         why = "; ".join(([case.error] if case.error else []) + case.reasons)
-        cells.append(f'<td class="why">{_esc(why)}</td>')
+        # long reasons fold to three lines; the whole text is the cell's title and the case's
+        cells.append(
+            f'<td class="why"><div class="clamp" title="{_esc(why)}">{_esc(why)}</div></td>'
+        )
         body.append(
             f'<tr class="st-{_esc(case.status)}" data-case="{_esc(case.case_id)}" '
             f'data-status="{_esc(case.status)}">{"".join(cells)}</tr>'
@@ -266,23 +270,32 @@ def _results_section(run: Run) -> str:
     )
 
 
-def _scene_sections(run: Run, figs: _Figures) -> str:
-    parts = []
+def scene_figures(run: Run) -> dict[str, list[dict[str, Any]]]:
+    """Each scene's curves (E(α), shear force, shear energy), scenes without any left out."""
+    out = {}
     for scene in run.scenes():
         cases = [c for c in run.cases if c.scene == scene]
-        plots = [
-            figs.place(figures.energy_vs_angle(scene, cases), "2d"),
-            figs.place(figures.shear_curves(scene, cases, "force_N_per_mm"), "2d"),
-            figs.place(figures.shear_curves(scene, cases, "energy_J_per_m2"), "2d"),
+        specs = [
+            figures.energy_vs_angle(scene, cases),
+            figures.shear_curves(scene, cases, "force_N_per_mm"),
+            figures.shear_curves(scene, cases, "energy_J_per_m2"),
         ]
-        body = "".join(plots) or (
-            '<p class="note">No curves: this scene searched no angle and drew no shear curve.</p>'
-        )
-        parts.append(
-            f'<section class="scene" id="scene-{_esc(re.sub(r"[^A-Za-z0-9_.-]", "-", scene))}">'
-            f"<h2>Scene {_esc(scene)}</h2>{body}</section>"
-        )
-    return "".join(parts)
+        if any(specs):
+            out[scene] = [s for s in specs if s is not None]
+    return out
+
+
+def _scene_anchor(scene: str) -> str:
+    return "scene-" + re.sub(r"[^A-Za-z0-9_.-]", "-", scene)
+
+
+def _scene_sections(by_scene: dict[str, list[dict[str, Any]]], figs: _Figures) -> str:
+    return "".join(
+        f'<section class="scene" id="{_esc(_scene_anchor(scene))}"><h2>Scene {_esc(scene)}</h2>'
+        + "".join(figs.place(spec, "2d") for spec in specs)
+        + "</section>"
+        for scene, specs in by_scene.items()
+    )
 
 
 def _trade_table(case: CaseData) -> str:
@@ -406,18 +419,19 @@ def render_page(run: Run, plotly_js: str | None) -> str:
     """The page's HTML for ``run``; ``plotly_js`` is the plotly.js bundle to embed (None:
     the page has no interactive figure and says how to get them)."""
     figs = _Figures(plotly_js is not None)
+    by_scene = scene_figures(run)
     body = (
         _run_section(run)
         + _attention_section(run.cases)
         + _warnings_section(run.cases)
         + _results_section(run)
-        + _scene_sections(run, figs)
+        + _scene_sections(by_scene, figs)
         + _tradeoff_section(run, figs)
         + '<section id="cases"><h2>Cases</h2>'
         + "".join(_case_section(c, run.columns, figs) for c in run.cases)
         + "</section>"
     )
-    nav = "".join(f'<a href="#{a}">{_esc(t)}</a>' for a, t in _nav(run))
+    nav = "".join(f'<a href="#{a}">{_esc(t)}</a>' for a, t in _nav(run, by_scene))
     plotly = f"<script>{plotly_js}</script>" if plotly_js is not None else ""
     return (
         "<!DOCTYPE html>\n"
@@ -436,15 +450,15 @@ def render_page(run: Run, plotly_js: str | None) -> str:
     )
 
 
-def _nav(run: Run) -> Iterable[tuple[str, str]]:
+def _nav(run: Run, by_scene: dict[str, list[dict[str, Any]]]) -> Iterable[tuple[str, str]]:
     yield "run", "run"
     if any(c.status != CaseStatus.OK.value for c in run.cases):
         yield "attention", "needs reading"
     if any(c.warnings for c in run.cases):
         yield "warnings", "warnings"
     yield "results-section", "results"
-    for scene in run.scenes():
-        yield "scene-" + re.sub(r"[^A-Za-z0-9_.-]", "-", scene), scene
+    for scene in by_scene:
+        yield _scene_anchor(scene), scene
     if run.tradeoff is not None:
         yield "tradeoff", "trade study"
     yield "cases", "cases"
