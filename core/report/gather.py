@@ -152,42 +152,60 @@ def _float(text: Any) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def csv_columns(
+    path: Path, numbers: set[str], texts: set[str]
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Of a CSV file's columns, those named in ``numbers`` as floats (an empty field NaN) and
+    those in ``texts`` as text; only the ones the file has. The csv module, not pandas (a
+    run's process never imports it) nor pyarrow (its arrays with gaps go through pandas).
+    Raises OSError, ValueError (a field that is not a number) or UnicodeDecodeError."""
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.reader(f)
+        header = next(reader, [])
+        columns = list(zip(*reader, strict=False)) or [() for _ in header]
+    nan = float("nan")
+    found_numbers = {
+        name: np.array([float(v) if v else nan for v in columns[k]], dtype=float)
+        for k, name in enumerate(header)
+        if name in numbers and k < len(columns)
+    }
+    found_texts = {
+        name: np.array(columns[k], dtype=str)
+        for k, name in enumerate(header)
+        if name in texts and k < len(columns)
+    }
+    return found_numbers, found_texts
+
+
 def read_net(path: Path) -> tuple[Net | None, str]:
     """The draped net of a case's cells.csv, thinned to at most ``NET_MAX_CELLS`` cells; or
     None and why."""
-    import pandas as pd  # its C parser: a default study's nets are 200 000 rows
-
     needed = ("i", "j", "x_mm", "y_mm", "z_mm", "shear_deg")
     flags = {"wrinkling": "wrinkling", "past_jamming": "past jamming"}
     flags["past_failure"] = "past stitch failure"
-    wanted = {*needed, *flags, "status"}
     try:
-        table = pd.read_csv(
-            path,
-            usecols=lambda c: c in wanted,
-            dtype={**dict.fromkeys(needed, float), **dict.fromkeys((*flags, "status"), str)},
-        )
+        numbers, table = csv_columns(path, set(needed), {*flags, "status"})
     except (OSError, ValueError, UnicodeDecodeError) as exc:
         return None, f"{path.name} could not be read ({type(exc).__name__})"
-    missing = [k for k in needed if k not in table.columns]
+    missing = [k for k in needed if k not in numbers]
     if missing:
         return None, f"{path.name} lacks the columns {', '.join(missing)}"
-    i, j, x, y, z, g = (table[k].to_numpy(dtype=float) for k in needed)
+    i, j, x, y, z, g = (numbers[k] for k in needed)
     placed = np.isfinite(i) & np.isfinite(j) & np.isfinite(x) & np.isfinite(y)
     placed &= np.isfinite(z) & np.isfinite(g) & (i >= 0) & (j >= 0)
     if not placed.any():
         return None, f"{path.name} holds no placed cell"
     labels: list[np.ndarray] = []
     names: list[str] = []
-    if "status" in table.columns:
-        labels.append((table["status"] == "FOLDED").to_numpy())
+    if "status" in table:
+        labels.append(table["status"] == "FOLDED")
         names.append("folded")
     for key, label in flags.items():
-        if key in table.columns:
-            labels.append((table[key] == "True").to_numpy())
+        if key in table:
+            labels.append(table[key] == "True")
             names.append(label)
-    hits = np.stack(labels, axis=1) if labels else np.zeros((len(table), 0), dtype=bool)
-    why = np.full(len(table), "", dtype=object)
+    hits = np.stack(labels, axis=1) if labels else np.zeros((len(i), 0), dtype=bool)
+    why = np.full(len(i), "", dtype=object)
     for k in np.flatnonzero(hits.any(axis=1)):  # few: the cells past a limit
         why[k] = ", ".join(n for n, hit in zip(names, hits[k], strict=True) if hit)
     ii, jj = i[placed].astype(np.int64), j[placed].astype(np.int64)
