@@ -90,6 +90,10 @@ LAZY_COMMANDS: dict[str, tuple[str, str]] = {
         "preform.bench.tradeoff:bench",
         "Measure preform: speed, and the speed/accuracy trade of the fidelity knobs.",
     ),
+    "report": (
+        "preform.report.command:report_command",
+        "Write report.html of the run folder DIR: one page, offline, from its files only.",
+    ),
 }
 
 
@@ -607,6 +611,11 @@ def pipeline() -> None:
 @click.option("--explain", is_flag=True, help="Print the plan of each scene and stop.")
 @click.option("-q", "--quiet", is_flag=True, help=QUIET_HELP)
 @click.option("-v", "--verbose", is_flag=True, help=VERBOSE_HELP)
+@click.option(
+    "--no-report",
+    is_flag=True,
+    help="Do not write report.html (the run's page; `preform report DIR` writes it later).",
+)
 @json_option
 def pipeline_run(
     libraries: tuple[str, ...],
@@ -625,6 +634,7 @@ def pipeline_run(
     explain: bool = False,
     quiet: bool = False,
     verbose: bool = False,
+    no_report: bool = False,
     as_json: bool = False,
 ) -> None:
     """Run every (material, scene) case.
@@ -756,6 +766,7 @@ def pipeline_run(
                 inputs=inputs,
                 on_done=lambda r: progress.advance(task),
                 batch_size=batch_size,
+                report_page=not no_report,
             )
     except RunDirectoryError as exc:
         _fail([f"error: {exc}; nothing was run."])
@@ -767,6 +778,8 @@ def pipeline_run(
         # with --json, stdout holds the JSON only: the words go to stderr
         problem = line.startswith(PROBLEM_PREFIXES)
         click.echo(line, err=as_json or problem)
+    if report.report_error:
+        click.echo(f"warning: report.html was not written: {report.report_error}", err=True)
     summary = run_summary(report)
     if as_json:
         _echo_json(summary)

@@ -103,6 +103,11 @@ COMMANDS: dict[str, dict[str, object]] = {
         "json": ["validate", "--out", "{tmp}/validation", "--json"],
         "error": (["validate", "--nosuch"], 2, "No such option"),
     },
+    "report": {
+        # docs/examples/results.csv makes {tmp} a run folder (a table and no case folders)
+        "json": ["report", "{tmp}", "--json"],
+        "error": (["report", "{tmp}/nosuch"], 2, "is not a directory"),
+    },
     "bench tradeoff": {
         "json": ["bench", "tradeoff", "--quick", "--out", "{tmp}/bench", "--json"],
         "error": (["bench", "tradeoff", "--material", "nosuch"], 2, "nosuch"),

@@ -6,6 +6,7 @@ Layout::
     manifest.json        every case in the directory (status, folder, input hash, reasons),
                          and a record of each run (settings, inputs, plugins, counts)
     results.csv          one row per case in the directory (results.parquet with pyarrow)
+    report.html          the whole folder on one page, written at a run's end (preform.report)
     <scene>/<material>/  summary.json (the case's own record) and the files its scene asked for
 
 A case's ``summary.json`` is its record; the manifest and the tables are rebuilt from the

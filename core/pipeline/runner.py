@@ -470,6 +470,10 @@ class RunReport:
     results: list[CaseResult]
     #: True when the run was interrupted (Ctrl-C, SIGTERM) and did not finish.
     interrupted: bool = False
+    #: The run's report page (``preform.report``) when one was asked for and written.
+    report_file: Path | None = None
+    #: Why the report page was not written, in words (the run's results are kept).
+    report_error: str | None = None
 
     @property
     def failed(self) -> list[CaseResult]:
@@ -525,6 +529,7 @@ def run_cases(
     inputs: dict[str, Any] | None = None,
     on_done: Callable[[CaseResult], None] | None = None,
     batch_size: int | None = None,
+    report_page: bool = False,
 ) -> RunReport:
     """Run the cases on an engine, keeping finished ones; keep manifest and tables current.
 
@@ -537,6 +542,10 @@ def run_cases(
     in batches of ``batch_size`` cases (None: ``preform.pipeline.batching.plan_batches``
     chooses; 1: none). A batch whose worker dies or overruns keeps the cases it finished; the
     others are run again, each on its own. The run-level outputs run on the engine too.
+
+    ``report_page``: write the folder's report.html (``preform.report``) when the run ends
+    uninterrupted; a report that cannot be written is said in ``report_error``, never fails
+    the run.
     """
     from preform.pipeline.main_guard import refuse_unguarded_run
 
@@ -565,6 +574,7 @@ def run_cases(
             inputs,
             on_done,
             batch_size,
+            report_page,
         )
 
 
@@ -580,6 +590,7 @@ def _run_in_directory(
     inputs: dict[str, Any] | None,
     on_done: Callable[[CaseResult], None] | None,
     batch_size: int | None,
+    report_page: bool = False,
 ) -> RunReport:
     with RunDirectory(out_dir) as rundir:
         run: dict[str, Any] = {
@@ -655,7 +666,21 @@ def _run_in_directory(
         run["counts"] = report.counts()
         rundir.write_manifest(run)
         rundir.write_tables()
+        if report_page and not interrupted:
+            _write_report_page(report)
         return report
+
+
+def _write_report_page(report: RunReport) -> None:
+    """The folder's report.html, under the run's lock, from the files just written."""
+    from preform.report import write_report
+
+    try:
+        report.report_file = write_report(report.out_dir)
+    except Exception as exc:  # a page must not lose the run's results
+        report.report_error = f"{type(exc).__name__}: {exc}"
+    except KeyboardInterrupt:  # every case is recorded: only the page is left to write
+        report.report_error = "interrupted; `preform report DIR` writes it"
 
 
 def execute_batch(cases: Sequence[Case]) -> list[CaseResult]:
