@@ -54,6 +54,9 @@ class Cause:
     count: int
     area_share: float | None
     energy_share: float | None
+    #: The warning itself when the cause has one and no share to state: its words say more
+    #: than the cause's name ("tool mesh: re-wound 12 triangles ...", not "tool mesh").
+    only: str | None = None
 
     @property
     def rank(self) -> tuple[int, float]:
@@ -61,6 +64,8 @@ class Cause:
 
     def words(self) -> str:
         """ "8.3 % of the part past jamming (39 % of its energy)"."""
+        if self.only is not None and self.area_share is None and self.energy_share is None:
+            return self.only
         text = self.name
         if self.area_share is not None:
             text = f"{_percent(self.area_share)} % of the part {self.name}"
@@ -87,17 +92,25 @@ def case_causes(warnings: list[str], results: Mapping[str, Any]) -> tuple[list[C
         if isinstance(n, Mapping) and isinstance(n.get("warning"), int)
     }
     grouped: dict[str, list[Mapping[str, Any]]] = {}
+    texts: dict[str, list[str]] = {}
     unnamed = scanned = 0
-    for index in range(len(warnings)):
+    for index, warning in enumerate(warnings):
         note = notes.get(index, {})
         if note.get("scan"):
             scanned += 1
         elif note.get("cause"):
             grouped.setdefault(str(note["cause"]), []).append(note)
+            texts.setdefault(str(note["cause"]), []).append(str(warning))
         else:
             unnamed += 1
     causes = [
-        Cause(name, len(group), _largest(group, "area_share"), _largest(group, "energy_share"))
+        Cause(
+            name,
+            len(group),
+            _largest(group, "area_share"),
+            _largest(group, "energy_share"),
+            only=texts[name][0] if len(group) == 1 else None,
+        )
         for name, group in grouped.items()
     ]
     return sorted(causes, key=lambda c: c.rank), unnamed, scanned
