@@ -12,9 +12,9 @@ Hypothesis profiles:
   ``max_examples``, or hypothesis' default of 100), but never fewer than ``min(its count,
   10)``. New examples on every run (that is how a property test finds bugs), so the small
   count still explores over many runs.
-- ``ci`` (``CI`` set, as ``.ci/run`` runs): every example each test asks for, derandomised, so
-  a landing is judged on the same examples every time and a new counterexample surfaces
-  locally, not as a random red CI.
+- ``ci`` (``CI`` set, as CI runs ``.ci/run``, which also sets ``HYPOTHESIS_PROFILE=ci``):
+  every example each test asks for, derandomised, so a landing is judged on the same examples
+  every time and a new counterexample surfaces locally, not as a random red CI.
 
 ``HYPOTHESIS_PROFILE=ci pytest`` runs the full counts locally; ``HYPOTHESIS_PROFILE`` wins over
 ``CI``.
