@@ -132,8 +132,15 @@ def _extremes(
     for k in range(last):
         # signs compared, not multiplied: the product of two tiny slopes underflows to 0
         left, right = slopes[k], slopes[k + 1]
+        # A slope exactly 0 at a grid point (a critical point there, e.g. γ = 0 of a law
+        # without a linear term) has the sign the slope takes just inside the interval, the
+        # curvature's: without it a hump between that point and the next was missed.
+        if left == 0.0:
+            left = _curvature(c, grid[k])
+        if right == 0.0:
+            right = -_curvature(c, grid[k + 1])
         if (left < 0.0 < right) or (right < 0.0 < left):
-            root = _slope_root(c, grid[k], grid[k + 1], slopes[k])
+            root = _slope_root(c, grid[k], grid[k + 1], left)
             if start_deg < root < end_deg:
                 angles.append(root)
                 values.append(_value_and_slope(c, root)[0])
@@ -167,6 +174,15 @@ def _value_and_slope(c: list[float], x: float) -> tuple[float, float]:
         slope = slope * x + value
         value = value * x + a
     return value, slope
+
+
+def _curvature(c: list[float], x: float) -> float:
+    """Σ k(k−1)·c_k·x^(k−2), the second derivative at x (plain Python, Horner's scheme)."""
+    second = [k * (k - 1) * a for k, a in enumerate(c)][2:]
+    value = 0.0
+    for a in reversed(second):
+        value = value * x + a
+    return value
 
 
 def _slope_root(c: list[float], lo: float, hi: float, slope_lo: float) -> float:

@@ -228,6 +228,9 @@ COEFFICIENT = st.floats(-1.0, 1.0, allow_subnormal=False)
 @example(raw=[0.0, 0.7200358324442404, -1.0, 1.7303754948657723e-13], end=20.0)
 # slopes ~1e-198 and ~1e-195 either side of the hump: their product underflowed to 0
 @example(raw=[0.0, 1.416030275987887e-198, -6.118341350390407e-195], end=20.0)
+# no linear term: the slope is exactly 0 at the grid's first point and a hump of 5.7e-7 rises
+# before the next one (found by the quick hypothesis profile)
+@example(raw=[0.0, 0.0, 0.015625, -1.0], end=20.0)
 def test_polynomial_extremes_agree_with_companion_roots(raw: list[float], end: float) -> None:
     """As extreme as the companion-matrix roots find (those can be off where the other root is
     huge: the example's, 7.7e12, put numpy's maximum 1.1e-7 low) and never past what the
