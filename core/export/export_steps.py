@@ -64,18 +64,26 @@ def no_element_covered(result: Any, mesh: Any, name: str) -> str:
     )
 
 
-def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.fe_mapping import map_to_mesh
+def scene_fe_mesh(ctx: CaseContext, what: str = "the drape") -> Any:
+    """The scene's FE mesh (``export.mesh``, relative to the scene's folder, in its unit), or
+    a ``CaseFailure`` saying what is wrong with it; ``what`` is what would be mapped onto it."""
     from preform.export.shell_mesh import read_shell_mesh
 
     options = export_options(ctx)
     if options.mesh is None:
-        raise CaseFailure("export.mesh: the scene names no FE mesh to map the drape onto")
+        raise CaseFailure(f"export.mesh: the scene names no FE mesh to map {what} onto")
     path = Path(ctx.scene.base_dir) / options.mesh
     try:
-        mesh = read_shell_mesh(path, unit_mm=options.mesh_unit_mm)
+        return read_shell_mesh(path, unit_mm=options.mesh_unit_mm)
     except (ValueError, OSError) as error:
         raise CaseFailure(f"export.mesh: {error}") from None
+
+
+def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
+    from preform.export.fe_mapping import map_to_mesh
+
+    options = export_options(ctx)
+    mesh = scene_fe_mesh(ctx)
     ply = ctx.products["drape"]
     # the case's one thickness (preform.drape.thickness): its model and its t0
     thickness = ctx.products["thickness"]

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -312,19 +311,12 @@ def run_stack_sections(ctx: CaseContext) -> dict[str, Any]:
     """Each ply's drape mapped onto the scene's FE mesh (``export.mesh``), tool side first:
     the ``StackSections`` the solver writers take, and ``stack_elements.csv``."""
     from preform.export.csv_columns import write_csv_columns
-    from preform.export.export_steps import export_options
+    from preform.export.export_steps import export_options, scene_fe_mesh
     from preform.export.fe_mapping import map_to_mesh
     from preform.export.ply_stack import PlySection, StackSections
-    from preform.export.shell_mesh import read_shell_mesh
 
     options = export_options(ctx)
-    if options.mesh is None:
-        raise CaseFailure("export.mesh: the scene names no FE mesh to map the stack onto")
-    path = Path(ctx.scene.base_dir) / options.mesh
-    try:
-        mesh = read_shell_mesh(path, unit_mm=options.mesh_unit_mm)
-    except (ValueError, OSError) as error:
-        raise CaseFailure(f"export.mesh: {error}") from None
+    mesh = scene_fe_mesh(ctx, "the stack")
     stack: Stack = ctx.products["layup"]
     sections = []
     columns: dict[str, Any] = {}
