@@ -58,7 +58,8 @@ SUBPROCESS_ONLY = {
 def compiled_functions(name: str) -> set[str]:
     """Names of the module's functions that numba compiles (a dispatcher keeps ``py_func``)."""
     module = importlib.import_module(name)
-    return {key for key, value in vars(module).items() if hasattr(value, "py_func")}
+    # a snapshot: asking a lazy module attribute for ``py_func`` may add to its globals
+    return {key for key, value in list(vars(module).items()) if hasattr(value, "py_func")}
 
 
 def has_nothing_to_run(node: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
