@@ -140,6 +140,7 @@ def _compile(root: Path, stream: IO[str] | None) -> tuple[bool, float | None]:
                 _say(stream, f"compiling drape kernels, once per install, ~{estimate:.0f} s")
 
         def on_end(self, event: Any) -> None:
+            # numba's Listener asks for both; the time is said once all kernels are compiled
             pass
 
     helper = _start_helper()

@@ -117,7 +117,8 @@ class Browser:
     def __exit__(self, *exc: object) -> None:
         try:
             self.call("Browser.close", session=False, timeout_s=5)
-        except Exception:
+        except (RuntimeError, TimeoutError, OSError):
+            # already gone (closed pipe) or not answering: the wait below ends it either way
             pass
         try:
             self.process.wait(timeout=10)
