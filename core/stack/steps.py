@@ -299,9 +299,6 @@ def stack_deck_writer(target: str) -> Any:
 
         sections = ctx.products["stack_sections"]
         written = write_stack_files(sections, ctx.case_dir, [target], title=ctx.scene.name)
-        # the counts (bare elements, each ply's drop-offs), not the element lists
-        counts = {k: v for k, v in sections.summary().items() if not k.endswith("_ids")}
-        ctx.summary["stack_sections_summary"] = counts
         return {f"stack_{target}": written[target]}
 
     return write
@@ -354,7 +351,12 @@ def run_stack_sections(ctx: CaseContext) -> dict[str, Any]:
     ctx.summary["stack_elements"] = int(mesh.n_elements)
     ctx.summary["stack_elements_all_plies"] = int(np.count_nonzero(count == len(sections)))
     ctx.summary["stack_elements_no_ply"] = int(np.count_nonzero(count == 0))
-    return {"stack_sections": StackSections(plies=tuple(sections))}
+    stack_sections = StackSections(plies=tuple(sections))
+    # the counts the decks state (bare elements, each ply's drop-offs), not the element lists
+    ctx.summary["stack_sections_summary"] = {
+        k: v for k, v in stack_sections.summary().items() if not k.endswith("_ids")
+    }
+    return {"stack_sections": stack_sections}
 
 
 STEPS = [
