@@ -29,6 +29,15 @@ STEPS: tuple[tuple[str, str], ...] = (
     ("stack_sections", "preform.stack.steps:STEPS"),
 )
 
+#: The scene sections a step owns and checks (``Step.sections``), declared without importing it.
+SECTIONS: dict[str, tuple[str, ...]] = {
+    "shear_curve": ("shear",),
+    "drape": ("tool", "ply", "start", "part"),
+    "optimum": ("search",),
+    "mesh_mapping": ("export",),
+    "layup": ("layup",),
+}
+
 #: Exporters (steps writing files), as STEPS.
 EXPORTERS: tuple[tuple[str, str], ...] = (
     ("shear_curve_json", "preform.pipeline.core_steps:EXPORTERS"),
@@ -72,7 +81,7 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 @hookimpl
 def preform_register_steps(register: StepRegistrar) -> None:
     for name, target in STEPS:
-        register.add_lazy(name, provides=(name,), target=target)
+        register.add_lazy(name, provides=(name,), target=target, sections=SECTIONS.get(name, ()))
 
 
 @hookimpl

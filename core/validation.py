@@ -64,16 +64,7 @@ def _message(err: Any, model: type[BaseModel] | None) -> str:
     kind = err.get("type", "")
     if kind == "extra_forbidden":
         field = err["loc"][-1] if err.get("loc") else "?"
-        allowed = sorted(model.model_fields) if model is not None else []
-        import difflib  # for the message only: off the path of a good listing
-
-        hint = difflib.get_close_matches(str(field), allowed, n=1)
-        msg = f"unknown field {field!r}"
-        if hint:
-            msg += f"; did you mean {hint[0]!r}?"
-        elif allowed:
-            msg += f"; allowed fields: {', '.join(allowed)}"
-        return msg
+        return unknown_field_message(field, sorted(model.model_fields) if model else [])
     if kind == "missing":
         return "required field is missing"
     if kind == "finite_number":
@@ -86,6 +77,16 @@ def _message(err: Any, model: type[BaseModel] | None) -> str:
         )
     msg = str(err.get("msg", "invalid value"))
     return msg.removeprefix("Value error, ")
+
+
+def unknown_field_message(field: Any, allowed: list[str]) -> str:
+    """Why ``field`` is refused: the closest of the ``allowed`` fields, or all of them."""
+    import difflib  # for the message only: off the path of a good listing
+
+    hint = difflib.get_close_matches(str(field), allowed, n=1)
+    if hint:
+        return f"unknown field {field!r}; did you mean {hint[0]!r}?"
+    return f"unknown field {field!r}" + (f"; allowed fields: {', '.join(allowed)}" * bool(allowed))
 
 
 def located_errors(
