@@ -213,22 +213,14 @@ class Registry:
         step: Step = self.get(kind, name)
         return step
 
-    def providers(self) -> dict[str, str]:
-        """Which step (by name) provides each product, without importing any step module."""
+    def providers(self, declared: str = "provides") -> dict[str, str]:
+        """Which step (by name) provides each product, or with ``declared="sections"`` owns
+        each scene section, without importing any step module."""
         return {
-            product: entry.name
+            name: entry.name
             for kind in ("steps", "exporters")
             for entry in self._entries[kind].values()
-            for product in entry.obj.provides
-        }
-
-    def section_owners(self) -> dict[str, str]:
-        """Which step (by name) owns each scene section, without importing any step module."""
-        return {
-            section: entry.name
-            for kind in ("steps", "exporters")
-            for entry in self._entries[kind].values()
-            for section in entry.obj.sections
+            for name in getattr(entry.obj, declared)
         }
 
     def load_all(self) -> list[str]:

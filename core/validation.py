@@ -5,6 +5,8 @@ Shared by the materials library and scenes, so both report problems the same way
 
 from __future__ import annotations
 
+import typing
+from collections.abc import Iterator
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -60,11 +62,32 @@ def format_path(path: Location) -> str:
     return out
 
 
+def _fields_at(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> list[str]:
+    """The fields of the model at ``loc`` inside ``model`` (a section's, not the top level's;
+    a union's members' together; a list index or union tag in ``loc`` leaves them as they are)."""
+    models = [model] if model is not None else []
+    for part in loc:
+        holder = next((m for m in models if part in m.model_fields), None)
+        if holder is not None:
+            models = [m for m in _inner(holder.model_fields[part].annotation) if _is_model(m)]
+    return sorted({name for m in models for name in m.model_fields})
+
+
+def _inner(annotation: Any) -> Iterator[Any]:
+    yield annotation
+    for arg in typing.get_args(annotation):
+        yield from _inner(arg)
+
+
+def _is_model(value: Any) -> bool:
+    return isinstance(value, type) and issubclass(value, BaseModel)
+
+
 def _message(err: Any, model: type[BaseModel] | None) -> str:
     kind = err.get("type", "")
     if kind == "extra_forbidden":
         field = err["loc"][-1] if err.get("loc") else "?"
-        return unknown_field_message(field, sorted(model.model_fields) if model else [])
+        return unknown_field_message(field, _fields_at(model, tuple(err["loc"][:-1])))
     if kind == "missing":
         return "required field is missing"
     if kind == "finite_number":

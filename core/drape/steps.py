@@ -540,6 +540,7 @@ def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceErr
 def _generator_problems(scene: Scene, doc: Document) -> list[SourceError]:
     """Polyline generators without their polylines, or with too few or too many vertices."""
     from preform.pipeline.scene import MAX_POLYGON_VERTICES
+
     start = scene.start
     if start is None or start.generators != "polyline":
         return []

@@ -67,7 +67,7 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
             problems.append((index, str(exc)))
             return
         for section in step.scene_sections:
-            if getattr(scene, section, None) is None:
+            if scene.section(section) is None:
                 problems.append(
                     (
                         index,

@@ -387,7 +387,7 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
     """
     if not isinstance(data, dict):
         raise SceneError([doc.error((), "a scene must be a mapping")])
-    owners = registry.section_owners()
+    owners = registry.providers("sections")
     fields = Scene.model_fields
     errors = [
         doc.error((key,), unknown_field_message(key, sorted({*fields, *owners})))
@@ -504,7 +504,9 @@ def scene_from_data(data: dict[str, Any], base_dir: str, registry: Registry) -> 
     fields = Scene.model_fields
     scene = Scene.model_validate({k: v for k, v in data.items() if k in fields})
     scene = scene.located_at(base_dir)
-    scene._sections.update(_plugin_sections(None, data, registry, registry.section_owners(), []))
+    scene._sections.update(
+        _plugin_sections(None, data, registry, registry.providers("sections"), [])
+    )
     tool = data.get("tool")
     if isinstance(tool, dict):
         params = registry.surface_type(str(tool.get("surface"))).params
