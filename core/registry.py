@@ -7,8 +7,8 @@ Lazy registration: steps, exporters, shear laws and surfaces may instead be regi
 import path (``add_lazy``), so that starting the plugin host imports none of their modules
 (``preform --help`` and ``materials list`` would otherwise import every drape, search and
 export module). What the registry lists and checks between plugins is given in the call and
-checked at once: the name and, for a step, the products it provides (the product conflicts
-between plugins are found at registration, as for an ordinary step). The object itself is
+checked at once: the name and, for a step, the products it provides and the scene sections it
+owns (the conflicts between plugins are found at registration, as for an ordinary step). The object itself is
 imported when first asked for (``Registry.step``, ``shear_law_type``, ``surface_type``: a run
 that plans the step, a fabric whose ``shear_law`` block names the law, a scene's tool) and is
 then checked as ``add`` would have checked it, and against what was declared. A lazy entry that
@@ -454,13 +454,9 @@ def _check_step(step: Any, kind: str) -> None:
     from pydantic import BaseModel
 
     for key, model in step.sections.items():
-        if not (isinstance(key, str) and key.isidentifier()) or not (
-            model is None or (inspect.isclass(model) and issubclass(model, BaseModel))
-        ):
-            raise RegistrationError(
-                f"step {step.name!r}: sections maps a scene key to its pydantic model (None "
-                f"for a field of Scene), got {key!r}: {model!r}"
-            )
+        is_model = model is None or (isinstance(model, type) and issubclass(model, BaseModel))
+        if not (isinstance(key, str) and key.isidentifier() and is_model):
+            raise RegistrationError(f"step {step.name!r}: section {key!r} needs a pydantic model")
 
 
 def _check_tagged(what: str, name: str, params: Any, tag_field: str, build: Any) -> None:

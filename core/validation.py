@@ -6,7 +6,6 @@ Shared by the materials library and scenes, so both report problems the same way
 from __future__ import annotations
 
 import typing
-from collections.abc import Iterator
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -67,20 +66,14 @@ def _fields_at(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> list[str]
     a union's members' together; a list index or union tag in ``loc`` leaves them as they are)."""
     models = [model] if model is not None else []
     for part in loc:
-        holder = next((m for m in models if part in m.model_fields), None)
-        if holder is not None:
-            models = [m for m in _inner(holder.model_fields[part].annotation) if _is_model(m)]
+        for held in (m.model_fields[part].annotation for m in models if part in m.model_fields):
+            models = [m for m in _inner(held) if isinstance(m, type) and issubclass(m, BaseModel)]
+            break
     return sorted({name for m in models for name in m.model_fields})
 
 
-def _inner(annotation: Any) -> Iterator[Any]:
-    yield annotation
-    for arg in typing.get_args(annotation):
-        yield from _inner(arg)
-
-
-def _is_model(value: Any) -> bool:
-    return isinstance(value, type) and issubclass(value, BaseModel)
+def _inner(annotation: Any) -> list[Any]:
+    return [annotation, *(inner for arg in typing.get_args(annotation) for inner in _inner(arg))]
 
 
 def _message(err: Any, model: type[BaseModel] | None) -> str:

@@ -430,11 +430,11 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
                     scene = scene.model_copy(update={"tool": params.model_validate(tool)})
                 except ValidationError as exc:
                     errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
-    if not errors:
-        for check in dict.fromkeys(
-            step.check for step in _owning_steps(data, registry, owners) if step.check is not None
-        ):
-            errors += check(scene, doc, registry)
+    # the checks of the steps owning a section the scene holds (one that cannot load: the plan)
+    for name in dict.fromkeys(owners[key] for key in owners if key in data and not errors):
+        with contextlib.suppress(LazyLoadError):
+            check = registry.step(name).check
+            errors += check(scene, doc, registry) if check is not None else []
     from preform.pipeline.planner import PlanError, plan
 
     try:
@@ -445,16 +445,6 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
     if errors:
         raise SceneError(errors)
     return scene
-
-
-def _owning_steps(data: dict[str, Any], registry: Registry, owners: dict[str, str]) -> list[Any]:
-    """The registered steps owning a section the scene holds, in registration order (a step
-    that cannot be loaded is said by the plan)."""
-    steps = []
-    for name in dict.fromkeys(owners[key] for key in owners if key in data):
-        with contextlib.suppress(LazyLoadError):
-            steps.append(registry.step(name))
-    return steps
 
 
 def _plugin_sections(
@@ -474,10 +464,11 @@ def _plugin_sections(
         except (LazyLoadError, ValidationError) as exc:
             if doc is None:
                 raise
-            if isinstance(exc, LazyLoadError):
-                errors.append(doc.error((key,), str(exc)))
-            else:
-                errors += located_errors(doc, (key,), data[key], exc, model, key)
+            errors += (
+                located_errors(doc, (key,), data[key], exc, model, key)
+                if isinstance(exc, ValidationError)
+                else [doc.error((key,), str(exc))]
+            )
     return sections
 
 
