@@ -480,13 +480,8 @@ def load_scene(path: str | Path, registry: Registry) -> tuple[Scene, dict[str, A
         raise SceneError(exc.errors) from None
     if len(docs) != 1:
         line, column = docs[1].locate(()) if len(docs) > 1 else (1, 1)
-        raise SceneError(
-            [
-                SourceError(
-                    str(path), line, column, "", "a scene file holds exactly one YAML document"
-                )
-            ]
-        )
+        message = "a scene file holds exactly one YAML document"
+        raise SceneError([SourceError(str(path), line, column, "", message)])
     return validate_scene_data(docs[0], docs[0].data, registry), docs[0].data
 
 
