@@ -12,24 +12,25 @@ from __future__ import annotations
 from preform.plugin_manager import hookimpl
 from preform.registry import ExporterRegistrar, ShearLawRegistrar, StepRegistrar
 
-#: Steps, in planning order: (name, import path of the module's list holding it). Every built-in
-#: step provides the one product of its own name.
-STEPS: tuple[tuple[str, str], ...] = (
-    ("unit_cell", "preform.pipeline.core_steps:STEPS"),
-    ("shear_law", "preform.pipeline.core_steps:STEPS"),
-    ("shear_curve", "preform.pipeline.core_steps:STEPS"),
-    ("surface", "preform.drape.steps:STEPS"),
-    ("drape", "preform.drape.steps:STEPS"),
-    ("thickness", "preform.drape.preform_steps:STEPS"),
-    ("permeability", "preform.drape.preform_steps:STEPS"),
-    ("energy_vs_angle", "preform.optimise.search_steps:STEPS"),
-    ("optimum", "preform.optimise.search_steps:STEPS"),
-    ("mesh_mapping", "preform.export.export_steps:STEPS"),
-    ("layup", "preform.stack.steps:STEPS"),
-    ("stack_sections", "preform.stack.steps:STEPS"),
+#: Steps, in planning order: (name, import path of the module's list holding it, the scene
+#: sections it owns and checks, ``Step.sections``). Every built-in step provides the one
+#: product of its own name.
+STEPS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+    ("unit_cell", "preform.pipeline.core_steps:STEPS", ()),
+    ("shear_law", "preform.pipeline.core_steps:STEPS", ()),
+    ("shear_curve", "preform.pipeline.core_steps:STEPS", ("shear",)),
+    ("surface", "preform.drape.steps:STEPS", ()),
+    ("drape", "preform.drape.steps:STEPS", ("tool", "ply", "start", "part")),
+    ("thickness", "preform.drape.preform_steps:STEPS", ()),
+    ("permeability", "preform.drape.preform_steps:STEPS", ()),
+    ("energy_vs_angle", "preform.optimise.search_steps:STEPS", ()),
+    ("optimum", "preform.optimise.search_steps:STEPS", ("search",)),
+    ("mesh_mapping", "preform.export.export_steps:STEPS", ("export",)),
+    ("layup", "preform.stack.steps:STEPS", ("layup",)),
+    ("stack_sections", "preform.stack.steps:STEPS", ()),
 )
 
-#: Exporters (steps writing files), as STEPS.
+#: Exporters (steps writing files): (name, import path), as STEPS.
 EXPORTERS: tuple[tuple[str, str], ...] = (
     ("shear_curve_json", "preform.pipeline.core_steps:EXPORTERS"),
     ("shear_curve_png", "preform.pipeline.core_steps:EXPORTERS"),
@@ -71,8 +72,8 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 
 @hookimpl
 def preform_register_steps(register: StepRegistrar) -> None:
-    for name, target in STEPS:
-        register.add_lazy(name, provides=(name,), target=target)
+    for name, target, sections in STEPS:
+        register.add_lazy(name, provides=(name,), target=target, sections=sections)
 
 
 @hookimpl

@@ -70,7 +70,8 @@ def preform_register_surfaces(register: SurfaceRegistrar) -> None:
 @hookspec
 def preform_register_steps(register: StepRegistrar) -> None:
     """Register pipeline steps: ``register.add(Step(...))`` with what each provides and
-    requires, and a version that is recorded with every result."""
+    requires, and a version that is recorded with every result; a step owning a scene section
+    declares it (``Step.sections``, ``Step.check``; ``add_lazy(..., sections=[...])``)."""
 
 
 @hookspec

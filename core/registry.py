@@ -7,8 +7,8 @@ Lazy registration: steps, exporters, shear laws and surfaces may instead be regi
 import path (``add_lazy``), so that starting the plugin host imports none of their modules
 (``preform --help`` and ``materials list`` would otherwise import every drape, search and
 export module). What the registry lists and checks between plugins is given in the call and
-checked at once: the name and, for a step, the products it provides (the product conflicts
-between plugins are found at registration, as for an ordinary step). The object itself is
+checked at once: the name and, for a step, the products it provides and the scene sections it
+owns (the conflicts between plugins are found at registration, as for an ordinary step). The object itself is
 imported when first asked for (``Registry.step``, ``shear_law_type``, ``surface_type``: a run
 that plans the step, a fabric whose ``shear_law`` block names the law, a scene's tool) and is
 then checked as ``add`` would have checked it, and against what was declared. A lazy entry that
@@ -100,6 +100,8 @@ class LazyStep(NamedTuple):
     provides: tuple[str, ...]
     target: str
     writes_files: bool = False
+    #: The scene sections the step owns (``Step.sections``), declared like ``provides``.
+    sections: tuple[str, ...] = ()
 
 
 class LazyArchitecture(NamedTuple):
@@ -211,13 +213,14 @@ class Registry:
         step: Step = self.get(kind, name)
         return step
 
-    def providers(self) -> dict[str, str]:
-        """Which step (by name) provides each product, without importing any step module."""
+    def providers(self, declared: str = "provides") -> dict[str, str]:
+        """Which step (by name) provides each product, or with ``declared="sections"`` owns
+        each scene section, without importing any step module."""
         return {
-            product: entry.name
+            name: entry.name
             for kind in ("steps", "exporters")
             for entry in self._entries[kind].values()
-            for product in entry.obj.provides
+            for name in getattr(entry.obj, declared)
         }
 
     def load_all(self) -> list[str]:
@@ -254,12 +257,15 @@ class Registry:
             if isinstance(lazy, LazyStep):
                 step = _pick_step(import_target(lazy.target), lazy.name, lazy.target)
                 _check_step(step, entry.kind)
-                declared, got = set(lazy.provides), set(step.provides)
-                if declared != got:
-                    raise RegistrationError(
-                        f"registered as providing {sorted(declared)}, but the step at "
-                        f"{lazy.target} provides {sorted(got)}"
-                    )
+                for what, does, declared, got in (
+                    ("providing", "provides", lazy.provides, step.provides),
+                    ("owning the scene sections", "owns", lazy.sections, step.sections),
+                ):
+                    if set(declared) != set(got):
+                        raise RegistrationError(
+                            f"registered as {what} {sorted(declared)}, but the step at "
+                            f"{lazy.target} {does} {sorted(got)}"
+                        )
                 return step
             if isinstance(lazy, LazyArchitecture):
                 model = import_target(lazy.model)
@@ -445,6 +451,12 @@ def _check_step(step: Any, kind: str) -> None:
         )
     if kind == "exporters" and not step.writes_files:
         raise RegistrationError(f"exporter {step.name!r} must have writes_files=True")
+    from pydantic import BaseModel
+
+    for key, model in step.sections.items():
+        is_model = model is None or (isinstance(model, type) and issubclass(model, BaseModel))
+        if not (isinstance(key, str) and key.isidentifier() and is_model):
+            raise RegistrationError(f"step {step.name!r}: section {key!r} needs a pydantic model")
 
 
 def _check_tagged(what: str, name: str, params: Any, tag_field: str, build: Any) -> None:
@@ -510,40 +522,60 @@ class StepRegistrar(Registrar["Step | LazyStep"]):
     def add(self, step: Step) -> None:
         """Register a pipeline step."""
         _check_step(step, self.kind)
-        self._check_products(step.name, step.provides)
+        self._check_products(step.name, step.provides, tuple(step.sections))
         self._put(step.name, step)
 
-    def add_lazy(self, name: str, *, provides: tuple[str, ...] | list[str], target: str) -> None:
+    def add_lazy(
+        self,
+        name: str,
+        *,
+        provides: tuple[str, ...] | list[str],
+        target: str,
+        sections: tuple[str, ...] | list[str] = (),
+    ) -> None:
         """Register a step by import path without importing it: ``target`` is
         ``"package.module:ATTRIBUTE"``, the ``Step`` or a sequence of steps holding the one
-        named ``name``; ``provides`` is what it provides (checked for conflicts now, and against
-        the step when it is imported, on first use)."""
+        named ``name``; ``provides`` is what it provides and ``sections`` the scene sections it
+        owns (both checked for conflicts now, and against the step when it is imported, on
+        first use)."""
         label = f"{self.kind[:-1]} {_check_name(self.kind[:-1], name)!r}"
-        if isinstance(provides, str) or not (
-            isinstance(provides, tuple | list)
-            and provides
-            and all(isinstance(p, str) and p for p in provides)
-        ):
-            raise RegistrationError(
-                f"{label}: provides must be a non-empty list of product names, got {provides!r}"
-            )
-        self._check_products(name, tuple(provides))
+        for what, names, least in (("provides", provides, 1), ("sections", sections, 0)):
+            if isinstance(names, str) or not (
+                isinstance(names, tuple | list)
+                and len(names) >= least
+                and all(isinstance(p, str) and p for p in names)
+            ):
+                raise RegistrationError(
+                    f"{label}: {what} must be a {'non-empty ' * least}list of names, got {names!r}"
+                )
+        self._check_products(name, tuple(provides), tuple(sections))
         lazy = LazyStep(
-            name, tuple(provides), _check_target(label, target), self.kind == "exporters"
+            name,
+            tuple(provides),
+            _check_target(label, target),
+            self.kind == "exporters",
+            tuple(sections),
         )
         self._put(name, lazy)
 
-    def _check_products(self, name: str, provides: tuple[str, ...]) -> None:
-        for product in provides:
-            for kind in ("steps", "exporters"):
-                for other in self._registry.entries(kind).values():
-                    if product in other.obj.provides:
+    def _check_products(
+        self, name: str, provides: tuple[str, ...], sections: tuple[str, ...]
+    ) -> None:
+        """A product or scene section held by another step is a conflict."""
+        for kind in ("steps", "exporters"):
+            for other in self._registry.entries(kind).values():
+                for what, mine, theirs in (
+                    ("product", provides, other.obj.provides),
+                    ("scene section", sections, other.obj.sections),
+                ):
+                    for taken in set(mine) & set(theirs):
                         raise NameConflict(
-                            f"step {name!r}: product {product!r} is already provided by "
+                            f"step {name!r}: {what} {taken!r} is already "
+                            f"{'provided' if what == 'product' else 'owned'} by "
                             f"step {other.name!r} of "
                             f"{self._registry.describe_owner(other.plugin, self._plugin)}",
-                            kind="products",
-                            name=product,
+                            kind="products" if what == "product" else "sections",
+                            name=taken,
                             owner=other.plugin,
                         )
 

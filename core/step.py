@@ -15,9 +15,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from pydantic import BaseModel
+
     from preform.material import FabricBase
     from preform.pipeline.scene import Scene
     from preform.registry import Registry
+    from preform.yamlsource import Document, SourceError
 
 
 #: Key of a case's summary (summary.json) holding what each warning is about: a list of
@@ -98,6 +101,10 @@ class CaseContext:
 
 #: A step's body: reads ``ctx.products`` (its requirements), returns what it provides.
 StepFunction = Callable[[CaseContext], Mapping[str, Any]]
+#: A step's check of the scene sections it owns, before anything runs: given the validated
+#: scene, its source document and the registry, the problems, each located by
+#: ``doc.error(path, message)`` (``at_value=True`` for "this value is wrong").
+SceneCheck = Callable[["Scene", "Document", "Registry"], list["SourceError"]]
 
 
 @dataclass(frozen=True)
@@ -118,6 +125,14 @@ class Step:
     writes_files: bool = False
     #: Scene sections the step needs (checked when a scene is planned: "tool", "ply", ...).
     scene_sections: tuple[str, ...] = ()
+    #: Scene sections the step owns, by top-level key, each with the pydantic model that
+    #: validates it (None: a field of ``Scene`` itself, preform's own sections). A scene key no
+    #: registered step owns is refused; a plugin's section reaches its step as
+    #: ``ctx.scene.section(key)``.
+    sections: Mapping[str, type[BaseModel] | None] = field(default_factory=dict, hash=False)
+    #: Checks of the owned sections that need more than their models (module-level function),
+    #: called once the scene has validated, when it holds any of them.
+    check: SceneCheck | None = None
     #: Extra requirements that depend on the scene (a module-level function of the scene),
     #: e.g. the drape needs the search's optimum when the scene searches.
     extra_requires: Callable[[Scene], tuple[str, ...]] | None = None

@@ -5,6 +5,7 @@ Shared by the materials library and scenes, so both report problems the same way
 
 from __future__ import annotations
 
+import typing
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
@@ -60,20 +61,26 @@ def format_path(path: Location) -> str:
     return out
 
 
+def _fields_at(model: type[BaseModel] | None, loc: tuple[Any, ...]) -> list[str]:
+    """The fields of the model at ``loc`` inside ``model`` (a section's, not the top level's;
+    a union's members' together; a list index or union tag in ``loc`` leaves them as they are)."""
+    models = [model] if model is not None else []
+    for part in loc:
+        for held in (m.model_fields[part].annotation for m in models if part in m.model_fields):
+            models = [m for m in _inner(held) if isinstance(m, type) and issubclass(m, BaseModel)]
+            break
+    return sorted({name for m in models for name in m.model_fields})
+
+
+def _inner(annotation: Any) -> list[Any]:
+    return [annotation, *(inner for arg in typing.get_args(annotation) for inner in _inner(arg))]
+
+
 def _message(err: Any, model: type[BaseModel] | None) -> str:
     kind = err.get("type", "")
     if kind == "extra_forbidden":
         field = err["loc"][-1] if err.get("loc") else "?"
-        allowed = sorted(model.model_fields) if model is not None else []
-        import difflib  # for the message only: off the path of a good listing
-
-        hint = difflib.get_close_matches(str(field), allowed, n=1)
-        msg = f"unknown field {field!r}"
-        if hint:
-            msg += f"; did you mean {hint[0]!r}?"
-        elif allowed:
-            msg += f"; allowed fields: {', '.join(allowed)}"
-        return msg
+        return unknown_field_message(field, _fields_at(model, tuple(err["loc"][:-1])))
     if kind == "missing":
         return "required field is missing"
     if kind == "finite_number":
@@ -86,6 +93,16 @@ def _message(err: Any, model: type[BaseModel] | None) -> str:
         )
     msg = str(err.get("msg", "invalid value"))
     return msg.removeprefix("Value error, ")
+
+
+def unknown_field_message(field: Any, allowed: list[str]) -> str:
+    """Why ``field`` is refused: the closest of the ``allowed`` fields, or all of them."""
+    import difflib  # for the message only: off the path of a good listing
+
+    hint = difflib.get_close_matches(str(field), allowed, n=1)
+    if hint:
+        return f"unknown field {field!r}; did you mean {hint[0]!r}?"
+    return f"unknown field {field!r}" + (f"; allowed fields: {', '.join(allowed)}" * bool(allowed))
 
 
 def located_errors(

@@ -111,6 +111,7 @@ def scenes_show(scene: str, as_json: bool) -> None:
         missing_scene_message,
         resolve_scene_path,
     )
+    from preform.stack.plies import ply_plans
 
     registry = _registry()
     path = resolve_scene_path(scene)
@@ -126,7 +127,7 @@ def scenes_show(scene: str, as_json: bool) -> None:
         "file": str(path),
         "data": data,
         "fidelity": knobs,
-        "plan": explain(loaded, registry),
+        "plan": explain(loaded, registry) + ply_plans(loaded, registry),
     }
     if as_json:
         echo_json(doc)

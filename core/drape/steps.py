@@ -24,6 +24,7 @@ from preform.drape.fields import cell_fields, energy_field, summary
 from preform.drape.net import DrapeError, drape
 from preform.drape.part import HeightCut, Part, PlanPolygon, combine
 from preform.drape.ply import MAX_COUNT, PlyOutline
+from preform.drape.polygon import outline_problem
 from preform.drape.preform_steps import preform_if_asked
 from preform.drape.result import DrapeResult, EnergyField
 from preform.drape.verdict import (
@@ -40,6 +41,7 @@ from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene
+    from preform.yamlsource import Document, SourceError
 
 MM = 1e-3
 #: Memory one net node costs while draping, roughly [bytes] (positions, statuses, residuals,
@@ -461,6 +463,141 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
     return {"fibre_pattern_png": "fibre_pattern.png"}
 
 
+def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceError]:
+    """Problems a scene's tool, ply, start and part have before anything runs, located (the
+    drape step's ``check``).
+
+    Cheap checks only: an outline that crosses itself or encloses nothing
+    (``preform.drape.polygon``), the ply's node count against ``limits.max_nodes``
+    (arithmetic, no array), a node spacing that leaves the ply or the tool without a cell, the
+    start point outside the ply or off the tool, generator polylines, a part beside the tool,
+    and the tool's own preflight (an analytic tool is built, microseconds; a mesh file is
+    checked for existence, type and size, not read).
+    """
+    outlines = (
+        (("ply", "outline_mm"), scene.ply.outline_mm if scene.ply else None),
+        (("part", "plan_outline_mm"), scene.part.plan_outline_mm if scene.part else None),
+    )
+    errors = [
+        doc.error(at, problem, at_value=True)
+        for at, outline in outlines
+        if outline is not None and (problem := outline_problem(outline, "mm")) is not None
+    ]
+    if errors:
+        return errors  # nothing else is defined on an outline without an inside
+    surface = None
+    preflight = getattr(scene.tool, "preflight", None)
+    if preflight is not None:
+        surface, problems = preflight(scene.base_dir, scene.limits)
+        errors += [doc.error(("tool", *where), message) for where, message in problems]
+    errors += _generator_problems(scene, doc)
+    if surface is not None:
+        errors += _empty_part_problems(scene, surface, doc)
+    ply = scene.ply
+    if ply is None:
+        return errors
+    outline = ply_outline(scene)
+    spacing_at: tuple[str | int, ...] = ("ply", "node_spacing_mm")
+    spacing = ply.node_spacing_mm
+    if spacing is None and surface is not None:
+        # The preset chooses d from the tool's size: check the ply against that d.
+        spacing = fidelity.resolve(scene, float(surface.size)).node_spacing_mm
+        spacing_at = ("ply",)
+    if spacing is not None:
+        problem = node_budget_problem(outline, spacing, scene.limits.max_nodes)
+        if problem is not None:
+            return [*errors, doc.error(spacing_at, problem)]
+        problem = ply_too_coarse_problem(outline, spacing)
+        if problem is not None:
+            errors.append(doc.error(spacing_at, problem))
+        elif surface is not None and spacing * 1e-3 > float(surface.size):
+            errors.append(
+                doc.error(
+                    spacing_at,
+                    f"the node spacing {spacing:g} mm is larger than the tool (its typical "
+                    f"length is {float(surface.size) * 1e3:.4g} mm), so the net has no cell on "
+                    "it; use a spacing well below the tool's size (the standard preset uses "
+                    "1/40 of it)",
+                ),
+            )
+    if not bool(outline.contains(np.zeros((1, 2)), 1e-9)[0]):
+        at = ("ply", "outline_mm") if ply.outline_mm is not None else ("ply", "offset_mm")
+        errors.append(
+            doc.error(
+                at,
+                "the start point (the flat origin) lies outside the ply; the generators run "
+                "through it, so it must be fabric",
+            )
+        )
+    if surface is not None and scene.start is not None:
+        point = scene.start.point_mm
+        problem = start_problem(surface, (point[0] * 1e-3, point[1] * 1e-3))
+        if problem is not None:
+            errors.append(doc.error(("start", "point_mm"), problem))
+    return errors
+
+
+def _generator_problems(scene: Scene, doc: Document) -> list[SourceError]:
+    """Polyline generators without their polylines, or with too few or too many vertices."""
+    from preform.pipeline.scene import MAX_POLYGON_VERTICES
+
+    start = scene.start
+    if start is None or start.generators != "polyline":
+        return []
+    if start.generator_polylines_mm is None:
+        return [
+            doc.error(
+                ("start", "generators"),
+                "generators: polyline needs start.generator_polylines_mm (the two plan "
+                "polylines, each through the start point)",
+            )
+        ]
+    return [
+        doc.error(
+            ("start", "generator_polylines_mm", k),
+            f"a generator polyline needs 2 to {MAX_POLYGON_VERTICES:,} vertices, got {len(line):,}",
+        )
+        for k, line in enumerate(start.generator_polylines_mm)
+        if not 2 <= len(line) <= MAX_POLYGON_VERTICES
+    ]
+
+
+def _empty_part_problems(scene: Scene, surface: Any, doc: Document) -> list[SourceError]:
+    """A ``part`` section that selects nothing of a built (analytic) tool, known from the
+    tool's bounds [m]: a height cut above its top, a plan outline wholly beside its plan.
+    What only the drape can tell (a cut and an outline that miss each other on the tool, a
+    mesh tool's part) fails the case after draping (:func:`judge_drape`)."""
+    section = scene.part
+    if section is None:
+        return []
+    (x0, y0, _), (x1, y1, z1) = (tuple(float(c) for c in corner) for corner in surface.bounds)
+    errors = []
+    # strictly above: a cut at the top of a flat or flat-topped tool (a plane, a frustum)
+    # selects its top face; at a dome's apex a point, which the drape then finds empty
+    if section.z_min_mm is not None and section.z_min_mm * 1e-3 > z1:
+        errors.append(
+            doc.error(
+                ("part", "z_min_mm"),
+                f"the height cut z ≥ {section.z_min_mm:g} mm lies above the tool, whose "
+                f"top is at z = {z1 * 1e3:.6g} mm, so the part selects nothing; lower the cut",
+            )
+        )
+    if section.plan_outline_mm is not None:
+        xy = np.asarray(section.plan_outline_mm, dtype=float) * 1e-3
+        (px0, py0), (px1, py1) = xy.min(axis=0), xy.max(axis=0)
+        if px1 <= x0 or px0 >= x1 or py1 <= y0 or py0 >= y1:
+            errors.append(
+                doc.error(
+                    ("part", "plan_outline_mm"),
+                    f"the part's plan outline (x {px0 * 1e3:.6g} … {px1 * 1e3:.6g} mm, "
+                    f"y {py0 * 1e3:.6g} … {py1 * 1e3:.6g} mm) lies beside the tool, whose plan "
+                    f"extent is x {x0 * 1e3:.6g} … {x1 * 1e3:.6g} mm, y {y0 * 1e3:.6g} … "
+                    f"{y1 * 1e3:.6g} mm, so the part selects nothing",
+                )
+            )
+    return errors
+
+
 STEPS = [
     Step(
         "surface",
@@ -480,6 +617,8 @@ STEPS = [
         "Pin-jointed net on the tool, its shear field and strain energy.",
         scene_sections=("tool", "ply", "start"),
         extra_requires=_needs_optimum,
+        sections=dict.fromkeys(("tool", "ply", "start", "part")),
+        check=scene_problems,
     ),
 ]
 

@@ -22,13 +22,17 @@ of whose elements the drape covers fails it with how far the mesh lies from the 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from preform.pipeline.export_section import ExportSection
 from preform.pipeline.status import CaseFailure
 from preform.step import CaseContext, Step
+
+if TYPE_CHECKING:
+    from preform.pipeline.scene import Scene
+    from preform.yamlsource import Document, SourceError
 
 
 def export_options(ctx: CaseContext) -> ExportSection:
@@ -254,6 +258,20 @@ def write_cut_pattern_step(ctx: CaseContext) -> dict[str, Any]:
     return {"cut_pattern": files}
 
 
+def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceError]:
+    """``export.mesh`` missing, unreadable or too large, refused when the scene is validated
+    like a tool mesh file (checked, not read) rather than after the drape has run (the
+    mesh_mapping step's ``check``)."""
+    from preform.export.shell_mesh import MB, mesh_file_problem
+
+    section = scene.export
+    if section is None or section.mesh is None:
+        return []
+    max_bytes = int(scene.limits.max_mesh_mb * MB)
+    problem = mesh_file_problem(Path(scene.base_dir) / section.mesh, max_bytes)
+    return [] if problem is None else [doc.error(("export", "mesh"), problem)]
+
+
 STEPS = [
     Step(
         "mesh_mapping",
@@ -263,6 +281,8 @@ STEPS = [
         run_mesh_mapping,
         "The drape mapped onto the scene's FE mesh (export.mesh): directions, shear, thickness.",
         scene_sections=("export",),
+        sections={"export": None},
+        check=scene_problems,
     ),
 ]
 

@@ -60,6 +60,7 @@ from preform.optimise.search import (
     AngleSearchResult,
     DrapeObjective,
     SearchError,
+    scan_size,
     search_generator_angle,
     search_layout,
 )
@@ -69,6 +70,7 @@ from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene
+    from preform.yamlsource import Document, SourceError
 
 MM = 1e-3
 
@@ -704,6 +706,54 @@ def energy_vs_angle_library(folder: Path, summaries: list[Mapping[str, Any]]) ->
     return ["energy_vs_angle.png"]
 
 
+def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceError]:
+    """Problems of the search section that would only surface at run time (or take the
+    machine first), checked by arithmetic (the optimum step's ``check``)."""
+    search = scene.search
+    if search is None:
+        return []
+    errors: list[SourceError] = []
+    if scene.start is not None and scene.start.generators == "polyline":
+        errors.append(
+            doc.error(
+                ("start", "generators"),
+                "the generator-angle search needs geodesic or plan generators: polylines "
+                "fix the angle themselves; remove the search section or the polylines",
+            )
+        )
+    span = search.generator_angle_deg
+    lo, hi = (span.min, span.max) if span is not None else (30.0, 150.0)
+    at: tuple[str | int, ...] = (
+        ("search", "generator_angle_deg") if span is not None else ("search",)
+    )
+    if not 0.0 < lo < hi < 180.0:
+        return [
+            *errors,
+            doc.error(
+                at,
+                f"the generator-angle range must satisfy 0 < min < max < 180°, got [{lo:g}°, {hi:g}°]",
+            ),
+        ]
+    knobs = fidelity.resolve(scene)
+    needed = scan_size(np.radians(lo), np.radians(hi), np.radians(knobs.scan_step_deg))
+    if search.scan_step_deg is not None:
+        at = ("search", "scan_step_deg")
+    elif span is not None and span.step is not None:
+        at = ("search", "generator_angle_deg", "step")
+    if needed > knobs.max_drapes:
+        count = "too many" if needed >= 2**63 else f"{needed:,}"
+        errors.append(
+            doc.error(
+                at,
+                f"a scan of [{lo:g}°, {hi:g}°] every {knobs.scan_step_deg:g}° needs "
+                f"{count} drapes, more than the budget max_drapes = "
+                f"{knobs.max_drapes}; widen the step (search.scan_step_deg) or raise "
+                "search.max_drapes",
+            )
+        )
+    return errors
+
+
 STEPS = [
     Step(
         "energy_vs_angle",
@@ -723,6 +773,8 @@ STEPS = [
         "The minimum-energy generator angle (and layout, curved generators, relaxation when "
         "the search section asks).",
         scene_sections=("search",),
+        sections={"search": None},
+        check=scene_problems,
     ),
 ]
 

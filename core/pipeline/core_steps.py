@@ -7,13 +7,17 @@ returns the products it provides; exporters write files atomically into the case
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from preform.library import build_shear_law
 from preform.pipeline.status import CaseFailure
 from preform.step import CaseContext, Step
+
+if TYPE_CHECKING:
+    from preform.pipeline.scene import Scene
+    from preform.yamlsource import Document, SourceError
 
 
 def _scalars(prefix: str, values: Mapping[str, Any]) -> dict[str, Any]:
@@ -106,6 +110,34 @@ def write_unit_cell_vtu(ctx: CaseContext) -> dict[str, Any]:
     return {"unit_cell_vtu": "unit_cell.vtu"}
 
 
+#: Most angles of a tabulated shear curve (``shear.angles_deg``): far more than any plot shows,
+#: and a step of 1e-9° over 60° would otherwise ask for 6·10¹⁰ of them.
+MAX_CURVE_ANGLES = 100_000
+
+
+def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceError]:
+    """An empty or too finely stepped ``shear.angles_deg``, before a curve is tabulated (the
+    shear_curve step's ``check``)."""
+    if scene.shear is None:
+        return []
+    spec = scene.shear.angles_deg
+    step = spec.step or 1.0
+    if spec.min > spec.max:
+        message = f"min ({spec.min:g}°) must not exceed max ({spec.max:g}°)"
+        return [doc.error(("shear", "angles_deg"), message)]
+    angles = (spec.max - spec.min) / step + 1
+    if angles <= MAX_CURVE_ANGLES:
+        return []
+    return [
+        doc.error(
+            ("shear", "angles_deg", "step"),
+            f"a step of {step:g}° over [{spec.min:g}°, {spec.max:g}°] gives {angles:.3g} angles, "
+            f"more than {MAX_CURVE_ANGLES:,}; use a step of at least "
+            f"{(spec.max - spec.min) / (MAX_CURVE_ANGLES - 1):.3g}°",
+        )
+    ]
+
+
 STEPS = [
     Step(
         "unit_cell",
@@ -130,6 +162,8 @@ STEPS = [
         "1",
         run_shear_curve,
         "Torque, force and energy against shear angle, both senses.",
+        sections={"shear": None},
+        check=scene_problems,
     ),
 ]
 

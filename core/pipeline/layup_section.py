@@ -84,10 +84,7 @@ class LayupPly(BaseModel):
     def _outline(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
         if v is not None and len(v) < 3:
             raise ValueError("a ply's part outline needs at least 3 vertices")
-        # the scene's own check of an outline (imported here: the scene imports this module)
-        from preform.pipeline.scene import _simple_outline
-
-        return _simple_outline(v)
+        return v  # one that crosses itself: the layup step's check (preform.stack.validate)
 
 
 class LayupSection(BaseModel):

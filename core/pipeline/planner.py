@@ -67,7 +67,7 @@ def plan(scene: Scene, registry: Registry) -> list[Step]:
             problems.append((index, str(exc)))
             return
         for section in step.scene_sections:
-            if getattr(scene, section, None) is None:
+            if scene.section(section) is None:
                 problems.append(
                     (
                         index,
@@ -111,14 +111,4 @@ def explain(scene: Scene, registry: Registry) -> list[str]:
         lines.append(
             f"{step.name} (v{step.version}): needs {reqs} -> provides {', '.join(step.provides)}"
         )
-    layup = getattr(scene, "layup", None)
-    if layup is not None:
-        # each ply runs its own plan inside the layup step (preform.stack.steps)
-        from preform.stack.plies import ply_scene
-
-        for k, name in enumerate(layup.ply_names()):
-            steps = plan(ply_scene(scene, k, registry), registry)
-            names = ", ".join(s.name for s in steps if s.name != "surface")
-            under = "the tool offset by the plies below" if k else "the tool"
-            lines.append(f"  layup ply {name}: {names} (on {under})")
     return lines

@@ -7,19 +7,19 @@ registered surfaces, like a fabric's ``architecture``.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import os
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
 
-import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
 from preform.pipeline.export_section import ExportSection
 from preform.pipeline.layup_section import LayupSection
 from preform.registry import LazyLoadError, Registry
-from preform.validation import located_errors
+from preform.validation import located_errors, unknown_field_message
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
@@ -27,22 +27,6 @@ _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 #: Most vertices of a ply outline or a generator polyline: the inside test walks the edges one
 #: by one, so a million-vertex outline would take the machine for hours; no ply needs more.
 MAX_POLYGON_VERTICES = 10_000
-#: Most angles of a tabulated shear curve (``shear.angles_deg``): far more than any plot shows,
-#: and a step of 1e-9° over 60° would otherwise ask for 6·10¹⁰ of them.
-MAX_CURVE_ANGLES = 100_000
-
-
-def _simple_outline(v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
-    """``v`` when it is a simple polygon of nonzero area, else a ValueError saying where it
-    crosses itself or that it encloses nothing (``preform.drape.polygon``)."""
-    if v is None:
-        return v
-    from preform.drape.polygon import outline_problem
-
-    problem = outline_problem(v, "mm")
-    if problem is not None:
-        raise ValueError(problem)
-    return v
 
 
 class PlySection(BaseModel):
@@ -81,7 +65,7 @@ class PlySection(BaseModel):
     def _polygon(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
         if v is not None and len(v) < 3:
             raise ValueError("a ply outline needs at least 3 vertices")
-        return _simple_outline(v)
+        return v
 
 
 class StartSection(BaseModel):
@@ -152,7 +136,7 @@ class PartSection(BaseModel):
     def _polygon(cls, v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
         if v is not None and len(v) < 3:
             raise ValueError("a part outline needs at least 3 vertices")
-        return _simple_outline(v)
+        return v
 
 
 class RangeDeg(BaseModel):
@@ -323,6 +307,12 @@ class Scene(BaseModel):
     outputs: list[str] = Field(min_length=1, description="Products and files to produce.")
     #: Directory of the scene file (resolves relative tool mesh paths); not from YAML.
     _base_dir: str = PrivateAttr(default=".")
+    #: The validated sections of plugins' steps (``Step.sections``), by key.
+    _sections: dict[str, BaseModel] = PrivateAttr(default_factory=dict)
+
+    def section(self, key: str) -> Any:
+        """The validated section ``key`` (a field of the scene or a plugin step's), or None."""
+        return getattr(self, key) if key in type(self).model_fields else self._sections.get(key)
 
     @property
     def base_dir(self) -> str:
@@ -388,19 +378,31 @@ def missing_scene_message(spec: str) -> str:
 
 
 def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
-    """Validate one scene document; raises SceneError with located errors."""
-    errors: list[SourceError] = []
+    """Validate one scene document; raises SceneError with located errors.
 
-    def err(path: tuple[str | int, ...], label: str, message: str) -> SourceError:
-        line, column = doc.locate(path)
-        return SourceError(doc.file, line, column, label, message)
-
+    The scene's own fields are validated by :class:`Scene`, a plugin step's section by the
+    model its step declares, the tool block by its registered surface; then each registered
+    step that owns a section of the scene checks it (``Step.check``), and the outputs are
+    planned. No step is imported here but through the registry.
+    """
     if not isinstance(data, dict):
-        raise SceneError([err((), "", "a scene must be a mapping")])
+        raise SceneError([doc.error((), "a scene must be a mapping")])
+    owners = registry.providers("sections")
+    fields = Scene.model_fields
+    errors = [
+        doc.error((key,), unknown_field_message(key, sorted({*fields, *owners})))
+        for key in data
+        if key not in fields and key not in owners
+    ]
     try:
-        scene = Scene.model_validate(data).located_at(str(Path(doc.file).resolve().parent))
+        own = {key: value for key, value in data.items() if key in fields}
+        scene = Scene.model_validate(own).located_at(str(Path(doc.file).resolve().parent))
     except ValidationError as exc:
-        raise SceneError(located_errors(doc, (), data, exc, Scene)) from None
+        errors += located_errors(doc, (), data, exc, Scene)
+    sections = _plugin_sections(doc, data, registry, owners, errors)
+    if errors:
+        raise SceneError(errors)
+    scene._sections.update(sections)
     tool = data.get("tool")
     if tool is not None:
         known = registry.names("surfaces")
@@ -412,9 +414,8 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
                 ("tool", "surface") if isinstance(tool, dict) and "surface" in tool else ("tool",)
             )
             errors.append(
-                err(
+                doc.error(
                     where,
-                    "tool.surface",
                     f"unknown surface {name!r}{hint}; "
                     f"registered surfaces: {', '.join(known) or 'none'}",
                 )
@@ -423,260 +424,52 @@ def validate_scene_data(doc: Document, data: Any, registry: Registry) -> Scene:
             try:
                 params = registry.surface_type(str(name)).params
             except LazyLoadError as exc:  # a plugin's lazily registered surface
-                errors.append(err(("tool", "surface"), "tool.surface", str(exc)))
+                errors.append(doc.error(("tool", "surface"), str(exc)))
             else:
                 try:
                     scene = scene.model_copy(update={"tool": params.model_validate(tool)})
                 except ValidationError as exc:
                     errors += located_errors(doc, ("tool",), tool, exc, params, "tool")
-    if not errors:
-        errors += _preflight(scene, err)
-    if not errors and scene.layup is not None:
-        from preform.stack.validate import layup_problems
-
-        errors += layup_problems(scene, registry, err)
+    # the checks of the steps owning a section the scene holds (one that cannot load: the plan)
+    for name in dict.fromkeys(owners[key] for key in owners if key in data and not errors):
+        with contextlib.suppress(LazyLoadError):
+            check = registry.step(name).check
+            errors += check(scene, doc, registry) if check is not None else []
     from preform.pipeline.planner import PlanError, plan
 
     try:
         plan(scene, registry)
     except PlanError as exc:
         for index, message in exc.problems:
-            at: tuple[str | int, ...] = ("outputs", index) if index is not None else ()
-            errors.append(err(at, f"outputs[{index}]" if index is not None else "", message))
+            errors.append(doc.error(("outputs", index) if index is not None else (), message))
     if errors:
         raise SceneError(errors)
     return scene
 
 
-def _preflight(scene: Scene, err: Any) -> list[SourceError]:
-    """Problems a scene's tool, ply and start have before anything runs, located.
-
-    Cheap checks only: the ply's node count against ``limits.max_nodes`` (arithmetic, no
-    array), a node spacing that leaves the ply or the tool without a cell, the start point
-    outside the ply or off the tool, and the tool's own preflight (an analytic tool is built,
-    microseconds; a mesh file is checked for existence, type and size, not read).
-    """
-    from preform.drape.steps import (
-        node_budget_problem,
-        ply_outline,
-        ply_too_coarse_problem,
-        start_problem,
-    )
-    from preform.pipeline import fidelity
-
-    errors: list[SourceError] = []
-    surface = None
-    tool = scene.tool
-    preflight = getattr(tool, "preflight", None)
-    if preflight is not None:
-        surface, problems = preflight(scene.base_dir, scene.limits)
-        for where, message in problems:
-            label = ".".join(str(p) for p in ("tool", *where))
-            errors.append(err(("tool", *where), label, message))
-    ply = scene.ply
-    errors += _section_problems(scene, err)
-    if surface is not None:
-        errors += _empty_part_problems(scene, surface, err)
-    errors += _export_mesh_problems(scene, err)
-    if ply is None:
-        return errors
-    outline = ply_outline(scene)
-    spacing_at: tuple[str | int, ...] = ("ply", "node_spacing_mm")
-    spacing = ply.node_spacing_mm
-    if spacing is None and surface is not None:
-        # The preset chooses d from the tool's size: check the ply against that d.
-        spacing = fidelity.resolve(scene, float(surface.size)).node_spacing_mm
-        spacing_at = ("ply",)
-    if spacing is not None:
-        label = ".".join(str(p) for p in spacing_at)
-        problem = node_budget_problem(outline, spacing, scene.limits.max_nodes)
-        if problem is not None:
-            return [*errors, err(spacing_at, label, problem)]
-        problem = ply_too_coarse_problem(outline, spacing)
-        if problem is not None:
-            errors.append(err(spacing_at, label, problem))
-        elif surface is not None and spacing * 1e-3 > float(surface.size):
-            errors.append(
-                err(
-                    spacing_at,
-                    label,
-                    f"the node spacing {spacing:g} mm is larger than the tool (its typical "
-                    f"length is {float(surface.size) * 1e3:.4g} mm), so the net has no cell on "
-                    "it; use a spacing well below the tool's size (the standard preset uses "
-                    "1/40 of it)",
-                ),
+def _plugin_sections(
+    doc: Document | None,
+    data: dict[str, Any],
+    registry: Registry,
+    owners: dict[str, str],
+    errors: list[SourceError],
+) -> dict[str, Any]:
+    """The sections of plugins' steps in ``data``, each validated by its step's model; their
+    problems, located in ``doc``, go to ``errors`` (raised at once without a ``doc``)."""
+    sections: dict[str, Any] = {}
+    for key in (key for key in data if key in owners and key not in Scene.model_fields):
+        try:
+            model = registry.step(owners[key]).sections[key]
+            sections[key] = model.model_validate(data[key]) if model is not None else data[key]
+        except (LazyLoadError, ValidationError) as exc:
+            if doc is None:
+                raise
+            errors += (
+                located_errors(doc, (key,), data[key], exc, model, key)
+                if isinstance(exc, ValidationError)
+                else [doc.error((key,), str(exc))]
             )
-    if not bool(outline.contains(np.zeros((1, 2)), 1e-9)[0]):
-        at = ("ply", "outline_mm") if ply.outline_mm is not None else ("ply", "offset_mm")
-        errors.append(
-            err(
-                at,
-                ".".join(at),
-                "the start point (the flat origin) lies outside the ply; the generators run "
-                "through it, so it must be fabric",
-            )
-        )
-    if surface is not None and scene.start is not None:
-        point = scene.start.point_mm
-        problem = start_problem(surface, (point[0] * 1e-3, point[1] * 1e-3))
-        if problem is not None:
-            errors.append(err(("start", "point_mm"), "start.point_mm", problem))
-    return errors
-
-
-def _empty_part_problems(scene: Scene, surface: Any, err: Any) -> list[SourceError]:
-    """A ``part`` section that selects nothing of a built (analytic) tool, known from the
-    tool's bounds [m]: a height cut above its top, a plan outline wholly beside its plan.
-    What only the drape can tell (a cut and an outline that miss each other on the tool, a
-    mesh tool's part) fails the case after draping (``preform.drape.steps.judge_drape``)."""
-    section = scene.part
-    if section is None:
-        return []
-    (x0, y0, _), (x1, y1, z1) = (tuple(float(c) for c in corner) for corner in surface.bounds)
-    errors = []
-    # strictly above: a cut at the top of a flat or flat-topped tool (a plane, a frustum)
-    # selects its top face; at a dome's apex a point, which the drape then finds empty
-    if section.z_min_mm is not None and section.z_min_mm * 1e-3 > z1:
-        errors.append(
-            err(
-                ("part", "z_min_mm"),
-                "part.z_min_mm",
-                f"the height cut z ≥ {section.z_min_mm:g} mm lies above the tool, whose "
-                f"top is at z = {z1 * 1e3:.6g} mm, so the part selects nothing; lower the cut",
-            )
-        )
-    if section.plan_outline_mm is not None:
-        xy = np.asarray(section.plan_outline_mm, dtype=float) * 1e-3
-        (px0, py0), (px1, py1) = xy.min(axis=0), xy.max(axis=0)
-        if px1 <= x0 or px0 >= x1 or py1 <= y0 or py0 >= y1:
-            errors.append(
-                err(
-                    ("part", "plan_outline_mm"),
-                    "part.plan_outline_mm",
-                    f"the part's plan outline (x {px0 * 1e3:.6g} … {px1 * 1e3:.6g} mm, "
-                    f"y {py0 * 1e3:.6g} … {py1 * 1e3:.6g} mm) lies beside the tool, whose plan "
-                    f"extent is x {x0 * 1e3:.6g} … {x1 * 1e3:.6g} mm, y {y0 * 1e3:.6g} … "
-                    f"{y1 * 1e3:.6g} mm, so the part selects nothing",
-                )
-            )
-    return errors
-
-
-def _export_mesh_problems(scene: Scene, err: Any) -> list[SourceError]:
-    """``export.mesh`` missing, unreadable or too large, refused here like a tool mesh file
-    (checked, not read) rather than after the drape has run."""
-    from preform.export.shell_mesh import MB, mesh_file_problem
-
-    section = scene.export
-    if section is None or section.mesh is None:
-        return []
-    max_bytes = int(scene.limits.max_mesh_mb * MB)
-    problem = mesh_file_problem(Path(scene.base_dir) / section.mesh, max_bytes)
-    if problem is None:
-        return []
-    return [err(("export", "mesh"), "export.mesh", problem)]
-
-
-def _section_problems(scene: Scene, err: Any) -> list[SourceError]:
-    """Problems of the start, search and shear sections that would only surface at run time
-    (or take the machine first): checked by arithmetic."""
-    from preform.optimise.search import scan_size
-    from preform.pipeline import fidelity
-
-    errors: list[SourceError] = []
-    start = scene.start
-    if start is not None and start.generators == "polyline":
-        if start.generator_polylines_mm is None:
-            errors.append(
-                err(
-                    ("start", "generators"),
-                    "start.generators",
-                    "generators: polyline needs start.generator_polylines_mm (the two plan "
-                    "polylines, each through the start point)",
-                )
-            )
-        else:
-            for k, line in enumerate(start.generator_polylines_mm):
-                if not 2 <= len(line) <= MAX_POLYGON_VERTICES:
-                    errors.append(
-                        err(
-                            ("start", "generator_polylines_mm", k),
-                            f"start.generator_polylines_mm[{k}]",
-                            f"a generator polyline needs 2 to {MAX_POLYGON_VERTICES:,} "
-                            f"vertices, got {len(line):,}",
-                        )
-                    )
-        if scene.search is not None:
-            errors.append(
-                err(
-                    ("start", "generators"),
-                    "start.generators",
-                    "the generator-angle search needs geodesic or plan generators: polylines "
-                    "fix the angle themselves; remove the search section or the polylines",
-                )
-            )
-    search = scene.search
-    if search is not None:
-        span = search.generator_angle_deg
-        lo, hi = (span.min, span.max) if span is not None else (30.0, 150.0)
-        at: tuple[str | int, ...] = (
-            ("search", "generator_angle_deg") if span is not None else ("search",)
-        )
-        label = ".".join(str(p) for p in at)
-        if not 0.0 < lo < hi < 180.0:
-            errors.append(
-                err(
-                    at,
-                    label,
-                    f"the generator-angle range must satisfy 0 < min < max < 180°, "
-                    f"got [{lo:g}°, {hi:g}°]",
-                )
-            )
-        else:
-            knobs = fidelity.resolve(scene)
-            needed = scan_size(np.radians(lo), np.radians(hi), np.radians(knobs.scan_step_deg))
-            if search.scan_step_deg is not None:
-                at = ("search", "scan_step_deg")
-            elif span is not None and span.step is not None:
-                at = ("search", "generator_angle_deg", "step")
-            label = ".".join(str(p) for p in at)
-            if needed > knobs.max_drapes:
-                count = "too many" if needed >= 2**63 else f"{needed:,}"
-                errors.append(
-                    err(
-                        at,
-                        label,
-                        f"a scan of [{lo:g}°, {hi:g}°] every {knobs.scan_step_deg:g}° needs "
-                        f"{count} drapes, more than the budget max_drapes = "
-                        f"{knobs.max_drapes}; widen the step (search.scan_step_deg) or raise "
-                        "search.max_drapes",
-                    )
-                )
-    shear = scene.shear
-    if shear is not None:
-        spec = shear.angles_deg
-        step = spec.step or 1.0
-        if spec.min > spec.max:
-            errors.append(
-                err(
-                    ("shear", "angles_deg"),
-                    "shear.angles_deg",
-                    f"min ({spec.min:g}°) must not exceed max ({spec.max:g}°)",
-                )
-            )
-        else:
-            angles = (spec.max - spec.min) / step + 1
-            if not angles <= MAX_CURVE_ANGLES:
-                errors.append(
-                    err(
-                        ("shear", "angles_deg", "step"),
-                        "shear.angles_deg.step",
-                        f"a step of {step:g}° over [{spec.min:g}°, {spec.max:g}°] gives "
-                        f"{angles:.3g} angles, more than {MAX_CURVE_ANGLES:,}; use a step of at "
-                        f"least {(spec.max - spec.min) / (MAX_CURVE_ANGLES - 1):.3g}°",
-                    )
-                )
-    return errors
+    return sections
 
 
 def load_scene(path: str | Path, registry: Registry) -> tuple[Scene, dict[str, Any]]:
@@ -687,19 +480,19 @@ def load_scene(path: str | Path, registry: Registry) -> tuple[Scene, dict[str, A
         raise SceneError(exc.errors) from None
     if len(docs) != 1:
         line, column = docs[1].locate(()) if len(docs) > 1 else (1, 1)
-        raise SceneError(
-            [
-                SourceError(
-                    str(path), line, column, "", "a scene file holds exactly one YAML document"
-                )
-            ]
-        )
+        message = "a scene file holds exactly one YAML document"
+        raise SceneError([SourceError(str(path), line, column, "", message)])
     return validate_scene_data(docs[0], docs[0].data, registry), docs[0].data
 
 
 def scene_from_data(data: dict[str, Any], base_dir: str, registry: Registry) -> Scene:
     """Rebuild a scene from data that already validated (worker processes)."""
-    scene = Scene.model_validate(data).located_at(base_dir)
+    fields = Scene.model_fields
+    scene = Scene.model_validate({k: v for k, v in data.items() if k in fields})
+    scene = scene.located_at(base_dir)
+    scene._sections.update(
+        _plugin_sections(None, data, registry, registry.providers("sections"), [])
+    )
     tool = data.get("tool")
     if isinstance(tool, dict):
         params = registry.surface_type(str(tool.get("surface"))).params

@@ -65,3 +65,17 @@ def ply_scene(scene: Scene, index: int, registry: Registry) -> Scene:
     from preform.pipeline.scene import scene_from_data
 
     return scene_from_data(ply_scene_data(scene, index), scene.base_dir, registry)
+
+
+def ply_plans(scene: Scene, registry: Registry) -> list[str]:
+    """Human-readable plan lines of each ply of the scene's layup (each ply runs its own plan
+    inside the layup step); none without a layup."""
+    from preform.pipeline.planner import plan
+
+    lines = []
+    for k, name in enumerate(layup_of(scene).ply_names() if scene.layup else ()):
+        steps = plan(ply_scene(scene, k, registry), registry)
+        names = ", ".join(s.name for s in steps if s.name != "surface")
+        under = "the tool offset by the plies below" if k else "the tool"
+        lines.append(f"  layup ply {name}: {names} (on {under})")
+    return lines

@@ -32,6 +32,7 @@ import numpy as np
 from preform.pipeline.status import CaseFailure, CaseStatus
 from preform.stack.maps import PlyLayer, StackMaps, stack_at, stations
 from preform.stack.plies import layup_of, ply_scene
+from preform.stack.validate import layup_problems
 from preform.step import CaseContext, Step
 
 MM = 1e-3
@@ -369,6 +370,8 @@ STEPS = [
         "Every ply of the layup draped on the tool offset by the plies below, each in a "
         "sub-folder with its outputs; the stack's maps.",
         scene_sections=("tool", "layup"),
+        sections={"layup": None},
+        check=layup_problems,
     ),
     Step(
         "stack_sections",
