@@ -1036,7 +1036,7 @@ def compare_drape(
         from preform.drape.steps import drape_settings
 
         law = case._product("shear_law")
-        settings = drape_settings(case.scene, surface)
+        settings = drape_settings(case.scene, surface).keywords()
 
         def energy_of(result: Any) -> Any:
             with np.errstate(all="ignore"):

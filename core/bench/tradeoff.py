@@ -463,9 +463,9 @@ def chebyshev_errors(scene: Scene, surface: Any, alpha_rad: float) -> tuple[floa
     from preform.drape.steps import drape_settings
 
     settings = drape_settings(scene, surface)
-    if not _is_bare_hemisphere(scene) or settings["generators"] != "geodesic":
+    if not _is_bare_hemisphere(scene) or settings.generators != "geodesic":
         return math.nan, math.nan
-    result = drape(surface, generator_angle_rad=alpha_rad, **settings)
+    result = drape(surface, settings, generator_angle_rad=alpha_rad)
     counted = result.valid & result.in_part
     if not counted.any():
         return math.nan, math.nan

@@ -196,7 +196,8 @@ def explain(
 
     ``surface``: the tool [m]; ``settings``: the other keyword arguments of
     :func:`preform.drape.net.drape` (``node_spacing_m``, ``ply``, ``generators``, ``trim``,
-    ``tolerance``, ``substeps``; ``preform.drape.steps.drape_settings`` gives a scene's);
+    ``tolerance``, ``substeps``; ``preform.drape.steps.drape_settings(...).keywords()`` gives a
+    scene's);
     ``initial``: the set-up the search starts from (the scene's). ``vary``: which of
     ``start``, ``orientation``, ``generator_angle``. ``reach``: how far each parameter may move
     [mm, deg] (default :data:`DEFAULT_REACH`). ``energy_of``: the energy field of a net, for
@@ -207,7 +208,8 @@ def explain(
 
     names = _names(vary)
     limits = {**DEFAULT_REACH, **(reach or {})}
-    base = {k: v for k, v in settings.items() if k not in ("start_xy_m", "orientation_rad")}
+    varied = ("start_xy_m", "start_point", "orientation_rad", "generator_angle_rad")
+    base = {k: v for k, v in settings.items() if k not in varied}
     if not isinstance(base.get("generators", "geodesic"), str):
         raise ValueError(
             "the inverse search varies the start, orientation and generator angle of "

@@ -27,12 +27,12 @@ parent failed is NOT_REACHED, never a silent NaN.
 
 from __future__ import annotations
 
+import dataclasses
 import time
-from collections.abc import Callable
 from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.fields import cell_fields
@@ -42,8 +42,8 @@ from preform.drape.generators import (
     geodesic_generators,
     plan_generators,
 )
-from preform.drape.ply import PlyOutline
 from preform.drape.result import DrapeResult, NodeStatus
+from preform.drape.settings import DrapeError, DrapeSettings
 from preform.drape.surface import Surface
 
 FloatArray = NDArray[np.float64]
@@ -53,10 +53,6 @@ IntArray = NDArray[np.int64]
 
 _PLACED = np.int8(NodeStatus.PLACED)
 _NOT_REACHED = np.int8(NodeStatus.NOT_REACHED)
-
-
-class DrapeError(ValueError):
-    """A drape that cannot start: the set-up itself is wrong (start off the tool, bad angle)."""
 
 
 @runtime_checkable
@@ -178,7 +174,7 @@ def _solve_on_circle(
 
 
 # --------------------------------------------------------------------------------------------
-# The start and the generators
+# The start
 
 
 def _lift_to_tangent(direction_xy: FloatArray, normal: FloatArray) -> FloatArray | None:
@@ -223,34 +219,177 @@ def _split_polyline(
     return forward, backward
 
 
-def _generators(
-    surface: Surface,
-    start: FloatArray,
-    start_xy: FloatArray,
-    t_u: FloatArray,
-    t_v: FloatArray,
-    kind: str | PlanPolylines | object,
-    spacing: float,
-    counts: tuple[int, int, int, int],
-    substeps: int,
-    tolerance: float,
-    use_closed_form: bool,
-    polyline_halves: list[FloatArray] | None,
+class NetStart(NamedTuple):
+    """Where the net starts and which way its generators leave (:func:`place_start`)."""
+
+    #: The start point on the tool (3,) [m] and its plan position (2,) [m].
+    point: FloatArray
+    xy: FloatArray
+    #: Unit tangents (3,) of the +u and +v generators at the start.
+    t_u: FloatArray
+    t_v: FloatArray
+    #: Plan direction of +u [rad from the tool's x axis] and the angle α from +u to +v [rad].
+    orientation: float
+    generator_angle: float
+    #: The generator polylines' halves +u, −u, +v, −v in plan [m] (PlanPolylines only).
+    polyline_halves: list[FloatArray] | None = None
+
+
+def place_start(surface: Surface, settings: DrapeSettings) -> NetStart:
+    """The start point on the tool and the generators' directions there. Raises
+    :class:`DrapeError` for a start off the tool, α outside (0, π) or unknown generators."""
+    point, xy = _start_point(surface, settings)
+    normal = surface.normal(point[None, :])[0]
+    generators = settings.generators
+    if isinstance(generators, PlanPolylines):
+        return _polyline_start(generators, settings, point, xy, normal)
+    if not (hasattr(generators, "nodes") or generators in ("geodesic", "plan")):
+        raise DrapeError(
+            f"generators must be 'geodesic', 'plan' or PlanPolylines, got {generators!r}"
+        )
+    if settings.orientation_rad is None or settings.generator_angle_rad is None:
+        raise DrapeError("orientation_rad and generator_angle_rad are required")
+    theta, alpha = float(settings.orientation_rad), float(settings.generator_angle_rad)
+    if not 0 < alpha < np.pi:
+        raise DrapeError(f"generator angle must lie in (0, π) rad, got {alpha!r}")
+    t_u = _lift_to_tangent(np.array([np.cos(theta), np.sin(theta)]), normal)
+    if t_u is None:
+        raise DrapeError(
+            "the tool is vertical at the start point and the orientation is not tangential to it"
+        )
+    t_v = np.cos(alpha) * t_u + np.sin(alpha) * _cross(normal[None], t_u[None])[0]
+    return NetStart(point, xy, t_u, t_v, theta, alpha)
+
+
+def _start_point(surface: Surface, settings: DrapeSettings) -> tuple[FloatArray, FloatArray]:
+    """The start point on the tool (3,) [m] and its plan position (2,) [m]."""
+    if (settings.start_xy_m is None) == (settings.start_point is None):
+        raise DrapeError("give exactly one of start_xy_m (plan) and start_point (3-D)")
+    if settings.start_xy_m is not None:
+        xy = np.asarray(settings.start_xy_m, dtype=float).reshape(2)
+        pts, mask = surface.point_at_plan(xy[None, :])
+        if not bool(mask[0]) or not np.all(np.isfinite(pts[0])):
+            raise DrapeError(
+                f"the start point (x, y) = ({xy[0]:.6g}, {xy[1]:.6g}) m is not over the tool "
+                f"(bounds {surface.bounds} m)"
+            )
+        return pts[0], xy
+    point = np.asarray(settings.start_point, dtype=float).reshape(1, 3)
+    foot, dist = surface.closest_point(point)
+    if not dist[0] <= max(1e-6 * surface.size, settings.tolerance_m):
+        raise DrapeError(f"the start point is {dist[0]:.3g} m from the tool surface")
+    return foot[0], foot[0][:2].copy()
+
+
+def _polyline_start(
+    lines: PlanPolylines,
+    settings: DrapeSettings,
+    point: FloatArray,
+    xy: FloatArray,
+    normal: FloatArray,
+) -> NetStart:
+    """The start of generators along plan polylines, which set orientation and α themselves."""
+    theta_rad, alpha_rad = settings.orientation_rad, settings.generator_angle_rad
+    if (
+        theta_rad is not None
+        and alpha_rad is not None
+        and (theta_rad, alpha_rad) != (0.0, 0.5 * np.pi)
+    ):
+        raise DrapeError("with PlanPolylines the polylines set orientation and angle")
+    d = float(settings.node_spacing_m)
+    fu, bu = _split_polyline(lines.first_xy_m, xy, 1e-6 * d)
+    fv, bv = _split_polyline(lines.second_xy_m, xy, 1e-6 * d)
+    t_u = _lift_to_tangent(fu[1] - fu[0], normal)
+    t_v = _lift_to_tangent(fv[1] - fv[0], normal)
+    if t_u is None or t_v is None:
+        raise DrapeError("a generator polyline crosses a vertical wall at the start point")
+    alpha = float(np.arctan2(_cross(t_u[None], t_v[None])[0] @ normal, t_u @ t_v))
+    theta = float(np.arctan2(fu[1, 1] - fu[0, 1], fu[1, 0] - fu[0, 0]))
+    if not 0 < alpha < np.pi:
+        raise DrapeError(
+            f"the second generator polyline is {np.degrees(alpha):.3g}° from the first; it "
+            "must be counter-clockwise from it (seen from the outward normal), 0 < α < 180°"
+        )
+    return NetStart(point, xy, t_u, t_v, theta, alpha, [fu, bu, fv, bv])
+
+
+# --------------------------------------------------------------------------------------------
+# The generators
+
+
+class Net(NamedTuple):
+    """The net being placed: flat arrays over its (ni, nj) node grid, filled in place."""
+
+    shape: tuple[int, int]
+    #: Grid index (i0, j0) of the start node.
+    start_index: tuple[int, int]
+    #: Positions (n, 3) [m] (NaN where not placed), NodeStatus codes (n,), residuals (n,) [m].
+    pos: FloatArray
+    status: StatusArray
+    residual: FloatArray
+    #: The generator nodes placed (flat indices) and each one's neighbour towards the start.
+    on_generators: IntArray
+    before: IntArray
+
+    @property
+    def start_flat(self) -> int:
+        return self.start_index[0] * self.shape[1] + self.start_index[1]
+
+
+def place_generators(surface: Surface, settings: DrapeSettings, start: NetStart) -> Net:
+    """The net's grid over the ply with the start node and the four half-generators +u, −u,
+    +v, −v placed; a generator ends where it leaves the tool or the ply."""
+    try:
+        grid = settings.ply.node_grid(float(settings.node_spacing_m))
+    except ValueError as exc:
+        raise DrapeError(str(exc)) from exc
+    (ni, nj), (i0, j0) = grid.shape, grid.start_index
+    pos = np.full((ni * nj, 3), np.nan)
+    status = np.full(ni * nj, NodeStatus.NOT_REACHED, dtype=np.int8)
+    status[~grid.inside.ravel()] = NodeStatus.OUTSIDE_PLY
+    residual = np.zeros(ni * nj)
+    start_flat = i0 * nj + j0
+    pos[start_flat], status[start_flat] = start.point, NodeStatus.PLACED
+    residual[start_flat] = float(surface.closest_point(start.point[None, :])[1][0])
+    counts = (ni - 1 - i0, i0, nj - 1 - j0, j0)
+    gen = _march_generators(surface, settings, start, max(counts))
+    on_generators, before = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+    for row, (count, stride) in enumerate(zip(counts, (nj, -nj, 1, -1), strict=True)):
+        if count == 0:
+            continue
+        flat = start_flat + stride * np.arange(1, count + 1)
+        gen_status = gen.status[row, :count].copy()
+        inside = status[flat] != NodeStatus.OUTSIDE_PLY
+        # A generator node outside the ply cuts the generator there like an edge of the tool.
+        alive = np.logical_and.accumulate((gen_status == _PLACED) & inside)
+        first_dead = ~alive & np.r_[True, alive[:-1]]
+        new = np.where(alive, _PLACED, _NOT_REACHED).astype(np.int8)
+        new[first_dead & (gen_status != _PLACED)] = NodeStatus.OFF_TOOL
+        new[~inside] = NodeStatus.OUTSIDE_PLY
+        status[flat] = new
+        pos[flat[alive]] = gen.points[row, :count][alive]
+        residual[flat[alive]] = gen.residual[row, :count][alive]
+        on_generators.append(flat[alive])
+        before.append(flat[alive] - stride)
+    return Net(
+        (ni, nj), (i0, j0), pos, status, residual, np.concatenate(on_generators),
+        np.concatenate(before),
+    )  # fmt: skip
+
+
+def _march_generators(
+    surface: Surface, settings: DrapeSettings, start: NetStart, count: int
 ) -> GeneratorNodes:
-    """Nodes on the four half-generators +u, −u, +v, −v."""
-    count = max(counts)
+    """``count`` nodes on each of the four half-generators +u, −u, +v, −v."""
+    kind, d = settings.generators, float(settings.node_spacing_m)
+    t_u, t_v = start.t_u, start.t_v
+    marching: dict[str, Any] = {"substeps": settings.substeps, "tolerance": settings.tolerance}
     if kind == "geodesic":
         directions = np.stack([t_u, -t_u, t_v, -t_v])
         return geodesic_generators(
-            surface,
-            start,
-            directions,
-            spacing,
-            count,
-            substeps=substeps,
-            tolerance=tolerance,
-            use_closed_form=use_closed_form,
-        )
+            surface, start.point, directions, d, count, **marching,
+            use_closed_form=settings.use_closed_form,
+        )  # fmt: skip
     if kind == "plan":
         lines = []
         for t in (t_u, -t_u, t_v, -t_v):
@@ -259,23 +398,17 @@ def _generators(
                     "a generator is vertical at the start point, so it has no plan direction; "
                     "use geodesic generators"
                 )
-            lines.append(np.vstack([start_xy, start_xy + spacing * t[:2] / np.hypot(*t[:2])]))
-        return plan_generators(
-            surface, start, lines, spacing, count, substeps=substeps, tolerance=tolerance
-        )
+            lines.append(np.vstack([start.xy, start.xy + d * t[:2] / np.hypot(*t[:2])]))
+        return plan_generators(surface, start.point, lines, d, count, **marching)
     if hasattr(kind, "nodes"):
         # Paths that build their own nodes, e.g. preform.optimise.curved.CurvedGenerators.
-        return kind.nodes(
-            surface, start, t_u, t_v, spacing, count, substeps=substeps, tolerance=tolerance
-        )
-    assert polyline_halves is not None
-    return plan_generators(
-        surface, start, polyline_halves, spacing, count, substeps=substeps, tolerance=tolerance
-    )
+        return cast(Any, kind).nodes(surface, start.point, t_u, t_v, d, count, **marching)
+    assert start.polyline_halves is not None
+    return plan_generators(surface, start.point, start.polyline_halves, d, count, **marching)
 
 
 # --------------------------------------------------------------------------------------------
-# The fronts on a surface without compiled queries
+# The fronts
 
 
 def _compiled_closed_form(surface: object) -> bool:
@@ -358,200 +491,32 @@ def _fill_fronts_python(
     return fronts, newton_iterations
 
 
-# --------------------------------------------------------------------------------------------
-# The engine
+class Fronts(NamedTuple):
+    """How the fronts were filled (:func:`place_fronts`), for the result's ``info``."""
+
+    #: "walking exact", "closed form" or "newton on the constraint circle".
+    placement: str
+    fronts: int
+    newton_iterations_max: int
+    #: Wall and CPU time of the fill [s].
+    fill_seconds: float
+    fill_cpu_seconds: float
 
 
-def drape(
-    surface: Surface,
-    *,
-    node_spacing_m: float,
-    ply: PlyOutline,
-    start_xy_m: ArrayLike | None = None,
-    start_point: ArrayLike | None = None,
-    orientation_rad: float | None = 0.0,
-    generator_angle_rad: float | None = 0.5 * np.pi,
-    generators: str | PlanPolylines | object = "geodesic",
-    trim: Callable[[FloatArray], BoolArray] | None = None,
-    tolerance: float = 1e-9,
-    max_iterations: int = 30,
-    substeps: int = 16,
-    use_closed_form: bool = True,
-) -> DrapeResult:
-    """Drape a ply over ``surface`` as a pin-jointed net.
-
-    Parameters
-    ----------
-    surface: the tool (any :class:`~preform.drape.surface.Surface`).
-    node_spacing_m: node spacing d [m], the chord between neighbouring crossovers.
-    ply: the ply outline in the flat; its origin is the start point, its axes the fibres.
-    start_xy_m: plan position (x, y) [m] of the start point, put on the tool's top with
-        ``point_at_plan``. Or ``start_point``: a 3-D point [m] already on the tool.
-    orientation_rad: plan direction [rad from the tool's x axis] of the first generator (+u)
-        at the start.
-    generator_angle_rad: angle α [rad] from +u to +v at the start, counter-clockwise seen from
-        the outward normal, in the tangent plane; 0 < α < π.
-    generators: "geodesic", "plan" (tool surface above straight plan lines), or
-        :class:`PlanPolylines` (then orientation and α follow from the polylines; pass None),
-        or paths with a ``nodes`` method (:class:`preform.optimise.curved.CurvedGenerators`).
-    trim: predicate on cell centroids (n, 3) [m] giving the part (default: every valid cell).
-    tolerance: relative tolerance; every solve stops at ``tolerance``·d [m].
-    max_iterations: cap on Newton steps per front on surfaces without a closed form.
-    substeps: sub-steps per node spacing when marching generators.
-    use_closed_form: use the surface's closed forms when it has them.
-
-    Raises :class:`DrapeError` for a set-up that cannot give a net at all (start off the tool,
-    start outside the ply, α outside (0, π), d ≤ 0). Everything else, including a net that
-    runs off the tool, comes back as node statuses.
-    """
-    clock = time.perf_counter()
-    d = float(node_spacing_m)
-    if not (np.isfinite(d) and d > 0):
-        raise DrapeError(f"node spacing must be a positive length, got {node_spacing_m!r} m")
-    if not 0 < tolerance < 1e-2:
-        raise DrapeError(f"tolerance is relative to the node spacing; got {tolerance!r}")
-    tol_m = tolerance * d
-
-    # The start point.
-    if (start_xy_m is None) == (start_point is None):
-        raise DrapeError("give exactly one of start_xy_m (plan) and start_point (3-D)")
-    if start_xy_m is not None:
-        start_xy = np.asarray(start_xy_m, dtype=float).reshape(2)
-        pts, mask = surface.point_at_plan(start_xy[None, :])
-        if not bool(mask[0]) or not np.all(np.isfinite(pts[0])):
-            raise DrapeError(
-                f"the start point (x, y) = ({start_xy[0]:.6g}, {start_xy[1]:.6g}) m is not over "
-                f"the tool (bounds {surface.bounds} m)"
-            )
-        start = pts[0]
-    else:
-        point = np.asarray(start_point, dtype=float).reshape(1, 3)
-        foot, dist = surface.closest_point(point)
-        if not dist[0] <= max(1e-6 * surface.size, tol_m):
-            raise DrapeError(f"the start point is {dist[0]:.3g} m from the tool surface")
-        start = foot[0]
-        start_xy = start[:2].copy()
-    normal = surface.normal(start[None, :])[0]
-
-    # The generator directions at the start.
-    polyline_halves: list[FloatArray] | None = None
-    if isinstance(generators, PlanPolylines):
-        if orientation_rad is not None and generator_angle_rad is not None:
-            if (orientation_rad, generator_angle_rad) != (0.0, 0.5 * np.pi):
-                raise DrapeError("with PlanPolylines the polylines set orientation and angle")
-        fu, bu = _split_polyline(generators.first_xy_m, start_xy, 1e-6 * d)
-        fv, bv = _split_polyline(generators.second_xy_m, start_xy, 1e-6 * d)
-        polyline_halves = [fu, bu, fv, bv]
-        lifted_u = _lift_to_tangent(fu[1] - fu[0], normal)
-        lifted_v = _lift_to_tangent(fv[1] - fv[0], normal)
-        if lifted_u is None or lifted_v is None:
-            raise DrapeError("a generator polyline crosses a vertical wall at the start point")
-        t_u, t_v = lifted_u, lifted_v
-        alpha = float(np.arctan2(_cross(t_u[None], t_v[None])[0] @ normal, t_u @ t_v))
-        theta = float(np.arctan2(fu[1, 1] - fu[0, 1], fu[1, 0] - fu[0, 0]))
-        if not 0 < alpha < np.pi:
-            raise DrapeError(
-                f"the second generator polyline is {np.degrees(alpha):.3g}° from the first; it "
-                "must be counter-clockwise from it (seen from the outward normal), 0 < α < 180°"
-            )
-    elif hasattr(generators, "nodes") or generators in ("geodesic", "plan"):
-        if orientation_rad is None or generator_angle_rad is None:
-            raise DrapeError("orientation_rad and generator_angle_rad are required")
-        theta, alpha = float(orientation_rad), float(generator_angle_rad)
-        if not 0 < alpha < np.pi:
-            raise DrapeError(f"generator angle must lie in (0, π) rad, got {alpha!r}")
-        lifted = _lift_to_tangent(np.array([np.cos(theta), np.sin(theta)]), normal)
-        if lifted is None:
-            raise DrapeError(
-                "the tool is vertical at the start point and the orientation is not tangential "
-                "to it"
-            )
-        t_u = lifted
-        t_v = np.cos(alpha) * t_u + np.sin(alpha) * _cross(normal[None], t_u[None])[0]
-    else:
-        raise DrapeError(
-            f"generators must be 'geodesic', 'plan' or PlanPolylines, got {generators!r}"
-        )
-
-    # The grid and the ply.
-    try:
-        grid = ply.node_grid(d)
-    except ValueError as exc:
-        raise DrapeError(str(exc)) from exc
-    ni, nj = grid.shape
-    i0, j0 = grid.start_index
-    n_nodes = ni * nj
-    pos = np.full((n_nodes, 3), np.nan)
-    status = np.full(n_nodes, NodeStatus.NOT_REACHED, dtype=np.int8)
-    status[~grid.inside.ravel()] = NodeStatus.OUTSIDE_PLY
-    residual = np.zeros(n_nodes)
-    start_flat = i0 * nj + j0
-    pos[start_flat] = start
-    status[start_flat] = NodeStatus.PLACED
-    residual[start_flat] = float(surface.closest_point(start[None, :])[1][0])
-
-    # Generators: +u, −u, +v, −v.
-    counts = (ni - 1 - i0, i0, nj - 1 - j0, j0)
-    gen = _generators(
-        surface,
-        start,
-        start_xy,
-        t_u,
-        t_v,
-        generators,
-        d,
-        counts,
-        substeps,
-        tolerance,
-        use_closed_form,
-        polyline_halves,
-    )
-    steps = ((nj, 0), (-nj, 0), (1, 1), (-1, 1))
-    gen_nodes: list[IntArray] = [np.zeros(0, dtype=np.int64)]
-    gen_prev: list[IntArray] = [np.zeros(0, dtype=np.int64)]
-    for row, (count, (stride, _)) in enumerate(zip(counts, steps, strict=True)):
-        if count == 0:
-            continue
-        flat = start_flat + stride * np.arange(1, count + 1)
-        gen_status = gen.status[row, :count].copy()
-        inside = status[flat] != NodeStatus.OUTSIDE_PLY
-        # A generator node outside the ply cuts the generator there like an edge of the tool.
-        alive = np.logical_and.accumulate((gen_status == _PLACED) & inside)
-        first_dead = ~alive & np.r_[True, alive[:-1]]
-        new = np.where(alive, _PLACED, _NOT_REACHED).astype(np.int8)
-        new[first_dead & (gen_status != _PLACED)] = NodeStatus.OFF_TOOL
-        new[~inside] = NodeStatus.OUTSIDE_PLY
-        status[flat] = new
-        pos[flat[alive]] = gen.points[row, :count][alive]
-        residual[flat[alive]] = gen.residual[row, :count][alive]
-        gen_nodes.append(flat[alive])
-        gen_prev.append(flat[alive] - stride)
-
-    # The wavefronts.
-    fill_clock = time.perf_counter()
-    fill_cpu = time.process_time()
+def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
+    """Every node off the generators, front by front, in place in ``net``: in one compiled
+    loop on a tool with compiled queries, else through the tool's own vectorised queries."""
+    clock, cpu = time.perf_counter(), time.process_time()
     from preform.drape import net_kernels as kernels
 
+    d, tol_m = float(settings.node_spacing_m), settings.tolerance_m
     compiled = isinstance(surface, CompiledQueries)
-    closed_form = use_closed_form and (
+    closed_form = settings.use_closed_form and (
         isinstance(surface, ClosedFormPlacement) or (compiled and _compiled_closed_form(surface))
     )
     # a faceted tool that places nodes exactly by walking from the parents' facets (meshes)
-    walking = use_closed_form and isinstance(surface, WalkingPlacement)
-    # each node's facet, for a walking placement only (8 B a node the others do not need)
-    face = np.full(n_nodes if walking else 0, -1, dtype=np.int64)
-    if walking:
-        seeded = np.flatnonzero(status == _PLACED)
-        face[seeded] = cast(WalkingPlacement, surface).locate_faces(pos[seeded])
-        # The mesh spaces its generators by its own rule (the length along the surface over a
-        # feature crease), so their spacing residual is measured by that rule too.
-        on_gen, before = np.concatenate(gen_nodes), np.concatenate(gen_prev)
-        if on_gen.size:
-            along = cast(WalkingPlacement, surface).spacings(
-                pos[before], pos[on_gen], face[before], face[on_gen], d
-            )
-            dist = surface.closest_point(pos[on_gen])[1]
-            residual[on_gen] = np.maximum(np.abs(along - d), dist)
+    walking = settings.use_closed_form and isinstance(surface, WalkingPlacement)
+    (ni, nj), (i0, j0) = net.shape, net.start_index
     (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
     lo_bound = np.array([bx0, by0, bz0]) - tol_m
     hi_bound = np.array([bx1, by1, bz1]) + tol_m
@@ -565,49 +530,106 @@ def drape(
     q_sa, q_sb, q_na, q_nb = (
         np.array([q[col] for q in quadrants], dtype=np.int64) for col in range(4)
     )
+    layout = (nj, net.start_flat, q_sa, q_sb, q_na, q_nb, last_front)
     if compiled and not walking and (not closed_form or _compiled_closed_form(surface)):
         # The whole fill in one compiled loop (preform.drape.net_kernels).
         kind, params = cast(CompiledQueries, surface).compiled_queries()
         fronts, newton_iterations = kernels.fill_fronts(
-            pos, status, residual, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front, d, tol_m,
-            max_iterations, lo_bound, hi_bound, checked_kind(kind), kernel_parameters(kind, params),
-            closed_form,
+            net.pos, net.status, net.residual, *layout, d, tol_m, settings.max_iterations,
+            lo_bound, hi_bound, checked_kind(kind), kernel_parameters(kind, params), closed_form,
         )  # fmt: skip
     else:
         fronts, newton_iterations = _fill_fronts_python(
-            surface, pos, status, residual, (nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front),
-            d, tol_m, max_iterations, lo_bound, hi_bound, closed_form, face if walking else None,
+            surface, net.pos, net.status, net.residual, layout, d, tol_m,
+            settings.max_iterations, lo_bound, hi_bound, closed_form,
+            _walking_faces(surface, net, d) if walking else None,
         )  # fmt: skip
-
-    fill_seconds = time.perf_counter() - fill_clock
-    fill_cpu_seconds = time.process_time() - fill_cpu
-    nodes = pos.reshape(ni, nj, 3)
-    node_status = status.reshape(ni, nj)
-    fields = cell_fields(nodes, node_status, trim=trim)
-    placed = status == _PLACED
-    info: dict[str, object] = {
-        "placement": "walking exact"
+    placement = (
+        "walking exact"
         if walking
         else "closed form"
         if closed_form
-        else "newton on the constraint circle",
+        else "newton on the constraint circle"
+    )
+    return Fronts(
+        placement, fronts, newton_iterations, time.perf_counter() - clock, time.process_time() - cpu
+    )
+
+
+def _walking_faces(surface: Surface, net: Net, d: float) -> IntArray:
+    """Each node's facet (flat, −1 where not placed) on a tool that places by walking from the
+    parents' facets, seeded on the start and generators; their residuals are measured anew."""
+    walker = cast(WalkingPlacement, surface)
+    face = np.full(len(net.status), -1, dtype=np.int64)
+    seeded = np.flatnonzero(net.status == _PLACED)
+    face[seeded] = walker.locate_faces(net.pos[seeded])
+    # The mesh spaces its generators by its own rule (the length along the surface over a
+    # feature crease), so their spacing residual is measured by that rule too.
+    on_gen, before = net.on_generators, net.before
+    if on_gen.size:
+        along = walker.spacings(net.pos[before], net.pos[on_gen], face[before], face[on_gen], d)
+        dist = surface.closest_point(net.pos[on_gen])[1]
+        net.residual[on_gen] = np.maximum(np.abs(along - d), dist)
+    return face
+
+
+# --------------------------------------------------------------------------------------------
+# The fields, and the engine
+
+
+def net_fields(
+    net: Net, start: NetStart, settings: DrapeSettings, fronts: Fronts, clock: float
+) -> DrapeResult:
+    """The drape result of a placed net: its cell fields (shear, directions, part shares) and
+    what the placement cost (``info``); ``clock`` is the drape's start [s, perf_counter]."""
+    ni, nj = net.shape
+    nodes, node_status = net.pos.reshape(ni, nj, 3), net.status.reshape(ni, nj)
+    fields = cell_fields(nodes, node_status, trim=settings.trim)
+    placed = net.status == _PLACED
+    generators = settings.generators
+    info: dict[str, object] = {
+        "placement": fronts.placement,
         "generators": generators if isinstance(generators, str) else "plan polylines",
-        "tolerance_m": tol_m,
-        "max_residual_m": float(residual[placed].max()) if placed.any() else 0.0,
-        "newton_iterations_max": newton_iterations,
-        "fronts": fronts,
+        "tolerance_m": settings.tolerance_m,
+        "max_residual_m": float(net.residual[placed].max()) if placed.any() else 0.0,
+        "newton_iterations_max": fronts.newton_iterations_max,
+        "fronts": fronts.fronts,
         "seconds": time.perf_counter() - clock,
-        "fill_seconds": fill_seconds,
-        "fill_cpu_seconds": fill_cpu_seconds,
+        "fill_seconds": fronts.fill_seconds,
+        "fill_cpu_seconds": fronts.fill_cpu_seconds,
     }
     return DrapeResult(
         nodes=nodes,
         status=node_status,
-        residual=residual.reshape(ni, nj),
-        start_index=(i0, j0),
-        node_spacing=d,
-        generator_angle=alpha,
-        orientation=theta,
+        residual=net.residual.reshape(ni, nj),
+        start_index=net.start_index,
+        node_spacing=float(settings.node_spacing_m),
+        generator_angle=start.generator_angle,
+        orientation=start.orientation,
         info=info,
         **fields,
     )
+
+
+def drape(surface: Surface, settings: DrapeSettings | None = None, **keywords: Any) -> DrapeResult:
+    """Drape a ply over ``surface`` (any :class:`~preform.drape.surface.Surface`) as a
+    pin-jointed net: :func:`place_start`, :func:`place_generators`, :func:`place_fronts`,
+    :func:`net_fields`.
+
+    ``settings``: a :class:`~preform.drape.settings.DrapeSettings` (node spacing, ply, start,
+    orientation, generator angle, generators, trim, tolerances, sub-steps, closed forms, in SI
+    units); ``keywords`` are its fields, given alone or replacing those of ``settings``.
+
+    Raises :class:`DrapeError` for a set-up that cannot give a net at all (start off the tool,
+    start outside the ply, α outside (0, π), d ≤ 0). Everything else, including a net that
+    runs off the tool, comes back as node statuses.
+    """
+    clock = time.perf_counter()
+    if settings is None:
+        settings = DrapeSettings(**keywords)
+    elif keywords:
+        settings = dataclasses.replace(settings, **keywords)
+    start = place_start(surface, settings)
+    net = place_generators(surface, settings, start)
+    fronts = place_fronts(surface, settings, net)
+    return net_fields(net, start, settings, fronts, clock)

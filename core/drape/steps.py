@@ -26,6 +26,7 @@ from preform.drape.part import HeightCut, Part, PlanPolygon, combine
 from preform.drape.ply import MAX_COUNT, PlyOutline
 from preform.drape.preform_steps import preform_if_asked
 from preform.drape.result import DrapeResult, EnergyField
+from preform.drape.settings import DrapeSettings
 from preform.drape.verdict import (
     coverage,
     first_nonfinite_energy,
@@ -133,9 +134,9 @@ def _bytes(n: float) -> str:
     return f"{n:.3g} EB"
 
 
-def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
-    """Keyword arguments of :func:`preform.drape.net.drape` from a scene (SI units), with the
-    fidelity knobs resolved against the tool (``preform.pipeline.fidelity``).
+def drape_settings(scene: Scene, surface: Any) -> DrapeSettings:
+    """The scene's drape set-up (SI units), its fidelity knobs resolved once against the tool
+    (``preform.pipeline.fidelity``) and carried in it, to be recorded as they ran.
 
     Raises ``CaseFailure`` when the ply would need more than ``limits.max_nodes`` nodes or has
     no cell at the resolved spacing, before anything of its size is allocated."""
@@ -151,27 +152,28 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
     ):
         if problem is not None:
             raise CaseFailure(problem)
-    settings: dict[str, Any] = {
-        "node_spacing_m": knobs.node_spacing_mm * MM,
-        "ply": outline,
-        "start_xy_m": (start.point_mm[0] * MM, start.point_mm[1] * MM),
-        "orientation_rad": float(np.radians(start.orientation_deg)),
-        "generators": start.generators,
-        "tolerance": knobs.solver_tolerance,
-        "substeps": knobs.generator_substeps,
-    }
-    part = scene_part(scene, surface)
-    if part is not None:
-        settings["trim"] = part
+    generators: Any = start.generators
+    # Polylines set the orientation and angle themselves.
+    angles = (np.radians(start.orientation_deg), np.radians(start.generator_angle_deg))
     if start.generators == "polyline":
         from preform.drape.generators import PlanPolylines
 
         if start.generator_polylines_mm is None:
             raise ValueError("generators: polyline needs start.generator_polylines_mm")
         first, second = (np.asarray(p, dtype=float) * MM for p in start.generator_polylines_mm)
-        settings["generators"] = PlanPolylines(first, second)
-        settings["orientation_rad"] = None
-    return settings
+        generators, angles = PlanPolylines(first, second), (None, None)
+    return DrapeSettings(
+        node_spacing_m=knobs.node_spacing_mm * MM,
+        ply=outline,
+        start_xy_m=(start.point_mm[0] * MM, start.point_mm[1] * MM),
+        orientation_rad=angles[0],
+        generator_angle_rad=angles[1],
+        generators=generators,
+        trim=scene_part(scene, surface),
+        tolerance=knobs.solver_tolerance,
+        substeps=knobs.generator_substeps,
+        fidelity=knobs,
+    )
 
 
 def scene_part(scene: Scene, surface: Any) -> Part | None:
@@ -312,9 +314,11 @@ def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: flo
         ctx.partial(wrinkles.reason(), covered_fraction)
 
 
-def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:
-    """Resolve the scene's fidelity knobs and record them as scalar results of the case."""
-    knobs = fidelity.resolve(ctx.scene, float(surface.size))
+def record_knobs(ctx: CaseContext, settings: DrapeSettings) -> fidelity.Knobs:
+    """Record the fidelity knobs a drape's ``settings`` were resolved with as scalar results of
+    the case, and return them."""
+    knobs = settings.fidelity
+    assert knobs is not None, "settings from drape_settings carry the scene's knobs"
     for key, value in knobs.as_dict().items():
         ctx.summary[key if key == "fidelity" else f"knob_{key}"] = value
     return knobs
@@ -351,31 +355,21 @@ def summed_law(ctx: CaseContext, knobs: fidelity.Knobs) -> Any:
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
     surface = ctx.products["surface"]
     settings = drape_settings(ctx.scene, surface)
-    knobs = record_knobs(ctx, surface)
-    law = summed_law(ctx, knobs)
+    law = summed_law(ctx, record_knobs(ctx, settings))
     optimum = ctx.products.get("optimum")
     if optimum is not None:
-        # the search may also have chosen the orientation, the start or curved generators
-        alpha = float(optimum["generator_angle_rad"])
-        for key, setting in (
-            ("orientation_rad", "orientation_rad"),
-            ("start_xy_m", "start_xy_m"),
-            ("generators", "generators"),
-        ):
-            if optimum.get(key) is not None:
-                settings[setting] = optimum[key]
-    else:
-        assert ctx.scene.start is not None
-        alpha = float(np.radians(ctx.scene.start.generator_angle_deg))
-    if settings["orientation_rad"] is None:
-        alpha_arg: float | None = None
-    else:
-        alpha_arg = alpha
+        # the search chose the angle, and may have chosen the orientation, start or generators
+        chosen = ("orientation_rad", "start_xy_m", "generators")
+        settings = dataclasses.replace(
+            settings,
+            generator_angle_rad=float(optimum["generator_angle_rad"]),
+            **{key: optimum[key] for key in chosen if optimum.get(key) is not None},
+        )
     try:
-        result = drape(surface, generator_angle_rad=alpha_arg, **settings)
+        result = drape(surface, settings)
     except DrapeError as error:
         raise CaseFailure(f"the drape cannot start: {error}") from None
-    part = settings.get("trim")
+    part = cast(Part | None, settings.trim)  # drape_settings trims to the scene's part
     relaxed = optimum.get("relaxed_nodes") if optimum is not None else None
     if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
         with np.errstate(all="ignore"):
@@ -392,7 +386,7 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     if part is not None:
         ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
-    judge_drape(ctx, result, energy, surface, settings["start_xy_m"], part)
+    judge_drape(ctx, result, energy, surface, settings.start_xy_m, part)
     area = getattr(part, "area_m2", None)
     if area is not None:
         # Part area the net does not cover, and how much of it the missing cells explain (by

@@ -1,0 +1,78 @@
+"""What a drape is set up with beside the tool, resolved once (:class:`DrapeSettings`).
+
+A scene's drape resolves its fidelity knobs and its sections into one of these
+(``preform.drape.steps.drape_settings``); the engine's stages (:mod:`preform.drape.net`: start,
+generators, fronts, fields) read it, and the case records the knobs it carries, so what ran is
+what is recorded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from preform.drape.ply import PlyOutline
+
+if TYPE_CHECKING:
+    from preform.pipeline.fidelity import Knobs
+
+
+class DrapeError(ValueError):
+    """A drape that cannot start: the set-up itself is wrong (start off the tool, bad angle)."""
+
+
+@dataclass(frozen=True)
+class DrapeSettings:
+    """One drape's set-up in SI units; :func:`preform.drape.net.drape` takes it, or its fields
+    as keywords. Raises :class:`DrapeError` for a spacing or tolerance that cannot give a net."""
+
+    #: Node spacing d [m], the chord between neighbouring crossovers.
+    node_spacing_m: float
+    #: The ply outline in the flat; its origin is the start point, its axes the fibres.
+    ply: PlyOutline
+    #: Plan position (x, y) [m] of the start point, put on the tool's top with
+    #: ``point_at_plan``. Or ``start_point``: a 3-D point [m] already on the tool.
+    start_xy_m: Any = None
+    start_point: Any = None
+    #: Plan direction [rad from the tool's x axis] of the first generator (+u) at the start.
+    orientation_rad: float | None = 0.0
+    #: Angle α [rad] from +u to +v at the start, counter-clockwise seen from the outward
+    #: normal, in the tangent plane; 0 < α < π.
+    generator_angle_rad: float | None = 0.5 * np.pi
+    #: "geodesic", "plan" (tool surface above straight plan lines), or
+    #: :class:`~preform.drape.generators.PlanPolylines` (then orientation and α follow from the
+    #: polylines; give None), or paths with a ``nodes`` method
+    #: (:class:`preform.optimise.curved.CurvedGenerators`).
+    generators: Any = "geodesic"
+    #: Predicate on cell centroids (n, 3) [m] giving the part (default: every valid cell).
+    trim: Callable[[Any], Any] | None = None
+    #: Relative tolerance [-]: every solve stops at ``tolerance``·d [m].
+    tolerance: float = 1e-9
+    #: Cap on Newton steps per front on surfaces without a closed form.
+    max_iterations: int = 30
+    #: Sub-steps per node spacing when marching generators.
+    substeps: int = 16
+    #: Use the surface's closed forms (node placement, geodesics) when it has them.
+    use_closed_form: bool = True
+    #: The scene's fidelity knobs these settings were resolved from, recorded with the case
+    #: (None for a drape set up by hand).
+    fidelity: Knobs | None = None
+
+    def __post_init__(self) -> None:
+        d = float(self.node_spacing_m)
+        if not (np.isfinite(d) and d > 0):
+            raise DrapeError(f"node spacing must be a positive length, got {d!r} m")
+        if not 0 < self.tolerance < 1e-2:
+            raise DrapeError(f"tolerance is relative to the node spacing; got {self.tolerance!r}")
+
+    def keywords(self) -> dict[str, Any]:
+        """The set-up as keyword arguments of :func:`preform.drape.net.drape` (no knobs)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "fidelity"}
+
+    @property
+    def tolerance_m(self) -> float:
+        """The solves' stopping distance [m]: ``tolerance``·d."""
+        return self.tolerance * float(self.node_spacing_m)
