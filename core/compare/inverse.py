@@ -37,8 +37,8 @@ from numpy.typing import NDArray
 
 from preform.compare.comparison import Comparison, OnTool, compare, evaluate, on_tool
 from preform.compare.measurement import MM, Measurement
-from preform.drape.net import DrapeError, drape
-from preform.drape.result import DrapeResult
+from preform.drape.engine.net import DrapeError, drape
+from preform.drape.engine.result import DrapeResult
 
 FloatArray = NDArray[np.float64]
 
@@ -195,7 +195,7 @@ def explain(
     """Search the set-up that best explains ``measurement`` (module docstring).
 
     ``surface``: the tool [m]; ``settings``: the other keyword arguments of
-    :func:`preform.drape.net.drape` (``node_spacing_m``, ``ply``, ``generators``, ``trim``,
+    :func:`preform.drape.engine.net.drape` (``node_spacing_m``, ``ply``, ``generators``, ``trim``,
     ``tolerance``, ``substeps``; ``preform.drape.steps.drape_settings(...).keywords()`` gives a
     scene's);
     ``initial``: the set-up the search starts from (the scene's). ``vary``: which of

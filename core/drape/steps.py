@@ -3,12 +3,12 @@
 The drape step uses the scene's generator angle, or the minimum-energy search's optimum when
 the scene has a ``search`` section. Scenes give mm and degrees; everything here is SI.
 
-The steps say what their result is worth (``preform.drape.verdict``, ``docs/results.md``): a
+The steps say what their result is worth (``preform.drape.judging.verdict``, ``docs/results.md``): a
 non-finite energy or a net without a cell raises ``CaseFailure``; a net that does not cover the
 ply where it lies over the tool marks the case partial with the covered fraction and why; cells
 past the law's locking, stitch-failure or packing angle, or outside its data range, are counted
 and said in words; a drape whose energy comes mostly from cells past jamming or stitch failure
-(where the fabric would wrinkle) is partial too (``preform.drape.wrinkling``). A ply too large for ``limits.max_nodes`` is refused before any array exists.
+(where the fabric would wrinkle) is partial too (``preform.drape.judging.wrinkling``). A ply too large for ``limits.max_nodes`` is refused before any array exists.
 """
 
 from __future__ import annotations
@@ -20,20 +20,20 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from preform.drape.fields import cell_fields, energy_field, summary
-from preform.drape.net import DrapeError, drape
-from preform.drape.part import HeightCut, Part, PlanPolygon, combine
-from preform.drape.ply import MAX_COUNT, PlyOutline
-from preform.drape.preform_steps import preform_if_asked
-from preform.drape.result import DrapeResult, EnergyField
-from preform.drape.settings import DrapeSettings
-from preform.drape.verdict import (
+from preform.drape.engine.fields import cell_fields, energy_field, summary
+from preform.drape.engine.net import DrapeError, drape
+from preform.drape.engine.part import HeightCut, Part, PlanPolygon, combine
+from preform.drape.engine.ply import MAX_COUNT, PlyOutline
+from preform.drape.engine.result import DrapeResult, EnergyField
+from preform.drape.engine.settings import DrapeSettings
+from preform.drape.judging.verdict import (
     coverage,
     first_nonfinite_energy,
     law_range,
     shear_limit_notes,
 )
-from preform.drape.wrinkling import Wrinkling, wrinkle_limits, wrinkling
+from preform.drape.judging.wrinkling import Wrinkling, wrinkle_limits, wrinkling
+from preform.drape.preform_steps import preform_if_asked
 from preform.pipeline import fidelity
 from preform.pipeline.status import CaseFailure
 from preform.shear.surrogate import surrogate
@@ -156,7 +156,7 @@ def drape_settings(scene: Scene, surface: Any) -> DrapeSettings:
     # Polylines set the orientation and angle themselves.
     angles = (np.radians(start.orientation_deg), np.radians(start.generator_angle_deg))
     if start.generators == "polyline":
-        from preform.drape.generators import PlanPolylines
+        from preform.drape.engine.generators import PlanPolylines
 
         if start.generator_polylines_mm is None:
             raise ValueError("generators: polyline needs start.generator_polylines_mm")
@@ -306,7 +306,7 @@ def empty_part_reason(result: DrapeResult, part: Part | None) -> str:
 def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: float) -> None:
     """Record a drape's wrinkling (the ``wrinkling`` block and its table columns) and make the
     case partial when its energy comes mostly from cells past a wrinkle limit (the status
-    rule, ``preform.drape.wrinkling``); ``covered_fraction`` [-] is the drape's coverage, which
+    rule, ``preform.drape.judging.wrinkling``); ``covered_fraction`` [-] is the drape's coverage, which
     a partial case records."""
     ctx.summary["wrinkling"] = wrinkles.summary()
     ctx.summary.update(wrinkles.columns())

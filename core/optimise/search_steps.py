@@ -45,8 +45,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.fields import energy_field
-from preform.drape.settings import DrapeSettings
+from preform.drape.engine.fields import energy_field
+from preform.drape.engine.settings import DrapeSettings
+from preform.drape.judging.verdict import coverage, law_nonfinite_angle, law_range
+from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.drape.steps import (
     drape_settings,
     judge_wrinkling,
@@ -55,8 +57,6 @@ from preform.drape.steps import (
     start_problem,
     summed_law,
 )
-from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
-from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.optimise.search import (
     AngleSearchResult,
     DrapeObjective,
@@ -349,7 +349,7 @@ def _judge_optimum_drape(
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
         ctx.warn(cover.fold_warning(), cause="fold zones")
-    # the status rule on wrinkling, as the drape step gives it (preform.drape.wrinkling)
+    # the status rule on wrinkling, as the drape step gives it (preform.drape.judging.wrinkling)
     result = evaluation.result
     counted = objective.counted(result)
     density = np.zeros(counted.shape)

@@ -34,10 +34,10 @@ MAX_CURVE_ANGLES = 100_000
 
 def _simple_outline(v: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
     """``v`` when it is a simple polygon of nonzero area, else a ValueError saying where it
-    crosses itself or that it encloses nothing (``preform.drape.polygon``)."""
+    crosses itself or that it encloses nothing (``preform.drape.engine.polygon``)."""
     if v is None:
         return v
-    from preform.drape.polygon import outline_problem
+    from preform.drape.engine.polygon import outline_problem
 
     problem = outline_problem(v, "mm")
     if problem is not None:
@@ -118,7 +118,7 @@ class StartSection(BaseModel):
 
 
 class PartSection(BaseModel):
-    """The part: the region of the tool that is made (``preform.drape.part``). The net is
+    """The part: the region of the tool that is made (``preform.drape.engine.part``). The net is
     draped over the tool as far as the ply reaches and clipped to the part; energies and
     extremes are of the part. Several fields together mean their intersection. Without this
     section the part is the tool's own (a bare hemisphere: z ≥ 0; other tools: every cell the

@@ -15,13 +15,13 @@ a front (all four quadrants stacked) is placed in one vectorised step:
   to the surface g(φ) is left: a few vectorised, damped Newton steps in φ solve it to
   ``tolerance``·d.
 
-The arithmetic is compiled (:mod:`preform.drape.net_kernels`, imported when a net is draped):
-on a tool with compiled queries (:class:`~preform.drape.compiled_surface.CompiledQueries`) one
+The arithmetic is compiled (:mod:`preform.drape.kernels.net_kernels`, imported when a net is draped):
+on a tool with compiled queries (:class:`~preform.drape.engine.compiled_surface.CompiledQueries`) one
 compiled loop fills the whole net, sweeping each quadrant row by row (a node needs only its
 three parents, so the net is the same); on any other tool the fronts above are filled in turn,
 the tool's own vectorised queries between the same compiled per-node steps.
 
-Every node ends with a :class:`~preform.drape.result.NodeStatus` and a residual; a node whose
+Every node ends with a :class:`~preform.drape.engine.result.NodeStatus` and a residual; a node whose
 parent failed is NOT_REACHED, never a silent NaN.
 """
 
@@ -34,17 +34,17 @@ from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
-from preform.drape.fields import cell_fields
-from preform.drape.generators import (
+from preform.drape.engine.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
+from preform.drape.engine.fields import cell_fields
+from preform.drape.engine.generators import (
     GeneratorNodes,
     PlanPolylines,
     geodesic_generators,
     plan_generators,
 )
-from preform.drape.result import DrapeResult, NodeStatus
-from preform.drape.settings import DrapeError, DrapeSettings
-from preform.drape.surface import Surface
+from preform.drape.engine.result import DrapeResult, NodeStatus
+from preform.drape.engine.settings import DrapeError, DrapeSettings
+from preform.drape.engine.surface import Surface
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -137,11 +137,11 @@ def _solve_on_circle(
 ) -> tuple[FloatArray, StatusArray, int]:
     """Nodes at chord ``spacing`` from a and b on the surface, away from c (see module doc),
     for a surface queried through its own vectorised methods; the per-node arithmetic is the
-    compiled one of :mod:`preform.drape.net_kernels`.
+    compiled one of :mod:`preform.drape.kernels.net_kernels`.
 
     Returns points (m, 3) (NaN where not placed), NodeStatus codes and the iterations used.
     """
-    from preform.drape import net_kernels as kernels
+    from preform.drape.kernels import net_kernels as kernels
 
     m = len(a)
     points = np.full((m, 3), np.nan)
@@ -413,7 +413,7 @@ def _march_generators(
 
 def _compiled_closed_form(surface: object) -> bool:
     """Whether a surface with compiled queries also has a compiled closed-form node."""
-    from preform.drape.compiled_surface import CLOSED_FORM_KINDS
+    from preform.drape.engine.compiled_surface import CLOSED_FORM_KINDS
 
     return cast(CompiledQueries, surface).compiled_queries()[0] in CLOSED_FORM_KINDS
 
@@ -437,7 +437,7 @@ def _fill_fronts_python(
     surface's. ``face``: each node's facet (flat, −1 where not placed) for a surface that
     places by walking from the parents' facets (:class:`WalkingPlacement`), else None.
     Returns (fronts placed, most Newton passes over a front)."""
-    from preform.drape import net_kernels as kernels
+    from preform.drape.kernels import net_kernels as kernels
 
     nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front = layout
     longest = 4 * (max(int(q_na.max()), int(q_nb.max())) + 1) if len(q_sa) else 1
@@ -507,7 +507,7 @@ def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
     """Every node off the generators, front by front, in place in ``net``: in one compiled
     loop on a tool with compiled queries, else through the tool's own vectorised queries."""
     clock, cpu = time.perf_counter(), time.process_time()
-    from preform.drape import net_kernels as kernels
+    from preform.drape.kernels import net_kernels as kernels
 
     d, tol_m = float(settings.node_spacing_m), settings.tolerance_m
     compiled = isinstance(surface, CompiledQueries)
@@ -532,7 +532,7 @@ def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
     )
     layout = (nj, net.start_flat, q_sa, q_sb, q_na, q_nb, last_front)
     if compiled and not walking and (not closed_form or _compiled_closed_form(surface)):
-        # The whole fill in one compiled loop (preform.drape.net_kernels).
+        # The whole fill in one compiled loop (preform.drape.kernels.net_kernels).
         kind, params = cast(CompiledQueries, surface).compiled_queries()
         fronts, newton_iterations = kernels.fill_fronts(
             net.pos, net.status, net.residual, *layout, d, tol_m, settings.max_iterations,
@@ -612,11 +612,11 @@ def net_fields(
 
 
 def drape(surface: Surface, settings: DrapeSettings | None = None, **keywords: Any) -> DrapeResult:
-    """Drape a ply over ``surface`` (any :class:`~preform.drape.surface.Surface`) as a
+    """Drape a ply over ``surface`` (any :class:`~preform.drape.engine.surface.Surface`) as a
     pin-jointed net: :func:`place_start`, :func:`place_generators`, :func:`place_fronts`,
     :func:`net_fields`.
 
-    ``settings``: a :class:`~preform.drape.settings.DrapeSettings` (node spacing, ply, start,
+    ``settings``: a :class:`~preform.drape.engine.settings.DrapeSettings` (node spacing, ply, start,
     orientation, generator angle, generators, trim, tolerances, sub-steps, closed forms, in SI
     units); ``keywords`` are its fields, given alone or replacing those of ``settings``.
 

@@ -1,7 +1,7 @@
 """What a drape is set up with beside the tool, resolved once (:class:`DrapeSettings`).
 
 A scene's drape resolves its fidelity knobs and its sections into one of these
-(``preform.drape.steps.drape_settings``); the engine's stages (:mod:`preform.drape.net`: start,
+(``preform.drape.steps.drape_settings``); the engine's stages (:mod:`preform.drape.engine.net`: start,
 generators, fronts, fields) read it, and the case records the knobs it carries, so what ran is
 what is recorded.
 """
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.ply import PlyOutline
 
 if TYPE_CHECKING:
     from preform.pipeline.fidelity import Knobs
@@ -26,7 +26,7 @@ class DrapeError(ValueError):
 
 @dataclass(frozen=True)
 class DrapeSettings:
-    """One drape's set-up in SI units; :func:`preform.drape.net.drape` takes it, or its fields
+    """One drape's set-up in SI units; :func:`preform.drape.engine.net.drape` takes it, or its fields
     as keywords. Raises :class:`DrapeError` for a spacing or tolerance that cannot give a net."""
 
     #: Node spacing d [m], the chord between neighbouring crossovers.
@@ -43,7 +43,7 @@ class DrapeSettings:
     #: normal, in the tangent plane; 0 < α < π.
     generator_angle_rad: float | None = 0.5 * np.pi
     #: "geodesic", "plan" (tool surface above straight plan lines), or
-    #: :class:`~preform.drape.generators.PlanPolylines` (then orientation and α follow from the
+    #: :class:`~preform.drape.engine.generators.PlanPolylines` (then orientation and α follow from the
     #: polylines; give None), or paths with a ``nodes`` method
     #: (:class:`preform.optimise.curved.CurvedGenerators`).
     generators: Any = "geodesic"
@@ -69,7 +69,7 @@ class DrapeSettings:
             raise DrapeError(f"tolerance is relative to the node spacing; got {self.tolerance!r}")
 
     def keywords(self) -> dict[str, Any]:
-        """The set-up as keyword arguments of :func:`preform.drape.net.drape` (no knobs)."""
+        """The set-up as keyword arguments of :func:`preform.drape.engine.net.drape` (no knobs)."""
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "fidelity"}
 
     @property
