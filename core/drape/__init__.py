@@ -1,9 +1,6 @@
-"""The kinematic drape: tool surfaces, the pin-jointed net, its shear and energy fields.
-
-The optimisation on top of it (the least-energy search, curved generators, relaxation) is
-``preform.optimise``; ``preform.drape.search``, ``.curved``, ``.relax`` and ``.search_steps``
-are deprecated aliases of its modules.
-"""
+"""The kinematic drape, in rooms (``docs/design.md``): ``engine`` (tools, the pin-jointed net,
+its fields), ``kernels``, ``judging``, ``properties``, and the steps. The optimisation on top
+of it is ``preform.optimise``; old module paths are in ``preform._moved.MOVED_MODULES``."""
 
 import sys as _sys
 import types as _types

@@ -220,18 +220,16 @@ def _split_polyline(
 
 
 class NetStart(NamedTuple):
-    """Where the net starts and which way its generators leave (:func:`place_start`)."""
+    """Where the net starts (:func:`place_start`): the point on the tool (3,) and in plan (2,)
+    [m]; the unit tangents (3,) of +u and +v there; the plan direction of +u [rad from the
+    tool's x axis] and α [rad]; for PlanPolylines, their halves +u, −u, +v, −v in plan [m]."""
 
-    #: The start point on the tool (3,) [m] and its plan position (2,) [m].
     point: FloatArray
     xy: FloatArray
-    #: Unit tangents (3,) of the +u and +v generators at the start.
     t_u: FloatArray
     t_v: FloatArray
-    #: Plan direction of +u [rad from the tool's x axis] and the angle α from +u to +v [rad].
     orientation: float
     generator_angle: float
-    #: The generator polylines' halves +u, −u, +v, −v in plan [m] (PlanPolylines only).
     polyline_halves: list[FloatArray] | None = None
 
 
@@ -318,16 +316,16 @@ def _polyline_start(
 
 
 class Net(NamedTuple):
-    """The net being placed: flat arrays over its (ni, nj) node grid, filled in place."""
+    """The net being placed, filled in place: its grid shape (ni, nj), the start node's index
+    (i0, j0); positions (n, 3) [m] (NaN where not placed), NodeStatus codes (n,), residuals
+    (n,) [m] over the flat grid; the generator nodes placed and each one's neighbour towards
+    the start (flat indices)."""
 
     shape: tuple[int, int]
-    #: Grid index (i0, j0) of the start node.
     start_index: tuple[int, int]
-    #: Positions (n, 3) [m] (NaN where not placed), NodeStatus codes (n,), residuals (n,) [m].
     pos: FloatArray
     status: StatusArray
     residual: FloatArray
-    #: The generator nodes placed (flat indices) and each one's neighbour towards the start.
     on_generators: IntArray
     before: IntArray
 
@@ -420,15 +418,10 @@ def _compiled_closed_form(surface: object) -> bool:
 
 def _fill_fronts_python(
     surface: Surface,
-    pos: FloatArray,
-    status: StatusArray,
-    residual: FloatArray,
+    settings: DrapeSettings,
+    net: Net,
     layout: tuple[int, int, IntArray, IntArray, IntArray, IntArray, int],
-    d: float,
-    tol_m: float,
-    max_iterations: int,
-    lo_bound: FloatArray,
-    hi_bound: FloatArray,
+    bounds: tuple[FloatArray, FloatArray],
     closed_form: bool,
     face: IntArray | None,
 ) -> tuple[int, int]:
@@ -439,6 +432,12 @@ def _fill_fronts_python(
     Returns (fronts placed, most Newton passes over a front)."""
     from preform.drape.kernels import net_kernels as kernels
 
+    pos, status, residual, (lo_bound, hi_bound) = net.pos, net.status, net.residual, bounds
+    d, tol_m, max_iterations = (
+        float(settings.node_spacing_m),
+        settings.tolerance_m,
+        settings.max_iterations,
+    )
     nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front = layout
     longest = 4 * (max(int(q_na.max()), int(q_nb.max())) + 1) if len(q_sa) else 1
     members = np.empty((longest, 5), dtype=np.int64)
@@ -492,13 +491,12 @@ def _fill_fronts_python(
 
 
 class Fronts(NamedTuple):
-    """How the fronts were filled (:func:`place_fronts`), for the result's ``info``."""
+    """How the fronts were filled (:func:`place_fronts`), for the result's ``info``: the
+    placement, fronts and most Newton passes over one, wall and CPU time of the fill [s]."""
 
-    #: "walking exact", "closed form" or "newton on the constraint circle".
     placement: str
     fronts: int
     newton_iterations_max: int
-    #: Wall and CPU time of the fill [s].
     fill_seconds: float
     fill_cpu_seconds: float
 
@@ -540,8 +538,7 @@ def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
         )  # fmt: skip
     else:
         fronts, newton_iterations = _fill_fronts_python(
-            surface, net.pos, net.status, net.residual, layout, d, tol_m,
-            settings.max_iterations, lo_bound, hi_bound, closed_form,
+            surface, settings, net, layout, (lo_bound, hi_bound), closed_form,
             _walking_faces(surface, net, d) if walking else None,
         )  # fmt: skip
     placement = (

@@ -1,10 +1,6 @@
-"""What a drape is set up with beside the tool, resolved once (:class:`DrapeSettings`).
-
-A scene's drape resolves its fidelity knobs and its sections into one of these
-(``preform.drape.steps.drape_settings``); the engine's stages (:mod:`preform.drape.engine.net`: start,
-generators, fronts, fields) read it, and the case records the knobs it carries, so what ran is
-what is recorded.
-"""
+"""A drape's set-up beside the tool, resolved once (:class:`DrapeSettings`): the engine's
+stages read it and a scene's case records the fidelity knobs it carries, so what ran is what
+is recorded (``preform.drape.steps.drape_settings`` makes a scene's)."""
 
 from __future__ import annotations
 
@@ -26,39 +22,34 @@ class DrapeError(ValueError):
 
 @dataclass(frozen=True)
 class DrapeSettings:
-    """One drape's set-up in SI units; :func:`preform.drape.engine.net.drape` takes it, or its fields
-    as keywords. Raises :class:`DrapeError` for a spacing or tolerance that cannot give a net."""
+    """One drape's set-up in SI units (:func:`preform.drape.engine.net.drape` takes it, or its
+    fields as keywords). :class:`DrapeError` for a spacing or tolerance that gives no net."""
 
     #: Node spacing d [m], the chord between neighbouring crossovers.
     node_spacing_m: float
     #: The ply outline in the flat; its origin is the start point, its axes the fibres.
     ply: PlyOutline
     #: Plan position (x, y) [m] of the start point, put on the tool's top with
-    #: ``point_at_plan``. Or ``start_point``: a 3-D point [m] already on the tool.
+    #: ``point_at_plan``; or ``start_point``, a 3-D point [m] on the tool.
     start_xy_m: Any = None
     start_point: Any = None
-    #: Plan direction [rad from the tool's x axis] of the first generator (+u) at the start.
+    #: Plan direction of the first generator +u [rad from the tool's x axis], and the angle α
+    #: [rad] from +u to +v, counter-clockwise seen from the outward normal, 0 < α < π.
     orientation_rad: float | None = 0.0
-    #: Angle α [rad] from +u to +v at the start, counter-clockwise seen from the outward
-    #: normal, in the tangent plane; 0 < α < π.
     generator_angle_rad: float | None = 0.5 * np.pi
-    #: "geodesic", "plan" (tool surface above straight plan lines), or
-    #: :class:`~preform.drape.engine.generators.PlanPolylines` (then orientation and α follow from the
-    #: polylines; give None), or paths with a ``nodes`` method
-    #: (:class:`preform.optimise.curved.CurvedGenerators`).
+    #: "geodesic", "plan" (the tool above straight plan lines), ``PlanPolylines`` (which set
+    #: orientation and α: give None), or paths with a ``nodes`` method (``CurvedGenerators``).
     generators: Any = "geodesic"
     #: Predicate on cell centroids (n, 3) [m] giving the part (default: every valid cell).
     trim: Callable[[Any], Any] | None = None
-    #: Relative tolerance [-]: every solve stops at ``tolerance``·d [m].
+    #: Relative tolerance [-] (every solve stops at ``tolerance``·d [m]), the cap on Newton
+    #: steps per front, sub-steps per spacing marching generators, and whether to use the
+    #: surface's closed forms (node placement, geodesics) when it has them.
     tolerance: float = 1e-9
-    #: Cap on Newton steps per front on surfaces without a closed form.
     max_iterations: int = 30
-    #: Sub-steps per node spacing when marching generators.
     substeps: int = 16
-    #: Use the surface's closed forms (node placement, geodesics) when it has them.
     use_closed_form: bool = True
-    #: The scene's fidelity knobs these settings were resolved from, recorded with the case
-    #: (None for a drape set up by hand).
+    #: The scene's fidelity knobs these were resolved from (None for a drape set by hand).
     fidelity: Knobs | None = None
 
     def __post_init__(self) -> None:
@@ -69,7 +60,7 @@ class DrapeSettings:
             raise DrapeError(f"tolerance is relative to the node spacing; got {self.tolerance!r}")
 
     def keywords(self) -> dict[str, Any]:
-        """The set-up as keyword arguments of :func:`preform.drape.engine.net.drape` (no knobs)."""
+        """The set-up as keyword arguments of :func:`~preform.drape.engine.net.drape`."""
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "fidelity"}
 
     @property

@@ -162,25 +162,13 @@ def generator_stops_on_tool(result: DrapeResult, surface: Any) -> BoolArray:
 def flat_plan_positions(result: DrapeResult, start_xy_m: tuple[float, float]) -> FloatArray:
     """Undeformed plan position (ni, nj, 2) [m] of every node: the flat ply laid on the plan
     at the start point, +u along the orientation, +v at the generator angle from it."""
-    ni, nj = result.shape
-    i0, j0 = result.start_index
-    d = result.node_spacing
-    theta, alpha = result.orientation, result.generator_angle
-    e_u = np.array([math.cos(theta), math.sin(theta)])
-    e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
-    xi = (np.arange(ni) - i0) * d
-    eta = (np.arange(nj) - j0) * d
-    return (
-        np.asarray(start_xy_m, dtype=float)
-        + xi[:, None, None] * e_u[None, None, :]
-        + eta[None, :, None] * e_v[None, None, :]
-    )
+    return plan_positions_at(result, start_xy_m, *np.indices(result.shape))
 
 
 def plan_positions_at(
     result: DrapeResult, start_xy_m: tuple[float, float], ii: NDArray[np.intp], jj: NDArray[np.intp]
 ) -> FloatArray:
-    """:func:`flat_plan_positions` (m, 2) [m] of the nodes (ii, jj) only (the same numbers)."""
+    """:func:`flat_plan_positions` (..., 2) [m] of the nodes (ii, jj) only."""
     i0, j0 = result.start_index
     d = result.node_spacing
     theta, alpha = result.orientation, result.generator_angle
@@ -188,7 +176,7 @@ def plan_positions_at(
     e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
     xi = (np.asarray(ii) - i0) * d
     eta = (np.asarray(jj) - j0) * d
-    return np.asarray(start_xy_m, dtype=float) + xi[:, None] * e_u + eta[:, None] * e_v
+    return np.asarray(start_xy_m, dtype=float) + xi[..., None] * e_u + eta[..., None] * e_v
 
 
 @dataclass(frozen=True)
