@@ -15,14 +15,17 @@ a front (all four quadrants stacked) is placed in one vectorised step:
   to the surface g(φ) is left: a few vectorised, damped Newton steps in φ solve it to
   ``tolerance``·d.
 
-The arithmetic is compiled (:mod:`preform.drape.kernels.net_kernels`, imported when a net is draped):
-on a tool with compiled queries (:class:`~preform.drape.engine.compiled_surface.CompiledQueries`) one
-compiled loop fills the whole net, sweeping each quadrant row by row (a node needs only its
-three parents, so the net is the same); on any other tool the fronts above are filled in turn,
-the tool's own vectorised queries between the same compiled per-node steps.
+The arithmetic is compiled (:mod:`preform.drape.kernels.net_kernels`, imported when a net
+is draped): on a tool with compiled queries
+(:class:`~preform.drape.engine.compiled_surface.CompiledQueries`) one compiled loop fills the
+whole net, sweeping each quadrant row by row (a node needs only its three parents, so the net
+is the same); on any other tool the fronts above are filled in turn, the tool's own
+vectorised queries between the same compiled per-node steps.
 
-Every node ends with a :class:`~preform.drape.engine.result.NodeStatus` and a residual; a node whose
-parent failed is NOT_REACHED, never a silent NaN.
+:func:`drape` is four stages, each reading the :class:`DrapeSettings`: :func:`place_start`,
+:func:`place_generators`, :func:`place_fronts`, :func:`net_fields`. Every node ends with a
+:class:`~preform.drape.engine.result.NodeStatus` and a residual; a node whose parent failed
+is NOT_REACHED, never a silent NaN.
 """
 
 from __future__ import annotations
@@ -288,11 +291,7 @@ def _polyline_start(
 ) -> NetStart:
     """The start of generators along plan polylines, which set orientation and α themselves."""
     theta_rad, alpha_rad = settings.orientation_rad, settings.generator_angle_rad
-    if (
-        theta_rad is not None
-        and alpha_rad is not None
-        and (theta_rad, alpha_rad) != (0.0, 0.5 * np.pi)
-    ):
+    if None not in (theta_rad, alpha_rad) and (theta_rad, alpha_rad) != (0.0, 0.5 * np.pi):
         raise DrapeError("with PlanPolylines the polylines set orientation and angle")
     d = float(settings.node_spacing_m)
     fu, bu = _split_polyline(lines.first_xy_m, xy, 1e-6 * d)
