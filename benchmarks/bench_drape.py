@@ -18,8 +18,8 @@ import tracemalloc
 
 import numpy as np
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.plugins.surfaces.basic import Hemisphere
 from preform.plugins.surfaces.mesh import tessellate_hemisphere
 

@@ -29,7 +29,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from preform.drape.kernel_cache import CACHE_ENV
+from preform.drape.kernels.kernel_cache import CACHE_ENV
 
 MAIN = (
     "import sys; from preform.__main__ import main; sys.argv = ['preform', *sys.argv[1:]]; main()"

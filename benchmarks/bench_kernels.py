@@ -44,8 +44,8 @@ from numpy_baseline import drape as numpy_drape
 from numpy_baseline import numpy_path
 
 import preform
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.drape.steps import run_drape
 from preform.plugins.surfaces import basic, domes
 from preform.plugins.surfaces.basic import Hemisphere

@@ -36,8 +36,8 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from preform.drape.net import drape  # noqa: E402
-from preform.drape.ply import PlyOutline  # noqa: E402
+from preform.drape.engine.net import drape  # noqa: E402
+from preform.drape.engine.ply import PlyOutline  # noqa: E402
 from preform.library import load_library  # noqa: E402
 from preform.optimise.search import DrapeObjective, search_generator_angle  # noqa: E402
 from preform.plugins.surfaces.basic import Hemisphere  # noqa: E402

@@ -30,8 +30,8 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from preform.drape.net import drape  # noqa: E402
-from preform.drape.ply import PlyOutline  # noqa: E402
+from preform.drape.engine.net import drape  # noqa: E402
+from preform.drape.engine.ply import PlyOutline  # noqa: E402
 from preform.library import load_library  # noqa: E402
 from preform.optimise.curved import optimise_curved_generators  # noqa: E402
 from preform.optimise.relax import relax_net  # noqa: E402

@@ -1,7 +1,7 @@
 """Cost of the draped thickness model against the drape it belongs to.
 
 For each bundled fabric: the default hemisphere drape (``api.drape``, outputs ``drape`` only:
-the net and its energy) against the fabric's thickness model (``preform.drape.thickness``:
+the net and its energy) against the fabric's thickness model (``preform.drape.properties.thickness``:
 its sheared unit cell tabulated over |γ|), cold (first time in the process) and warm (kept in
 memory). The ratio thickness/drape says what an output that needs a thickness (cells.csv, the
 VTU, the FE exports) adds to a case. Best of ``--repeat`` runs (the machine may be shared).
@@ -24,8 +24,8 @@ import numpy as np
 import thickness_baseline
 
 from preform import api
-from preform.drape import thickness
-from preform.drape.preform_fields import PreformResponse
+from preform.drape.properties import thickness
+from preform.drape.properties.preform_fields import PreformResponse
 from preform.plugins.woven.tow_jamming import jamming_fraction
 
 

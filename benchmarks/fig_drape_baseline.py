@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from preform.drape.part import Part
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.part import Part
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.export.atomic import atomic_path
 
 if TYPE_CHECKING:

@@ -19,10 +19,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape import fields as fields_module
 from preform.drape import steps as steps_module
-from preform.drape import verdict as verdict_module
-from preform.drape.generators import (
+from preform.drape.engine import fields as fields_module
+from preform.drape.engine.generators import (
     ClosedFormGeodesics,
     GeneratorNodes,
     _across_crease,
@@ -31,18 +30,19 @@ from preform.drape.generators import (
     _residual,
     plan_generators,
 )
-from preform.drape.net import (
+from preform.drape.engine.net import (
     ClosedFormPlacement,
     DrapeError,
     PlanPolylines,
     _lift_to_tangent,
     _split_polyline,
 )
-from preform.drape.part import Part
-from preform.drape.ply import PlyOutline
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
-from preform.drape.surface import Surface
-from preform.drape.verdict import (
+from preform.drape.engine.part import Part
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.surface import Surface
+from preform.drape.judging import verdict as verdict_module
+from preform.drape.judging.verdict import (
     Coverage,
     _fold_zones,
     flat_plan_positions,
@@ -167,7 +167,7 @@ def drape(
 
     Parameters
     ----------
-    surface: the tool (any :class:`~preform.drape.surface.Surface`).
+    surface: the tool (any :class:`~preform.drape.engine.surface.Surface`).
     node_spacing_m: node spacing d [m], the chord between neighbouring crossovers.
     ply: the ply outline in the flat; its origin is the start point, its axes the fibres.
     start_xy_m: plan position (x, y) [m] of the start point, put on the tool's top with
@@ -485,7 +485,7 @@ def cell_fields(
     """The cell arrays of a :class:`DrapeResult` from node positions (ni, nj, 3) [m] and
     statuses (ni, nj): ``cell_status``, ``shear`` [rad], ``centroid`` [m], ``area`` [m²],
     ``fibre_u``, ``fibre_v`` (unit), ``in_part`` and ``part_share``. ``trim`` is a
-    :class:`~preform.drape.part.Part` (cells cut by its edge count by their undeformed area
+    :class:`~preform.drape.engine.part.Part` (cells cut by its edge count by their undeformed area
     inside it: ``part_share``; ``in_part`` is every valid cell with some area inside) or a
     predicate on centroids (a cell is in or out whole). Without it every valid cell counts
     whole. Zero (NaN for centroids) where not VALID."""
@@ -539,7 +539,7 @@ def cell_fields(
     in_part = valid.copy()
     share = valid.astype(float)
     if isinstance(trim, Part):
-        # Cut cells count by their undeformed area inside the part (preform.drape.part).
+        # Cut cells count by their undeformed area inside the part (preform.drape.engine.part).
         with np.errstate(invalid="ignore"):
             phi = np.asarray(trim.level(nodes), dtype=float)
             cut = cell_part_share(phi[:-1, :-1], phi[1:, :-1], phi[:-1, 1:], phi[1:, 1:])
@@ -920,7 +920,7 @@ def energy_field(
     """Shear strain energy of a draped net under ``law``.
 
     W(γ) [J/m²] per cell from the signed shear (so an asymmetric law takes the branch the
-    convention in ``preform.drape.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
+    convention in ``preform.drape.engine.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
     locking angle (|γ| > locking) and past stitch failure (γ > failure, the parallel sense),
     and the total Σ W·s·d² [J] over the counted cells (d² the undeformed cell, s its share
     inside the part, ``result.part_weight``: 1 for a cell wholly inside).
@@ -970,7 +970,7 @@ def surrogate_energy(self: Any, gamma: ArrayLike) -> FloatArray:
 
 
 def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
-    """``preform.drape.verdict.dependency_shadow`` as numpy accumulates (as before the kernels)."""
+    """``preform.drape.judging.verdict.dependency_shadow`` as numpy accumulates (as before the kernels)."""
     i0, j0 = start
     out = np.zeros_like(mask, dtype=bool)
     rows = (slice(i0, None), slice(i0, None, -1))
@@ -983,7 +983,7 @@ def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
 
 
 def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
-    """``preform.drape.fields.extremes`` in numpy, on this module's node shear (as before the
+    """``preform.drape.engine.fields.extremes`` in numpy, on this module's node shear (as before the
     kernels)."""
     counted = result.valid & result.in_part
     cells = np.abs(result.shear[counted])
@@ -999,7 +999,7 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
 
 
 def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float]) -> Coverage:
-    """``preform.drape.verdict.coverage`` as it was before the kernels: the plan positions of
+    """``preform.drape.judging.verdict.coverage`` as it was before the kernels: the plan positions of
     every node, the dependency shadows as numpy accumulates."""
     status = result.status
     placed = status == NodeStatus.PLACED
@@ -1097,7 +1097,7 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
 def summary(
     result: DrapeResult, energy: EnergyField | None = None, part: Part | None = None
 ) -> dict[str, object]:
-    """``preform.drape.fields.summary`` as numpy masks and sums (as before the kernels), on
+    """``preform.drape.engine.fields.summary`` as numpy masks and sums (as before the kernels), on
     this module's extremes."""
     valid = result.valid  # each a pass over the net: computed once here
     counted = valid & result.in_part

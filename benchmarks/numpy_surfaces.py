@@ -18,7 +18,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.result import NodeStatus
+from preform.drape.engine.result import NodeStatus
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

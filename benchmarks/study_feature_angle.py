@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from preform.drape import PlyOutline, drape
-from preform.drape.result import NodeStatus
+from preform.drape.engine.result import NodeStatus
 from preform.plugins.surfaces.basic import Hemisphere
 from preform.plugins.surfaces.mesh import TriangleMesh, tessellate_hemisphere
 

@@ -15,6 +15,26 @@ def alias_moved_module(old: str, new: str) -> None:
     sys.modules[old] = moved
 
 
+#: Every moved module, old path -> new path (issue 16: the optimisation out of the drape, the
+#: trade study into ``bench``; issue 31: the drape's modules into its rooms).
+MOVED_MODULES: dict[str, str] = {
+    "preform.tradeoff": "preform.bench.tradeoff",
+    **{f"preform.drape.{m}": f"preform.optimise.{m}" for m in ("search", "curved", "relax")},
+    "preform.drape.search_steps": "preform.optimise.search_steps",
+    **{
+        f"preform.drape.{module}": f"preform.drape.{room}.{module}"
+        for room, modules in {
+            "engine": "chebyshev compiled_surface fields generators net offset part ply polygon "
+            "result surface",
+            "kernels": "field_kernels generator_kernels kernel_cache kernel_compile net_kernels "
+            "surface_kernels verdict_kernels",
+            "judging": "verdict wrinkling",
+            "properties": "preform_fields thickness",
+        }.items()
+        for module in modules.split()
+    },
+}
+
 #: Scene outputs (and ``preform export`` targets) that were replaced: old name -> the message
 #: that refuses it, naming what replaced it. Refused rather than aliased: the old output wrote
 #: other files under other names, so running the new one silently would surprise a script.

@@ -351,13 +351,13 @@ class Drape(CaseRun):
     @property
     def thickness_model(self) -> str:
         """Which model gives the cells' thickness, in words: "sheared unit cell" or
-        "constant fibre volume fraction (1/cos γ)" (``preform.drape.thickness``)."""
+        "constant fibre volume fraction (1/cos γ)" (``preform.drape.properties.thickness``)."""
         return str(self._thickness().name)
 
     def _thickness(self) -> Any:
         # the case's own when an output of it needed a thickness, else the same model now
         if "thickness" not in self.products:
-            from preform.drape.thickness import thickness_model
+            from preform.drape.properties.thickness import thickness_model
 
             export = getattr(self.scene, "export", None)
             nominal = getattr(export, "nominal_thickness_mm", None)
@@ -1032,11 +1032,11 @@ def compare_drape(
     explanation = None
     if explain:
         from preform.compare.inverse import explain as search
-        from preform.drape.fields import energy_field
+        from preform.drape.engine.fields import energy_field
         from preform.drape.steps import drape_settings
 
         law = case._product("shear_law")
-        settings = drape_settings(case.scene, surface)
+        settings = drape_settings(case.scene, surface).keywords()
 
         def energy_of(result: Any) -> Any:
             with np.errstate(all="ignore"):

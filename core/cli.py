@@ -747,7 +747,7 @@ def pipeline_run(
             inputs["fidelity_override"] = fidelity
     from rich.progress import Progress
 
-    from preform.drape.kernel_compile import ensure_compiled
+    from preform.drape.kernels.kernel_compile import ensure_compiled
 
     # the first run after an install compiles the drape kernels here, once and saying so,
     # before any worker needs them (they then load them from the cache)

@@ -63,7 +63,7 @@ def preform_register_shear_laws(register: ShearLawRegistrar) -> None:
 def preform_register_surfaces(register: SurfaceRegistrar) -> None:
     """Register tool surfaces: ``register.add(name, Params, build)``. ``Params`` is a pydantic
     model with ``surface: Literal[name]`` and dimensions in mm; ``build(params, base_dir)``
-    returns a ``preform.drape.surface.Surface`` in metres (``base_dir`` resolves file paths
+    returns a ``preform.drape.engine.surface.Surface`` in metres (``base_dir`` resolves file paths
     given in a scene)."""
 
 

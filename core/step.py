@@ -45,7 +45,7 @@ class CaseContext:
     #: Files written by the case, relative to case_dir.
     files: list[str] = field(default_factory=list)
     #: Why the result covers less than the scene asked (or is mostly no physical energy:
-    #: ``preform.drape.wrinkling``), in words; any makes the case
+    #: ``preform.drape.judging.wrinkling``), in words; any makes the case
     #: ``partial`` (see ``preform.pipeline.status``). Set through :meth:`partial`.
     partial_reasons: list[str] = field(default_factory=list)
     #: What the user must know about a result that is still complete (cells past locking,

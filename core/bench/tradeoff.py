@@ -25,7 +25,7 @@ this is the case's peak; traced on a separate run because tracing slows numpy), 
 against the reference of the optimum's comparable energy (relative), of the optimum generator
 angle [deg] and of the largest |shear| at the optimum [deg]. On a bare hemisphere also the
 error of the largest |shear| at the reference's optimum angle against the continuum Chebyshev
-net (:func:`preform.drape.chebyshev.chebyshev_angle`), evaluated at the same cell centres: the
+net (:func:`preform.drape.engine.chebyshev.chebyshev_angle`), evaluated at the same cell centres: the
 net's discretisation error alone, free of the search's.
 
 Curved generators change the model (they lower the energy the straight reference measures),
@@ -458,14 +458,14 @@ def chebyshev_errors(scene: Scene, surface: Any, alpha_rad: float) -> tuple[floa
 
     NaN for anything but a bare hemisphere with geodesic generators (the oracle's premises).
     """
-    from preform.drape.chebyshev import chebyshev_angle
-    from preform.drape.net import drape
+    from preform.drape.engine.chebyshev import chebyshev_angle
+    from preform.drape.engine.net import drape
     from preform.drape.steps import drape_settings
 
     settings = drape_settings(scene, surface)
-    if not _is_bare_hemisphere(scene) or settings["generators"] != "geodesic":
+    if not _is_bare_hemisphere(scene) or settings.generators != "geodesic":
         return math.nan, math.nan
-    result = drape(surface, generator_angle_rad=alpha_rad, **settings)
+    result = drape(surface, settings, generator_angle_rad=alpha_rad)
     counted = result.valid & result.in_part
     if not counted.any():
         return math.nan, math.nan

@@ -22,7 +22,7 @@ How:
 4. **Flags.** ``off_tool``, ``off_net``, ``outside_part`` (the net cell is not in the part),
    ``near_fold`` (within one cell of a folded node or a cell lost behind it) and
    ``wrinkle_zone`` (the net cell is past a limit where the fabric would wrinkle:
-   ``preform.drape.wrinkling``, known when the energy field is given).
+   ``preform.drape.judging.wrinkling``, known when the energy field is given).
 
 Summaries (rms, mean, max and percentiles of the absolute errors) are over the compared points,
 for all of them and per region: the measurement's own ``region`` labels, and the flags'.
@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from preform.compare.measurement import MM, Measurement, MeasurementError
-from preform.drape.result import DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.result import DrapeResult, EnergyField, NodeStatus
 from preform.export.fe_mapping import (
     EDGE_TOLERANCE,
     NetHit,
@@ -131,7 +131,7 @@ def _fold_cells(result: DrapeResult) -> BoolArray:
     bad = (status == NodeStatus.FOLDED) | (status == NodeStatus.NO_INTERSECTION)
     if not bad.any():
         return np.zeros(result.cell_status.shape, dtype=bool)
-    from preform.drape.verdict import dependency_shadow
+    from preform.drape.judging.verdict import dependency_shadow
 
     shadow = bad | (dependency_shadow(bad, result.start_index) & (status != NodeStatus.PLACED))
     cells = shadow[:-1, :-1] | shadow[1:, :-1] | shadow[:-1, 1:] | shadow[1:, 1:]

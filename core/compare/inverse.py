@@ -37,8 +37,8 @@ from numpy.typing import NDArray
 
 from preform.compare.comparison import Comparison, OnTool, compare, evaluate, on_tool
 from preform.compare.measurement import MM, Measurement
-from preform.drape.net import DrapeError, drape
-from preform.drape.result import DrapeResult
+from preform.drape.engine.net import DrapeError, drape
+from preform.drape.engine.result import DrapeResult
 
 FloatArray = NDArray[np.float64]
 
@@ -195,8 +195,9 @@ def explain(
     """Search the set-up that best explains ``measurement`` (module docstring).
 
     ``surface``: the tool [m]; ``settings``: the other keyword arguments of
-    :func:`preform.drape.net.drape` (``node_spacing_m``, ``ply``, ``generators``, ``trim``,
-    ``tolerance``, ``substeps``; ``preform.drape.steps.drape_settings`` gives a scene's);
+    :func:`preform.drape.engine.net.drape` (``node_spacing_m``, ``ply``, ``generators``, ``trim``,
+    ``tolerance``, ``substeps``; ``preform.drape.steps.drape_settings(...).keywords()`` gives a
+    scene's);
     ``initial``: the set-up the search starts from (the scene's). ``vary``: which of
     ``start``, ``orientation``, ``generator_angle``. ``reach``: how far each parameter may move
     [mm, deg] (default :data:`DEFAULT_REACH`). ``energy_of``: the energy field of a net, for
@@ -207,7 +208,8 @@ def explain(
 
     names = _names(vary)
     limits = {**DEFAULT_REACH, **(reach or {})}
-    base = {k: v for k, v in settings.items() if k not in ("start_xy_m", "orientation_rad")}
+    varied = ("start_xy_m", "start_point", "orientation_rad", "generator_angle_rad")
+    base = {k: v for k, v in settings.items() if k not in varied}
     if not isinstance(base.get("generators", "geodesic"), str):
         raise ValueError(
             "the inverse search varies the start, orientation and generator angle of "

@@ -9,7 +9,7 @@ A measurement is a set of points on (or near) the tool, each with what was measu
   tool's outward normal (counter-clockwise seen from outside), the convention of
   ``preform.export.fe_mapping``; the reference direction is projected into the tool's tangent
   plane at the point, or
-- the shear angle only [deg], signed as preform signs it (``preform.drape.result``: γ = ω − 90°
+- the shear angle only [deg], signed as preform signs it (``preform.drape.engine.result``: γ = ω − 90°
   with ω the angle from the u to the v fibres),
 
 and optionally a standard uncertainty [deg] of each angle. Inside, points are in metres.

@@ -2,11 +2,11 @@
 
 A scene lists ``permeability`` among its outputs to have it computed (nothing else asks for it);
 then the ``cells_csv`` and ``vtu`` outputs of the same scene carry its columns and arrays too,
-and the case summary gets their ranges over the part (``preform.drape.preform_fields``).
+and the case summary gets their ranges over the part (``preform.drape.properties.preform_fields``).
 A fabric whose architecture has no sheared unit cell, or whose cell cannot be sheared, fails the
 case in words; cells sheared past 89° (the table's end) are held there and said in a warning.
 
-The ``thickness`` product (``preform.drape.thickness``) is the one thickness model of a case:
+The ``thickness`` product (``preform.drape.properties.thickness``) is the one thickness model of a case:
 the cell tables, the VTU and the FE mapping read it, and ``permeability`` reuses its table of
 the sheared cell. Only outputs that write a thickness ask for it (tabulating the cell costs
 0.1–2 s per fabric, once per process).
@@ -35,7 +35,7 @@ def preform_if_asked(scene: Scene) -> tuple[str, ...]:
 
 
 def run_thickness(ctx: CaseContext) -> dict[str, Any]:
-    from preform.drape.thickness import SHEARED_CELL, thickness_model
+    from preform.drape.properties.thickness import SHEARED_CELL, thickness_model
 
     export = getattr(ctx.scene, "export", None)
     nominal = getattr(export, "nominal_thickness_mm", None)
@@ -68,13 +68,13 @@ def run_thickness(ctx: CaseContext) -> dict[str, Any]:
 
 
 def run_permeability(ctx: CaseContext) -> dict[str, Any]:
-    from preform.drape.preform_fields import preform_field, preform_summary
+    from preform.drape.properties.preform_fields import preform_field, preform_summary
 
     ply = ctx.products["drape"]
     fabric = ctx.fabric
     model = ctx.products.get("thickness")  # the planner runs the thickness step first
     if model is None:
-        from preform.drape.thickness import thickness_model
+        from preform.drape.properties.thickness import thickness_model
 
         model = thickness_model(fabric)
     if model.cell_error is not None:

@@ -3,12 +3,12 @@
 The drape step uses the scene's generator angle, or the minimum-energy search's optimum when
 the scene has a ``search`` section. Scenes give mm and degrees; everything here is SI.
 
-The steps say what their result is worth (``preform.drape.verdict``, ``docs/results.md``): a
+The steps say what their result is worth (``preform.drape.judging.verdict``, ``docs/results.md``): a
 non-finite energy or a net without a cell raises ``CaseFailure``; a net that does not cover the
 ply where it lies over the tool marks the case partial with the covered fraction and why; cells
 past the law's locking, stitch-failure or packing angle, or outside its data range, are counted
 and said in words; a drape whose energy comes mostly from cells past jamming or stitch failure
-(where the fabric would wrinkle) is partial too (``preform.drape.wrinkling``). A ply too large for ``limits.max_nodes`` is refused before any array exists.
+(where the fabric would wrinkle) is partial too (``preform.drape.judging.wrinkling``). A ply too large for ``limits.max_nodes`` is refused before any array exists.
 """
 
 from __future__ import annotations
@@ -20,20 +20,21 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from preform.drape.fields import cell_fields, energy_field, summary
-from preform.drape.net import DrapeError, drape
-from preform.drape.part import HeightCut, Part, PlanPolygon, combine
-from preform.drape.ply import MAX_COUNT, PlyOutline
-from preform.drape.polygon import outline_problem
-from preform.drape.preform_steps import preform_if_asked
-from preform.drape.result import DrapeResult, EnergyField
-from preform.drape.verdict import (
+from preform.drape.engine.fields import cell_fields, energy_field, summary
+from preform.drape.engine.net import DrapeError, drape
+from preform.drape.engine.part import HeightCut, Part, PlanPolygon, combine
+from preform.drape.engine.ply import MAX_COUNT, PlyOutline
+from preform.drape.engine.polygon import outline_problem
+from preform.drape.engine.result import DrapeResult, EnergyField
+from preform.drape.engine.settings import DrapeSettings
+from preform.drape.judging.verdict import (
     coverage,
     first_nonfinite_energy,
     law_range,
     shear_limit_notes,
 )
-from preform.drape.wrinkling import Wrinkling, wrinkle_limits, wrinkling
+from preform.drape.judging.wrinkling import Wrinkling, wrinkle_limits, wrinkling
+from preform.drape.preform_steps import preform_if_asked
 from preform.pipeline import fidelity
 from preform.pipeline.status import CaseFailure
 from preform.shear.surrogate import surrogate
@@ -135,9 +136,9 @@ def _bytes(n: float) -> str:
     return f"{n:.3g} EB"
 
 
-def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
-    """Keyword arguments of :func:`preform.drape.net.drape` from a scene (SI units), with the
-    fidelity knobs resolved against the tool (``preform.pipeline.fidelity``).
+def drape_settings(scene: Scene, surface: Any) -> DrapeSettings:
+    """The scene's drape set-up (SI units), its fidelity knobs resolved once against the tool
+    (``preform.pipeline.fidelity``) and carried in it, to be recorded as they ran.
 
     Raises ``CaseFailure`` when the ply would need more than ``limits.max_nodes`` nodes or has
     no cell at the resolved spacing, before anything of its size is allocated."""
@@ -153,27 +154,28 @@ def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
     ):
         if problem is not None:
             raise CaseFailure(problem)
-    settings: dict[str, Any] = {
-        "node_spacing_m": knobs.node_spacing_mm * MM,
-        "ply": outline,
-        "start_xy_m": (start.point_mm[0] * MM, start.point_mm[1] * MM),
-        "orientation_rad": float(np.radians(start.orientation_deg)),
-        "generators": start.generators,
-        "tolerance": knobs.solver_tolerance,
-        "substeps": knobs.generator_substeps,
-    }
-    part = scene_part(scene, surface)
-    if part is not None:
-        settings["trim"] = part
+    generators: Any = start.generators
+    # Polylines set the orientation and angle themselves.
+    angles = (np.radians(start.orientation_deg), np.radians(start.generator_angle_deg))
     if start.generators == "polyline":
-        from preform.drape.generators import PlanPolylines
+        from preform.drape.engine.generators import PlanPolylines
 
         if start.generator_polylines_mm is None:
             raise ValueError("generators: polyline needs start.generator_polylines_mm")
         first, second = (np.asarray(p, dtype=float) * MM for p in start.generator_polylines_mm)
-        settings["generators"] = PlanPolylines(first, second)
-        settings["orientation_rad"] = None
-    return settings
+        generators, angles = PlanPolylines(first, second), (None, None)
+    return DrapeSettings(
+        node_spacing_m=knobs.node_spacing_mm * MM,
+        ply=outline,
+        start_xy_m=(start.point_mm[0] * MM, start.point_mm[1] * MM),
+        orientation_rad=angles[0],
+        generator_angle_rad=angles[1],
+        generators=generators,
+        trim=scene_part(scene, surface),
+        tolerance=knobs.solver_tolerance,
+        substeps=knobs.generator_substeps,
+        fidelity=knobs,
+    )
 
 
 def scene_part(scene: Scene, surface: Any) -> Part | None:
@@ -306,7 +308,7 @@ def empty_part_reason(result: DrapeResult, part: Part | None) -> str:
 def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: float) -> None:
     """Record a drape's wrinkling (the ``wrinkling`` block and its table columns) and make the
     case partial when its energy comes mostly from cells past a wrinkle limit (the status
-    rule, ``preform.drape.wrinkling``); ``covered_fraction`` [-] is the drape's coverage, which
+    rule, ``preform.drape.judging.wrinkling``); ``covered_fraction`` [-] is the drape's coverage, which
     a partial case records."""
     ctx.summary["wrinkling"] = wrinkles.summary()
     ctx.summary.update(wrinkles.columns())
@@ -314,9 +316,11 @@ def judge_wrinkling(ctx: CaseContext, wrinkles: Wrinkling, covered_fraction: flo
         ctx.partial(wrinkles.reason(), covered_fraction)
 
 
-def record_knobs(ctx: CaseContext, surface: Any) -> fidelity.Knobs:
-    """Resolve the scene's fidelity knobs and record them as scalar results of the case."""
-    knobs = fidelity.resolve(ctx.scene, float(surface.size))
+def record_knobs(ctx: CaseContext, settings: DrapeSettings) -> fidelity.Knobs:
+    """Record the fidelity knobs a drape's ``settings`` were resolved with as scalar results of
+    the case, and return them."""
+    knobs = settings.fidelity
+    assert knobs is not None, "settings from drape_settings carry the scene's knobs"
     for key, value in knobs.as_dict().items():
         ctx.summary[key if key == "fidelity" else f"knob_{key}"] = value
     return knobs
@@ -353,31 +357,21 @@ def summed_law(ctx: CaseContext, knobs: fidelity.Knobs) -> Any:
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
     surface = ctx.products["surface"]
     settings = drape_settings(ctx.scene, surface)
-    knobs = record_knobs(ctx, surface)
-    law = summed_law(ctx, knobs)
+    law = summed_law(ctx, record_knobs(ctx, settings))
     optimum = ctx.products.get("optimum")
     if optimum is not None:
-        # the search may also have chosen the orientation, the start or curved generators
-        alpha = float(optimum["generator_angle_rad"])
-        for key, setting in (
-            ("orientation_rad", "orientation_rad"),
-            ("start_xy_m", "start_xy_m"),
-            ("generators", "generators"),
-        ):
-            if optimum.get(key) is not None:
-                settings[setting] = optimum[key]
-    else:
-        assert ctx.scene.start is not None
-        alpha = float(np.radians(ctx.scene.start.generator_angle_deg))
-    if settings["orientation_rad"] is None:
-        alpha_arg: float | None = None
-    else:
-        alpha_arg = alpha
+        # the search chose the angle, and may have chosen the orientation, start or generators
+        chosen = ("orientation_rad", "start_xy_m", "generators")
+        settings = dataclasses.replace(
+            settings,
+            generator_angle_rad=float(optimum["generator_angle_rad"]),
+            **{key: optimum[key] for key in chosen if optimum.get(key) is not None},
+        )
     try:
-        result = drape(surface, generator_angle_rad=alpha_arg, **settings)
+        result = drape(surface, settings)
     except DrapeError as error:
         raise CaseFailure(f"the drape cannot start: {error}") from None
-    part = settings.get("trim")
+    part = cast(Part | None, settings.trim)  # drape_settings trims to the scene's part
     relaxed = optimum.get("relaxed_nodes") if optimum is not None else None
     if relaxed is not None and np.shape(relaxed) == result.nodes.shape:
         with np.errstate(all="ignore"):
@@ -394,7 +388,7 @@ def run_drape(ctx: CaseContext) -> dict[str, Any]:
     if part is not None:
         ctx.summary["part"] = part.describe()
     ctx.summary["generator_angle_deg"] = float(np.degrees(result.generator_angle))
-    judge_drape(ctx, result, energy, surface, settings["start_xy_m"], part)
+    judge_drape(ctx, result, energy, surface, settings.start_xy_m, part)
     area = getattr(part, "area_m2", None)
     if area is not None:
         # Part area the net does not cover, and how much of it the missing cells explain (by
@@ -468,7 +462,7 @@ def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceErr
     drape step's ``check``).
 
     Cheap checks only: an outline that crosses itself or encloses nothing
-    (``preform.drape.polygon``), the ply's node count against ``limits.max_nodes``
+    (``preform.drape.engine.polygon``), the ply's node count against ``limits.max_nodes``
     (arithmetic, no array), a node spacing that leaves the ply or the tool without a cell, the
     start point outside the ply or off the tool, generator polylines, a part beside the tool,
     and the tool's own preflight (an analytic tool is built, microseconds; a mesh file is

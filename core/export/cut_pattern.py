@@ -10,7 +10,7 @@ The outline is one of:
   point by point through the net: closest point on the draped net, then the same (i + s,
   j + t) in the flat, linear inside each half-cell. This is the outline once scenes have
   parts;
-- **the part, clipped in the flat** (``part``: the scene's part, ``preform.drape.part``): the
+- **the part, clipped in the flat** (``part``: the scene's part, ``preform.drape.engine.part``): the
   part's level function φ at the net's nodes, taken as linear on the two triangles of each
   cell (split along its (i, j)–(i+1, j+1) diagonal), and each cell's region φ ≥ 0 laid out in
   the flat. The outline is then the part's edge interpolated inside the cells it cuts, exact
@@ -64,14 +64,14 @@ from xml.sax.saxutils import escape
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import DrapeResult
+from preform.drape.engine.result import DrapeResult
 from preform.export.atomic import atomic_open, atomic_path
 from preform.export.flat_pattern import flat_pattern
 
 if TYPE_CHECKING:
     from shapely.geometry import MultiPolygon
 
-    from preform.drape.part import Part
+    from preform.drape.engine.part import Part
 
 FloatArray = NDArray[np.float64]
 MM_PER_M = 1e3

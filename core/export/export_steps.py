@@ -89,7 +89,7 @@ def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
     options = export_options(ctx)
     mesh = scene_fe_mesh(ctx)
     ply = ctx.products["drape"]
-    # the case's one thickness (preform.drape.thickness): its model and its t0
+    # the case's one thickness (preform.drape.properties.thickness): its model and its t0
     thickness = ctx.products["thickness"]
     mapping = map_to_mesh(
         ply.result,

@@ -29,7 +29,7 @@ non-planarity), which the tests check, and on a hemisphere the mapped shear appr
 drape's at the element centroids as O(d²).
 
 Thickness: the ratio t/t0 comes from the drape's energy field, which carries the case's one
-thickness model (``preform.drape.thickness``: the fabric's sheared unit cell where it has one,
+thickness model (``preform.drape.properties.thickness``: the fabric's sheared unit cell where it has one,
 else constant fibre volume fraction, 1/cos γ), and the thickness in mm is t0 · t/t0 when the
 nominal thickness t0 is known; ``thickness_reference`` says where t0 comes from. A compaction cap (a ratio past which the
 fabric cannot thicken further) is reported per element (``above_thickness_cap``) and counted,
@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import DrapeResult, EnergyField
+from preform.drape.engine.result import DrapeResult, EnergyField
 from preform.export.shell_mesh import ShellMesh
 
 FloatArray = NDArray[np.float64]
@@ -82,7 +82,7 @@ class MeshMapping:
     angle_u_deg: FloatArray
     angle_v_deg: FloatArray
     #: Signed shear angle γ [deg], interpolated from the drape (sign convention of
-    #: ``preform.drape.result``).
+    #: ``preform.drape.engine.result``).
     shear_deg: FloatArray
     #: Thickness ratio t/t0 [-] and thickness [mm] (NaN throughout when t0 is unknown).
     thickness_ratio: FloatArray
@@ -108,7 +108,7 @@ class MeshMapping:
     max_gap_mm: float
     #: Elements whose reference direction is normal to them (angles NaN there).
     reference_normal_to_element: BoolArray = field(default_factory=lambda: np.zeros(0, bool))
-    #: Where t0 comes from, in words (``preform.drape.thickness``), None when not said.
+    #: Where t0 comes from, in words (``preform.drape.properties.thickness``), None when not said.
     thickness_reference: str | None = None
 
     @property

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from preform.compare.comparison import Comparison
-from preform.drape.result import DrapeResult
+from preform.drape.engine.result import DrapeResult
 from preform.export.compare_vtu import largest_angle_error
 from preform.export.figures import new_figure, save_figure
 

@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.part import Part
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.part import Part
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.export.figures import new_figure, save_figure
 
 if TYPE_CHECKING:
@@ -625,7 +625,7 @@ def coverage_words(result: DrapeResult, covered_fraction: float | None) -> str:
     nodes = f"{on_part} nodes on the part"
     if covered_fraction is None:
         return nodes
-    # the case's coverage is of the ply's fabric over the tool (preform.drape.verdict)
+    # the case's coverage is of the ply's fabric over the tool (preform.drape.judging.verdict)
     return f"covers {percent(float(covered_fraction))} of the ply over the tool, {nodes}"
 
 
@@ -651,7 +651,7 @@ def fibre_pattern_figure(
     so figures of two fabrics compare; None: this drape's largest |γ|); with ``energy``, cells
     past locking are outlined black, cells past stitch failure magenta, and the total energy
     [J] goes into the title. The title says what the drape covers: ``covered_fraction`` (the
-    case's coverage, ``preform.drape.verdict``) when given, and the nodes drawn on the part
+    case's coverage, ``preform.drape.judging.verdict``) when given, and the nodes drawn on the part
     (not the nodes of the whole ply, most of which hang past a part's edge). It is an orthographic view from ``VIEW_ELEVATION_DEG``,
     ``VIEW_AZIMUTH_DEG`` projected here and drawn on the figure itself (no axes), the cells as one
     collection farthest first (``painter_order``), the box's back panes, ticks [mm] and the

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import CellStatus, DrapeResult
+from preform.drape.engine.result import CellStatus, DrapeResult
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

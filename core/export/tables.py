@@ -17,13 +17,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.result import CellStatus, DrapeResult, EnergyField
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField
 from preform.export.atomic import atomic_open, atomic_path
 
 if TYPE_CHECKING:
     import pandas as pd
 
-    from preform.drape.preform_fields import PreformField
+    from preform.drape.properties.preform_fields import PreformField
 
 #: Column order of ``cells_table``.
 CELL_COLUMNS: tuple[str, ...] = (
@@ -47,7 +47,7 @@ CELL_COLUMNS: tuple[str, ...] = (
 )
 
 
-#: Columns added by the ``permeability`` output (``preform.drape.preform_fields``).
+#: Columns added by the ``permeability`` output (``preform.drape.properties.preform_fields``).
 PREFORM_COLUMNS: tuple[str, ...] = (
     "preform_thickness_mm",
     "fibre_volume_fraction",
@@ -141,11 +141,11 @@ def cells_table(
     "INCOMPLETE"), ``in_part`` (bool), ``x_mm``, ``y_mm``, ``z_mm`` (centroid [mm]),
     ``shear_deg`` (signed shear [deg]), ``area_mm2`` (draped area [mm²]),
     ``thickness_ratio`` (t/t0 [-]: a thickening, formerly ``thinning``; from the model
-    ``energy.thickness_model`` names, ``preform.drape.thickness``), ``thickness_mm`` (t0 · t/t0
+    ``energy.thickness_model`` names, ``preform.drape.properties.thickness``), ``thickness_mm`` (t0 · t/t0
     [mm], NaN when t0 is unknown), ``energy_J_per_m2`` (strain energy density [J/m²]),
     ``past_locking`` and ``past_failure`` (nullable bool), ``past_jamming`` (past the law's
     jamming angle) and ``wrinkling`` (past any limit where the fabric wrinkles: jamming, stitch
-    failure, the law's own; ``preform.drape.wrinkling``) (nullable bool), ``part_share`` (the share 0..1 of the
+    failure, the law's own; ``preform.drape.judging.wrinkling``) (nullable bool), ``part_share`` (the share 0..1 of the
     cell's undeformed area inside the part, 0 outside it: the total energy is
     Σ energy_J_per_m2 · part_share · d²). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and

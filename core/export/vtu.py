@@ -13,11 +13,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.export.atomic import atomic_path
 
 if TYPE_CHECKING:
-    from preform.drape.preform_fields import PreformField
+    from preform.drape.properties.preform_fields import PreformField
     from preform.geometry.unit_cell import UnitCell
 
 #: Integer code of each tow kind in the ``kind`` cell array (VTK cell data must be numeric).
@@ -111,7 +111,7 @@ def write_drape_vtu(
     (t0 · t/t0 [mm], when t0 is known), ``status`` (CellStatus code), ``in_part`` (0/1) and,
     when ``energy`` is given, ``energy_J_per_m2`` [J/m²], ``past_locking``,
     ``past_failure``, ``past_jamming`` and ``wrinkling`` (0/1: past any limit where the fabric
-    wrinkles, ``preform.drape.wrinkling``); with ``preform`` (the ``permeability`` output)
+    wrinkles, ``preform.drape.judging.wrinkling``); with ``preform`` (the ``permeability`` output)
     ``preform_thickness_mm`` [mm], ``fibre_volume_fraction`` [-], ``permeability_m2`` (the
     in-plane tensor in the file's axes, 9 components [m²]), ``permeability_k1_m2`` and
     ``permeability_k2_m2`` (principal values k1 ≥ k2 [m²]) and ``permeability_k1_dir`` (k1's unit

@@ -35,10 +35,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.generators import GeneratorNodes
-from preform.drape.result import NodeStatus
-from preform.drape.surface import Surface
-from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE
+from preform.drape.engine.generators import GeneratorNodes
+from preform.drape.engine.result import NodeStatus
+from preform.drape.engine.surface import Surface
+from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE
 from preform.optimise.search import COVERAGE_SLACK, DrapeObjective, SearchError, with_generators
 
 FloatArray = NDArray[np.float64]
@@ -70,7 +70,7 @@ class CurvedGenerators:
 
     ``coefficients``: (u family, v family), each ``terms`` dimensionless c_k; ``length_m``: the
     scale L [m] (None: the tool's ``size``). Pass an instance as ``generators=`` to
-    :func:`preform.drape.net.drape`.
+    :func:`preform.drape.engine.net.drape`.
     """
 
     coefficients: tuple[tuple[float, ...], tuple[float, ...]]

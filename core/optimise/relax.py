@@ -13,7 +13,7 @@ the start node stays pinned):
     minimise  Σ_cells W(γ_c)·s_c·d²   subject to  |x_a − x_b| = d on every edge,  x on the tool,
 
 with γ_c the mean of the four edge-pair angles minus 90° exactly as
-:func:`preform.drape.fields.cell_fields` defines it and s_c the cell's share of area inside the
+:func:`preform.drape.engine.fields.cell_fields` defines it and s_c the cell's share of area inside the
 part (``DrapeResult.part_weight``, held at the kinematic drape's). The edges go into an augmented
 Lagrangian on the strains r_e = |e|/d − 1, the tool into a penalty on the scaled (unsigned)
 distance r_s = dist(x)/d, which also holds nodes back at a trimmed edge such as a dome's rim.
@@ -42,8 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import DrapeResult, NodeStatus
-from preform.drape.surface import Surface
+from preform.drape.engine.result import DrapeResult, NodeStatus
+from preform.drape.engine.surface import Surface
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 

@@ -10,7 +10,7 @@ The energy of the part [D]
 --------------------------
 Every drape is judged on the same part (PHYSICS §6 "The energy of a part"): the net is draped
 over the tool as far as the ply reaches and clipped to the part (the drape's ``trim``, a
-:class:`~preform.drape.part.Part`, further restricted by an optional ``region``); each cell
+:class:`~preform.drape.engine.part.Part`, further restricted by an optional ``region``); each cell
 counts W(γ) times its undeformed area inside the part, s·d² (``DrapeResult.part_weight``), so a
 cell cut by the part's edge counts by its share, and
 
@@ -34,7 +34,7 @@ falls below it infeasible instead: never chosen as the optimum (its energy is st
 What can be made [D]
 --------------------
 Least energy is compared among drapes that can be made. A drape needing cells past jamming or
-stitch failure wrinkles there (``preform.drape.wrinkling``), and the law's energy for those
+stitch failure wrinkles there (``preform.drape.judging.wrinkling``), and the law's energy for those
 cells is its continuation, not a physical energy; 4–7 % of a part sheared past jamming can
 carry 95 % of a satin's energy, so E(α) alone would compare continuations. The rule,
 feasibility first and by area, the same for every architecture (it reads only the law's
@@ -56,7 +56,7 @@ the pipeline then makes the case ``partial`` and says that no angle drapes withi
 The same fabric at every angle [D]
 ----------------------------------
 A drape can lose ply cells: behind a sharp convex vertex the net folds (its *fold zones*,
-:class:`~preform.drape.verdict.Coverage`), or it loses its intersection and the cells behind.
+:class:`~preform.drape.judging.verdict.Coverage`), or it loses its intersection and the cells behind.
 Those cells drop out of Σ W·s·d², so an angle at which a fold zone appears looks cheap for that
 reason alone: on the bundled hat mould at α = 90° all four block corners fold and E was
 0.27 J, while at 88.74° two of them are draped instead, sheared to about 88° (past the law's
@@ -136,12 +136,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.net import DrapeError, drape
-from preform.drape.result import DrapeResult
-from preform.drape.surface import Surface
-from preform.drape.verdict import coverage, law_range
-from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, WrinkleLimit, makeable, past_any
-from preform.drape.wrinkling import wrinkle_limits as limits_of
+from preform.drape.engine.net import DrapeError, drape
+from preform.drape.engine.result import DrapeResult
+from preform.drape.engine.surface import Surface
+from preform.drape.judging.verdict import coverage, law_range
+from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE, WrinkleLimit, makeable, past_any
+from preform.drape.judging.wrinkling import wrinkle_limits as limits_of
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
@@ -186,7 +186,7 @@ class DrapeEvaluation:
     draped: bool = True
     #: The net itself, when the caller asked to keep it.
     result: DrapeResult | None = field(default=None, repr=False, compare=False)
-    #: Of those, the cells past a limit where the fabric wrinkles (``preform.drape.wrinkling``:
+    #: Of those, the cells past a limit where the fabric wrinkles (``preform.drape.judging.wrinkling``:
     #: jamming, stitch failure): their energy Σ W·s·d² [J] and draped area Σ s·area [m²].
     wrinkle_energy_J: float = 0.0
     wrinkle_area_m2: float = 0.0
@@ -223,14 +223,14 @@ class DrapeEvaluation:
 class DrapeObjective:
     """Drape-and-judge: E(choices) for one fabric on one tool (see the module docstring).
 
-    ``drape_kwargs`` are the fixed keyword arguments of :func:`preform.drape.net.drape`
+    ``drape_kwargs`` are the fixed keyword arguments of :func:`preform.drape.engine.net.drape`
     (``node_spacing_m``, ``ply``, ``start_xy_m`` or ``start_point``, ``orientation_rad``,
     ``generators``, ``trim``, ``tolerance``, ...); :meth:`evaluate` overrides the generator
     angle and, optionally, the orientation, the start point and the generators.
     ``region`` (a predicate on cell centroids (n, 3) [m]) restricts the part further.
     ``uncovered_shear_rad`` [rad]: price uncovered part area at W_miss = max W(±γ_m) [J/m²]
     (module docstring; default None: no charge). ``wrinkle_limits``: where the fabric wrinkles
-    (``preform.drape.wrinkling``; default: the law's, through ``law_range``); each evaluation
+    (``preform.drape.judging.wrinkling``; default: the law's, through ``law_range``); each evaluation
     carries the energy and area of its cells past them.
     """
 
@@ -265,7 +265,7 @@ class DrapeObjective:
         trim = drape_kwargs.get("trim")
         #: The part's own area [m²] when it knows it (a bare hemisphere: 2πR²), else None.
         self.part_area_m2: float | None = getattr(trim, "area_m2", None)
-        #: Where the fabric wrinkles instead of shearing (``preform.drape.wrinkling``).
+        #: Where the fabric wrinkles instead of shearing (``preform.drape.judging.wrinkling``).
         self.wrinkle_limits: tuple[WrinkleLimit, ...] = (
             limits_of(law_range(law)) if wrinkle_limits is None else tuple(wrinkle_limits)
         )
@@ -337,7 +337,7 @@ class DrapeObjective:
         """Energy [J], covered area [m²] and counted cells of a finished drape, and the
         energy and area of those past a wrinkle limit.
 
-        Equal to :func:`preform.drape.fields.energy_field`'s total over the same cells, up to
+        Equal to :func:`preform.drape.engine.fields.energy_field`'s total over the same cells, up to
         the energy table's interpolation (relative error ~1e-6 at the default step; pass
         ``energy_table_step_rad=None`` for the law itself). The table matters for mechanistic
         laws that cost microseconds per angle: a drape has ~10⁴ cells and a search ~30 drapes.
@@ -407,7 +407,7 @@ class SearchPoint:
     #: law's trustworthy range).
     max_abs_shear_rad: float = 0.0
     #: Share of the covered part area, and of the drape energy, past a wrinkle limit [-], and
-    #: whether the drape can be made by that (``preform.drape.wrinkling.makeable``): an angle
+    #: whether the drape can be made by that (``preform.drape.judging.wrinkling.makeable``): an angle
     #: that cannot is not feasible.
     wrinkle_area_share: float = 0.0
     wrinkle_energy_share: float = 0.0

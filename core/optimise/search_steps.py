@@ -45,7 +45,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.drape.fields import energy_field
+from preform.drape.engine.fields import energy_field
+from preform.drape.engine.settings import DrapeSettings
+from preform.drape.judging.verdict import coverage, law_nonfinite_angle, law_range
+from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.drape.steps import (
     drape_settings,
     judge_wrinkling,
@@ -54,8 +57,6 @@ from preform.drape.steps import (
     start_problem,
     summed_law,
 )
-from preform.drape.verdict import coverage, law_nonfinite_angle, law_range
-from preform.drape.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.optimise.search import (
     AngleSearchResult,
     DrapeObjective,
@@ -81,6 +82,8 @@ class AngleStudy:
 
     search: AngleSearchResult
     objective: DrapeObjective
+    #: The drape set-up the objective was built from (its fidelity knobs resolved once).
+    settings: DrapeSettings
 
 
 def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, Any]:
@@ -107,10 +110,9 @@ def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, An
     }
 
 
-def build_objective(ctx: CaseContext) -> DrapeObjective:
+def build_objective(ctx: CaseContext, settings: DrapeSettings) -> DrapeObjective:
     """The drape-and-judge objective of the case: its tool, ply, start and shear law."""
-    settings = drape_settings(ctx.scene, ctx.products["surface"])
-    if not isinstance(settings["generators"], str):
+    if not isinstance(settings.generators, str):
         raise ValueError(
             "the generator-angle search needs geodesic or plan generators, not "
             "polylines (polylines fix the angle themselves)"
@@ -123,15 +125,16 @@ def build_objective(ctx: CaseContext) -> DrapeObjective:
         ctx.products["shear_law"],
         uncovered_shear_rad=None if shear is None else math.radians(float(shear)),
         energy_table_step_rad=math.radians(table) if table > 0 else None,
-        **settings,
+        **settings.keywords(),
     )
 
 
 def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
-    record_knobs(ctx, ctx.products["surface"])
+    settings = drape_settings(ctx.scene, ctx.products["surface"])
+    record_knobs(ctx, settings)
     with np.errstate(invalid="ignore", over="ignore"):
-        objective = build_objective(ctx)
+        objective = build_objective(ctx, settings)
     where = objective.drape_kwargs.get("start_xy_m")
     if where is not None:
         problem = start_problem(objective.surface, where)
@@ -198,7 +201,7 @@ def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
     )
     ctx.summary["search_drapes"] = result.drapes
     ctx.summary["search_settings"] = {**knobs, **result.settings}
-    return {"energy_vs_angle": AngleStudy(result, objective)}
+    return {"energy_vs_angle": AngleStudy(result, objective, settings)}
 
 
 #: Columns of the energy/wrinkle trade table (``energy_vs_angle.csv``, the summary's
@@ -348,7 +351,7 @@ def _judge_optimum_drape(
         ctx.partial(cover.reason(), cover.covered_fraction)
     elif cover.fold_zones:
         ctx.warn(cover.fold_warning(), cause="fold zones")
-    # the status rule on wrinkling, as the drape step gives it (preform.drape.wrinkling)
+    # the status rule on wrinkling, as the drape step gives it (preform.drape.judging.wrinkling)
     result = evaluation.result
     counted = objective.counted(result)
     density = np.zeros(counted.shape)
@@ -418,7 +421,7 @@ def run_optimum(ctx: CaseContext) -> dict[str, Any]:
         _run_curved(ctx, objective, search, curved, optimum)
     relax = knobs["relax"]
     if relax:
-        _run_relax(ctx, objective, optimum, relax if isinstance(relax, Mapping) else {})
+        _run_relax(ctx, study, optimum, relax if isinstance(relax, Mapping) else {})
     _warn_resolution(ctx, search)
     _warn_accounting(ctx, search)
     from preform.pipeline.planner import plan
@@ -591,7 +594,7 @@ def _judge_curved_saving(ctx: CaseContext, objective: DrapeObjective, curved: An
 
 
 def _run_relax(
-    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any], options: Mapping[str, Any]
+    ctx: CaseContext, study: AngleStudy, optimum: dict[str, Any], options: Mapping[str, Any]
 ) -> None:
     """Relax the optimum's net (``preform.optimise.relax``) and keep it when it holds less
     energy than the kinematic net, both summed as the drape step sums ``total_energy_J``: each
@@ -599,6 +602,7 @@ def _run_relax(
     objective holds every cell's kinematic share, so it is not the relaxed net's energy)."""
     from preform.optimise.relax import relax_net
 
+    objective = study.objective
     kinematic = objective.evaluate(
         float(optimum["generator_angle_rad"]),
         orientation_rad=optimum.get("orientation_rad"),
@@ -616,7 +620,8 @@ def _run_relax(
         max_iterations=int(options.get("max_iterations", 1500)),
     )
     ctx.summary.update(relaxed.summary())
-    law = summed_law(ctx, record_knobs(ctx, objective.surface))
+    assert study.settings.fidelity is not None  # a scene's settings carry its knobs
+    law = summed_law(ctx, study.settings.fidelity)
     part = objective.drape_kwargs.get("trim")
     net = relaxed_result(kinematic.result, relaxed.nodes, part)
     with np.errstate(all="ignore"):

@@ -102,7 +102,7 @@ class StartSection(BaseModel):
 
 
 class PartSection(BaseModel):
-    """The part: the region of the tool that is made (``preform.drape.part``). The net is
+    """The part: the region of the tool that is made (``preform.drape.engine.part``). The net is
     draped over the tool as far as the ply reaches and clipped to the part; energies and
     extremes are of the part. Several fields together mean their intersection. Without this
     section the part is the tool's own (a bare hemisphere: z ≥ 0; other tools: every cell the

@@ -99,7 +99,7 @@ class TabulatedSurrogate:
         # a stitch that also breaks shearing the other way (stitch_yarn): the energy field
         # flags it from the law in hand, so the table must carry it
         self.failure_angle_negative = getattr(law, "failure_angle_negative", None)
-        # and where the fabric wrinkles (preform.drape.wrinkling): jammed, or the law's own
+        # and where the fabric wrinkles (preform.drape.judging.wrinkling): jammed, or the law's own
         self.packing_angle = getattr(law, "packing_angle", None)
         self.wrinkle_limits = tuple(getattr(law, "wrinkle_limits", None) or ())
         count = math.ceil(_DOMAIN_END / step_rad)

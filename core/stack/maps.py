@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import DrapeResult
+from preform.drape.engine.result import DrapeResult
 from preform.export.fe_mapping import EDGE_TOLERANCE, closest_on_net
 
 FloatArray = NDArray[np.float64]
@@ -46,7 +46,7 @@ class PlyLayer:
     #: or not known).
     thickness_mm: FloatArray
     fibre_volume_fraction: FloatArray
-    #: Cells past a wrinkle limit (jamming, stitch failure: ``preform.drape.wrinkling``).
+    #: Cells past a wrinkle limit (jamming, stitch failure: ``preform.drape.judging.wrinkling``).
     wrinkles: BoolArray
     #: The reference thickness t0 [mm] and the ply's offset from the tool [mm] (the analytic
     #: offset's one distance, or the largest of a mesh's).

@@ -5,7 +5,7 @@ The ``layup`` step runs each ply as a drape case of its own (``preform.stack.pli
 scene with the ply's start, orientation, angle, outline and outputs) inside the layup's case,
 with the same planned steps a ``pipeline run`` of that scene would run, writing the ply's
 outputs and ``summary.json`` into a sub-folder named after the ply. Ply k (from 0 at the tool)
-lies on the tool offset by plies 0 … k−1 (``preform.drape.offset``):
+lies on the tool offset by plies 0 … k−1 (``preform.drape.engine.offset``):
 
 - an analytic tool is offset exactly by one distance, the sum of the plies' area-weighted mean
   thicknesses over their parts (``offset_mm`` of the ply); where a ply below varies in
@@ -47,14 +47,14 @@ class Stack:
     layers: tuple[PlyLayer, ...]
     maps: StackMaps
     plies_products: tuple[dict[str, Any], ...]
-    #: How the tool was offset for the plies above the first (``preform.drape.offset``).
+    #: How the tool was offset for the plies above the first (``preform.drape.engine.offset``).
     offset_method: str
 
 
 def _thickness_model(ply_ctx: CaseContext) -> Any:
     model = ply_ctx.products.get("thickness")
     if model is None:
-        from preform.drape.thickness import thickness_model
+        from preform.drape.properties.thickness import thickness_model
 
         export = ply_ctx.scene.export
         nominal = export.nominal_thickness_mm if export is not None else None
@@ -64,8 +64,8 @@ def _thickness_model(ply_ctx: CaseContext) -> Any:
 
 def _layer(ply_ctx: CaseContext, name: str, orientation_deg: float, offset_mm: float) -> PlyLayer:
     """The stack's view of a draped ply (thickness, fraction and wrinkling per cell)."""
-    from preform.drape.verdict import law_range
-    from preform.drape.wrinkling import wrinkle_limits
+    from preform.drape.judging.verdict import law_range
+    from preform.drape.judging.wrinkling import wrinkle_limits
 
     draped = ply_ctx.products["drape"]
     result = draped.result
@@ -134,7 +134,7 @@ def _offset_for(
     tool: Any, layers: list[PlyLayer], mesh_points_mm: Any
 ) -> tuple[Any, float, str, list[str]]:
     """The tool under the next ply: (surface, largest offset [mm], method, warnings)."""
-    from preform.drape.offset import OffsetError, is_mesh, offset_tool
+    from preform.drape.engine.offset import OffsetError, is_mesh, offset_tool
 
     if not layers:
         return tool, 0.0, "none (the tool itself)", []

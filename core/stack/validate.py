@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from preform.drape.polygon import outline_problem
+from preform.drape.engine.polygon import outline_problem
 from preform.stack.plies import ply_scene
 
 if TYPE_CHECKING:

@@ -1,7 +1,7 @@
 """Analytic tool surfaces: a flat plate, a sphere (and the upper hemisphere), a cylinder.
 
-Each implements the ``preform.drape.surface.Surface`` protocol vectorised over (n, 3) points,
-through its compiled queries (``compiled_queries``: ``preform.drape.surface_kernels``, imported
+Each implements the ``preform.drape.engine.surface.Surface`` protocol vectorised over (n, 3) points,
+through its compiled queries (``compiled_queries``: ``preform.drape.kernels.surface_kernels``, imported
 when first asked), so its drape runs the compiled fill in one loop.
 ``Plane`` and ``Sphere``/``Hemisphere`` also offer the drape engine's optional closed forms
 (``place_nodes`` for a net node, ``geodesic_nodes`` for a generator), so draping them needs no
@@ -15,7 +15,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import (
+from preform.drape.engine.compiled_surface import (
     CYLINDER,
     PLANE,
     SPHERE,
@@ -24,8 +24,8 @@ from preform.drape.compiled_surface import (
     kernel_parameters,
     query_tool,
 )
-from preform.drape.part import HeightCut
-from preform.drape.result import NodeStatus
+from preform.drape.engine.part import HeightCut
+from preform.drape.engine.result import NodeStatus
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -50,7 +50,7 @@ def _compiled_place_nodes(
 ) -> tuple[FloatArray, StatusArray]:
     """The tool's closed-form nodes through the compiled kernel (one implementation for the
     compiled fill and the vectorised callers)."""
-    from preform.drape import net_kernels
+    from preform.drape.kernels import net_kernels
 
     kind, params = tool.compiled_queries()
     ends = [np.ascontiguousarray(v, dtype=float).reshape(-1, 3) for v in (a, b, opposite)]
@@ -86,7 +86,7 @@ class Plane:
 
     def offset(self, distance_m: float) -> Plane:
         """The plate moved ``distance_m`` [m] along its normal (+z): its exact offset surface
-        (the layup's next ply lies on it, ``preform.drape.offset``). Its plan size is kept."""
+        (the layup's next ply lies on it, ``preform.drape.engine.offset``). Its plan size is kept."""
         size = (float(2.0 * self.half[0]), float(2.0 * self.half[1]))
         return Plane(size, centre_m=self.centre + np.array([0.0, 0.0, float(distance_m)]))
 
@@ -96,7 +96,7 @@ class Plane:
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest points on the plate [m] and distances (n,) [m] to points (n, 3) [m]
-        (compiled: ``preform.drape.surface_kernels``)."""
+        (compiled: ``preform.drape.kernels.surface_kernels``)."""
         foot, _, dist = query_tool(self, points)
         return foot, dist
 
@@ -121,7 +121,7 @@ class Plane:
     ) -> tuple[FloatArray, StatusArray]:
         """Net nodes (m, 3) [m] at distance ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the
         side away from ``opposite``, with NodeStatus codes (m,): in the plate, on the
-        perpendicular bisector of ab (compiled: ``preform.drape.surface_kernels.plane_node``).
+        perpendicular bisector of ab (compiled: ``preform.drape.kernels.surface_kernels.plane_node``).
         """
         return _compiled_place_nodes(self, a, b, opposite, spacing)
 
@@ -203,7 +203,7 @@ class Sphere:
         """Net nodes (m, 3) [m] at chord ``spacing`` [m] from ``a`` and ``b`` (m, 3) on the side
         away from ``opposite``, with NodeStatus codes (m,).
 
-        Closed form (PHYSICS §6), compiled (``preform.drape.net_kernels._sphere_node``): relative
+        Closed form (PHYSICS §6), compiled (``preform.drape.kernels.net_kernels._sphere_node``): relative
         to the centre, P·A = P·B = R² − d²/2 and |P| = R. P lies in the plane spanned by A + B
         and n = A × B; the root on the far side of the plane (0, A, B) from the opposite node is
         the new node. A node below a trimmed sphere's floor is OFF_TOOL.
@@ -212,7 +212,7 @@ class Sphere:
 
     def offset(self, distance_m: float) -> Sphere:
         """The concentric sphere of radius R + ``distance_m`` [m]: the exact offset surface
-        (outward normals, ``preform.drape.offset``)."""
+        (outward normals, ``preform.drape.engine.offset``)."""
         return Sphere(self.radius + float(distance_m), centre_m=self.centre)
 
     def compiled_queries(self) -> tuple[int, FloatArray]:
@@ -277,7 +277,7 @@ class Hemisphere(Sphere):
 
     def offset(self, distance_m: float) -> Hemisphere:
         """The concentric hemisphere of radius R + ``distance_m`` [m], its exact offset
-        (``preform.drape.offset``); the run-off below the rim keeps its angular extent, so the
+        (``preform.drape.engine.offset``); the run-off below the rim keeps its angular extent, so the
         offset tool continues as far round the sphere as this one."""
         radius = self.radius + float(distance_m)
         run_off = self.run_off * radius / self.radius if self.run_off else None
@@ -339,7 +339,7 @@ class Cylinder:
 
     def offset(self, distance_m: float) -> Cylinder:
         """The coaxial cylinder of radius R + ``distance_m`` [m] and the same length: the exact
-        offset of the lateral surface (``preform.drape.offset``)."""
+        offset of the lateral surface (``preform.drape.engine.offset``)."""
         return Cylinder(
             self.radius + float(distance_m), self.length, self.axis, centre_m=self.centre
         )
@@ -353,7 +353,7 @@ class Cylinder:
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest points on the lateral surface [m] and distances (n,) [m] (compiled:
-        ``preform.drape.surface_kernels``); a point on the axis gets the top (+z)."""
+        ``preform.drape.kernels.surface_kernels``); a point on the axis gets the top (+z)."""
         foot, _, dist = query_tool(self, points)
         return foot, dist
 

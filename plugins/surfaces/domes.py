@@ -5,9 +5,9 @@
 * ``EllipsoidDome``: the upper half of an ellipsoid.
 * ``ParaboloidDome``: z = h (1 − r²/R²) for r ≤ R.
 
-All lengths are in metres. Every class implements the ``preform.drape.surface.Surface``
+All lengths are in metres. Every class implements the ``preform.drape.engine.surface.Surface``
 protocol with closed-form or iterative closest points, compiled (``compiled_queries``: the
-queries are in ``preform.drape.surface_kernels``, imported when first asked, and a drape of the
+queries are in ``preform.drape.kernels.surface_kernels``, imported when first asked, and a drape of the
 tool runs the compiled fill in one loop), so it answers for any query point, including points
 beyond the rim (the answer then lies on the rim or the flange edge).
 ``point_at_plan`` answers the single point of the tool above a plan position (these tools are
@@ -26,7 +26,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.compiled_surface import (
+from preform.drape.engine.compiled_surface import (
     CONE,
     ELLIPSOID_DOME,
     FLANGED_HEMISPHERE,
@@ -303,7 +303,7 @@ class EllipsoidDome:
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]
-        (compiled: ``preform.drape.surface_kernels._ellipsoid_foot`` has the root solve)."""
+        (compiled: ``preform.drape.kernels.surface_kernels._ellipsoid_foot`` has the root solve)."""
         closest, _, distance = query_tool(self, _as_points(points, 3))
         return closest, distance
 
@@ -351,7 +351,7 @@ class ParaboloidDome:
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]
-        (compiled: ``preform.drape.surface_kernels``)."""
+        (compiled: ``preform.drape.kernels.surface_kernels``)."""
         closest, _, distance = query_tool(self, _as_points(points, 3))
         return closest, distance
 

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, HygieneReport, check_surface
 
 if TYPE_CHECKING:
-    from preform.drape.net import FacePlacement
+    from preform.drape.engine.net import FacePlacement
     from preform.plugins.surfaces.mesh_walk import MeshWalker
     from preform.plugins.surfaces.tool_mesh import ToolMesh
 
@@ -243,7 +243,7 @@ class TriangleMesh:
 
     def moved(self, vertices: FloatArray) -> TriangleMesh:
         """This mesh with its vertices (n, 3) [m] moved (the same faces, normals and knobs):
-        a tool offset along its vertex normals (``preform.drape.offset``)."""
+        a tool offset along its vertex normals (``preform.drape.engine.offset``)."""
         return TriangleMesh(
             vertices,
             self.faces,

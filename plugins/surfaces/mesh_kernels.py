@@ -34,13 +34,13 @@ import math
 import numba
 import numpy as np
 
-from preform.drape.kernel_cache import cache_by_content
-from preform.drape.result import NodeStatus
+from preform.drape.engine.result import NodeStatus
+from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernel_cache``).
-COMPILED_IN = ("preform.drape.result",)
+#: (``preform.drape.kernels.kernel_cache``).
+COMPILED_IN = ("preform.drape.engine.result",)
 cache_by_content(__name__)
 
 _PLACED = int(NodeStatus.PLACED)

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.net import FacePlacement
+from preform.drape.engine.net import FacePlacement
 from preform.plugins.surfaces.mesh_topology import MeshTopology
 
 if TYPE_CHECKING:

@@ -12,7 +12,7 @@ tessellation tolerance of a CAD tool, the repairs). Every file reaches it throug
 
 The part of selected faces [D]
 ------------------------------
-:class:`FaceSet` is a :class:`~preform.drape.part.Part`; its level φ at a point is the distance
+:class:`FaceSet` is a :class:`~preform.drape.engine.part.Part`; its level φ at a point is the distance
 to the selection's edge (the mesh edges between a selected and an unselected triangle), signed
 by whether the point's closest triangle is selected. The distance is straight-line (not along
 the surface), which near the edge, where cut cells use it, differs from the distance along the
@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.part import Part
+from preform.drape.engine.part import Part
 from preform.plugins.surfaces.mesh import (
     DEFAULT_FEATURE_ANGLE_DEG,
     TriangleMesh,
@@ -118,7 +118,7 @@ class ToolMesh(TriangleMesh):
     def moved(self, vertices: FloatArray) -> ToolMesh:
         """This tool with its vertices (n, 3) [m] moved: the same triangles, face labels,
         names, source and hygiene record (a tool offset along its vertex normals,
-        ``preform.drape.offset``; ``part.faces`` selects the same faces of it)."""
+        ``preform.drape.engine.offset``; ``part.faces`` selects the same faces of it)."""
         repaired = RepairedMesh(
             np.asarray(vertices, dtype=float),
             self.faces,

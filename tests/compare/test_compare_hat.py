@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from preform.compare import SetUp, compare, explain, measurement
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.result import NodeStatus
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import NodeStatus
 from preform.plugins.surfaces.mesh import read_obj
 
 HAT = read_obj(

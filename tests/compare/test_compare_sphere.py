@@ -22,8 +22,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from preform.compare import SetUp, compare, explain, measurement
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.plugins.surfaces.basic import Hemisphere
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -21,8 +21,8 @@ from preform.compare import (
     measurement,
     read_measurement,
 )
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.plugins.surfaces.basic import Hemisphere
 
 ROOT = Path(__file__).resolve().parents[2]

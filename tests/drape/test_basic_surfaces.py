@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.generators import ClosedFormGeodesics
-from preform.drape.net import ClosedFormPlacement
-from preform.drape.result import NodeStatus
-from preform.drape.surface import Surface
+from preform.drape.engine.generators import ClosedFormGeodesics
+from preform.drape.engine.net import ClosedFormPlacement
+from preform.drape.engine.result import NodeStatus
+from preform.drape.engine.surface import Surface
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane, Sphere
 
 RNG = np.random.default_rng(7)

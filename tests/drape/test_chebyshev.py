@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from preform.drape.chebyshev import (
+from preform.drape.engine.chebyshev import (
     chebyshev_angle,
     chebyshev_shear_profile,
     series_coefficients,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import preform
-from preform.drape.fields import energy_field
+from preform.drape.engine.fields import energy_field
 from preform.drape.steps import run_drape
 from preform.pipeline import fidelity
 from preform.shear.surrogate import TabulatedSurrogate

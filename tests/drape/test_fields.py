@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from numpy.typing import ArrayLike
 
-from preform.drape.fields import cell_fields, cell_status, energy_field, summary
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.result import CellStatus, DrapeResult, NodeStatus
+from preform.drape.engine.fields import cell_fields, cell_status, energy_field, summary
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import CellStatus, DrapeResult, NodeStatus
 from preform.plugins.surfaces.basic import Hemisphere
 from preform.shear.law import ShearLaw
 

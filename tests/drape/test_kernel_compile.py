@@ -1,5 +1,5 @@
 """The drape kernels are compiled once per install, by one process, saying so
-(``preform.drape.kernel_compile``). The fast tests swap the small case for a one-line kernel
+(``preform.drape.kernels.kernel_compile``). The fast tests swap the small case for a one-line kernel
 (the compile is numba's either way); the slow one runs the real command on an empty cache."""
 
 from __future__ import annotations
@@ -12,16 +12,15 @@ from pathlib import Path
 
 import pytest
 
-from preform.drape import kernel_compile
-from preform.drape.kernel_cache import CACHE_ENV
+from preform.drape.kernels import kernel_compile
+from preform.drape.kernels.kernel_cache import CACHE_ENV
 
 #: ``ensure_compiled`` in a fresh process whose small case compiles a tiny kernel (after
 #: ``sleep`` seconds, to hold the lock) or fails; prints what it returned on stdout.
 PROCESS = """
 import sys, time
 import numba
-from preform.drape import kernel_compile
-
+from preform.drape.kernels import kernel_compile
 def small_case():
     if {fail}:
         raise RuntimeError("no library")
@@ -144,10 +143,12 @@ def test_the_helper_compiles_what_comes_after_the_drape_and_not_the_fill(tmp_pat
     env = {**os.environ, CACHE_ENV: str(tmp_path)}
     command = [sys.executable, "-m", kernel_compile.HELPER_MODULE, kernel_compile.HELPER_FLAG]
     subprocess.run(command, env=env, check=True, capture_output=True, timeout=600)
-    assert list(tmp_path.glob("preform.drape.field_kernels-*/field_kernels.node_shear-*.nbi"))
-    assert list(tmp_path.glob("preform.drape.verdict_kernels-*/*.nbi"))
+    assert list(
+        tmp_path.glob("preform.drape.kernels.field_kernels-*/field_kernels.node_shear-*.nbi")
+    )
+    assert list(tmp_path.glob("preform.drape.kernels.verdict_kernels-*/*.nbi"))
     assert list(tmp_path.glob("preform.shear.surrogate_kernels-*/*.nbi"))
-    assert not list(tmp_path.glob("preform.drape.net_kernels-*/*fill_fronts*.nbi"))
+    assert not list(tmp_path.glob("preform.drape.kernels.net_kernels-*/*fill_fronts*.nbi"))
     assert not list(tmp_path.glob("compiled-*"))  # the helper marks nothing
 
 
@@ -172,6 +173,6 @@ def test_the_first_run_after_an_install_compiles_once_visibly_the_second_not(tmp
     first = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
     assert "preform: compiling drape kernels, once per install" in first.stderr
     assert "preform: drape kernels compiled in" in first.stderr
-    assert list((tmp_path / "cache").glob("preform.drape.net_kernels-*/*.nbi"))
+    assert list((tmp_path / "cache").glob("preform.drape.kernels.net_kernels-*/*.nbi"))
     second = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
     assert "compil" not in second.stderr

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from preform.drape.fields import (
+from preform.drape.engine.fields import (
     cell_fields,
     cell_status,
     energy_field,
@@ -19,10 +19,10 @@ from preform.drape.fields import (
     node_shear,
     summary,
 )
-from preform.drape.net import drape
-from preform.drape.part import HeightCut, cell_part_share
-from preform.drape.ply import PlyOutline
-from preform.drape.result import CellStatus, DrapeResult, NodeStatus
+from preform.drape.engine.net import drape
+from preform.drape.engine.part import HeightCut, cell_part_share
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import CellStatus, DrapeResult, NodeStatus
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Sphere
 from preform.plugins.surfaces.domes import Cone, EllipsoidDome, ParaboloidDome
 from preform.shear.surrogate import TabulatedSurrogate

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from preform.drape import PlyOutline, drape
-from preform.drape.result import NodeStatus
+from preform.drape.engine.result import NodeStatus
 from preform.plugins.surfaces.mesh import TriangleMesh, read_obj
 
 HAT = Path(__file__).resolve().parents[2] / "materials" / "tools" / "hat_mould.obj"

@@ -8,11 +8,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.chebyshev import chebyshev_angle
-from preform.drape.generators import PlanPolylines
-from preform.drape.net import DrapeError, drape
-from preform.drape.ply import PlyOutline
-from preform.drape.result import CellStatus, DrapeResult, NodeStatus
+from preform.drape.engine.chebyshev import chebyshev_angle
+from preform.drape.engine.generators import PlanPolylines
+from preform.drape.engine.net import DrapeError, drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import CellStatus, DrapeResult, NodeStatus
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane, Sphere
 
 R = 1.0

@@ -23,11 +23,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from preform.cli import cli
-from preform.drape.chebyshev import chebyshev_angle
-from preform.drape.fields import extremes
-from preform.drape.net import drape
-from preform.drape.part import HeightCut, PlanPolygon, cell_part_share
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.chebyshev import chebyshev_angle
+from preform.drape.engine.fields import extremes
+from preform.drape.engine.net import drape
+from preform.drape.engine.part import HeightCut, PlanPolygon, cell_part_share
+from preform.drape.engine.ply import PlyOutline
 from preform.plugins.surfaces.basic import Hemisphere
 
 R = 0.1

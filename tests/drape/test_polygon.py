@@ -1,4 +1,4 @@
-"""Simple polygons (``preform.drape.polygon``) against shapely's GEOS validity, a second
+"""Simple polygons (``preform.drape.engine.polygon``) against shapely's GEOS validity, a second
 implementation: on an integer grid every crossing and touching is exact, so the two must agree
 on every polygon, degenerate ones included."""
 
@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.polygon import outline_problem, self_crossing, signed_area
+from preform.drape.engine.polygon import outline_problem, self_crossing, signed_area
 
 shapely = pytest.importorskip("shapely")
 

@@ -1,4 +1,4 @@
-"""One thickness per draped cell (``preform.drape.thickness``), the same in every output.
+"""One thickness per draped cell (``preform.drape.properties.thickness``), the same in every output.
 
 Independent truths: the sheared unit cell keeps its thickness before locking (t = t0 exactly,
 closed form), after locking each cell's thickness is ``fabric.sheared_cell(γ).thickness``
@@ -17,10 +17,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from preform import api
-from preform.drape.fields import energy_field
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.thickness import CONSTANT_FIBRE_VOLUME, SHEARED_CELL, thickness_model
+from preform.drape.engine.fields import energy_field
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.properties.thickness import CONSTANT_FIBRE_VOLUME, SHEARED_CELL, thickness_model
 from preform.export.abaqus import abaqus_include_text
 from preform.export.ansys import ansys_macro_text
 from preform.export.fe_mapping import map_to_mesh

@@ -18,11 +18,11 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-import preform.drape.net as net_module
-from preform.drape.compiled_surface import CompiledQueries
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.result import NodeStatus
+import preform.drape.engine.net as net_module
+from preform.drape.engine.compiled_surface import CompiledQueries
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import NodeStatus
 from preform.plugins.surfaces import basic, domes
 
 
@@ -88,7 +88,7 @@ class UnknownKind:
 
 
 def test_an_unknown_kind_is_refused_in_words_not_answered_with_nan() -> None:
-    from preform.drape.compiled_surface import query_tool
+    from preform.drape.engine.compiled_surface import query_tool
 
     with pytest.raises(ValueError, match=r"kind 99.*compiled_queries"):
         query_tool(UnknownKind(), np.zeros((1, 3)))

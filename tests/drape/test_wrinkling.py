@@ -13,11 +13,11 @@ from hypothesis import strategies as st
 from pydantic import BaseModel, ConfigDict
 
 from preform import hookimpl
-from preform.drape.fields import energy_field
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.verdict import law_range
-from preform.drape.wrinkling import (
+from preform.drape.engine.fields import energy_field
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.judging.verdict import law_range
+from preform.drape.judging.wrinkling import (
     PAST_JAMMING,
     WRINKLE_ENERGY_SHARE_MAX,
     WrinkleLimit,
@@ -303,7 +303,7 @@ def test_the_search_is_partial_when_no_angle_can_be_made(jam_library: Any, tmp_p
 def test_connected_patches_match_a_flood_fill(cells: list[list[bool]], seed: int) -> None:
     """The shared patch finder against a flood fill written here (8-neighbours), with random
     centres and weights (some zero: such a patch's centre is the plain mean)."""
-    from preform.drape.wrinkling import connected_patches
+    from preform.drape.judging.wrinkling import connected_patches
 
     mask = np.array(cells, dtype=bool)
     rng = np.random.default_rng(seed)

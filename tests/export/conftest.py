@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.geometry.unit_cell import TowPath, UnitCell
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.abaqus import abaqus_include_text, write_abaqus_include
 from preform.export.fe_mapping import map_to_mesh
 from preform.export.shell_mesh import shell_mesh

@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.ansys import ansys_macro_text, local_angles_deg, write_ansys_macro
 from preform.export.fe_mapping import map_to_mesh
 from preform.export.shell_mesh import shell_mesh

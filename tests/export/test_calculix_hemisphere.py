@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.calculix import calculix_include_text
 from preform.export.fe_mapping import MeshMapping, map_to_mesh
 from preform.export.shell_mesh import read_shell_mesh

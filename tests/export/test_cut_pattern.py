@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.cut_pattern import (
     cut_pattern,
     flat_points,
@@ -314,7 +314,7 @@ def test_marked_cells_outside_the_pattern_region_are_not_drawn(make_net) -> None
 
 
 def _hexagon_on_a_plate(d: float, alpha_deg: float = 60.0):
-    from preform.drape.part import PlanPolygon
+    from preform.drape.engine.part import PlanPolygon
 
     t = np.linspace(0, 2 * np.pi, 7)[:-1] + 0.3
     hexagon = PlanPolygon(np.column_stack([0.05 * np.cos(t), 0.05 * np.sin(t)]))
@@ -361,7 +361,7 @@ def test_a_height_cut_part_in_the_flat_has_the_area_the_energy_counts() -> None:
     """The bare hemisphere's part z ≥ 0, draped past the rim: the flat region of the part has
     the fabric area the energy counts, Σ share·d², to the O(d²) difference between one
     diagonal split (the outline) and the average of both (the share)."""
-    from preform.drape.part import HeightCut
+    from preform.drape.engine.part import HeightCut
 
     cut = HeightCut(0.0)
     ratios = []

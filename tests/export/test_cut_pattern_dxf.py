@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Polygon, box
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.cut_pattern import cut_pattern, write_cut_pattern_dxf, write_cut_pattern_svg
 from preform.plugins.surfaces.basic import Hemisphere, Plane
 

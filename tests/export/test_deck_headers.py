@@ -8,8 +8,8 @@ import re
 import numpy as np
 import pytest
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.abaqus import abaqus_include_text
 from preform.export.ansys import ansys_macro_text
 from preform.export.fe_mapping import map_to_mesh

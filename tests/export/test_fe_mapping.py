@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from preform.drape.fields import energy_field
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.fields import energy_field
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.export.element_table import element_table, write_element_table
 from preform.export.fe_mapping import map_to_mesh
 from preform.export.mapped_vtu import write_mapped_vtu

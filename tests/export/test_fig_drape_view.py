@@ -165,7 +165,7 @@ def test_the_panel_frames_the_net_with_round_ticks_in_mm(make_net, make_energy):
 
 def test_a_net_with_a_fold_draws_its_triangle_with_the_cells(make_net, make_energy):
     net = make_net(10, 10, folded=[(7, 7)])
-    from preform.drape.result import NodeStatus
+    from preform.drape.engine.result import NodeStatus
 
     status = np.asarray(net.status).copy()
     status[8, 8] = NodeStatus.FOLDED

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from preform.drape.result import CellStatus
+from preform.drape.engine.result import CellStatus
 from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
 from preform.export.fig_drape import (
     SHEAR_SCALE_DEG,

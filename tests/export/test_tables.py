@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from preform.drape.result import CellStatus, NodeStatus
+from preform.drape.engine.result import CellStatus, NodeStatus
 from preform.export.tables import CELL_COLUMNS, cells_table, write_json, write_table
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 import meshio
 import numpy as np
 
-from preform.drape.result import CellStatus, NodeStatus
+from preform.drape.engine.result import CellStatus, NodeStatus
 from preform.export.vtu import TOW_KIND_CODES, write_drape_vtu, write_unit_cell_vtu
 
 

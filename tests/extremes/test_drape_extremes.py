@@ -21,7 +21,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from preform.drape import DrapeError, NodeStatus, PlyOutline, drape, energy_field, summary
-from preform.drape.result import CellStatus, DrapeResult
+from preform.drape.engine.result import CellStatus, DrapeResult
 from preform.plugins.surfaces.basic import Hemisphere
 from preform.plugins.surfaces.mesh import TriangleMesh, read_obj
 from preform.shear.laws import PolynomialParams, build_polynomial

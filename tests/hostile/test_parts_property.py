@@ -110,7 +110,7 @@ def _outline_is_region(outline: list[list[float]]) -> bool:
 
 
 def _node_in_part(nodes: np.ndarray, part: dict[str, Any]) -> bool:
-    """Whether a placed node lies in the part (independent of preform.drape.part)."""
+    """Whether a placed node lies in the part (independent of preform.drape.engine.part)."""
     pts = nodes.reshape(-1, 3)[np.all(np.isfinite(nodes.reshape(-1, 3)), axis=1)] * 1e3
     keep = np.ones(len(pts), dtype=bool)
     if "z_min_mm" in part:

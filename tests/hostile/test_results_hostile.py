@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 from pydantic import BaseModel, ConfigDict
 
-from preform.drape.fields import cell_fields
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.result import CellStatus, NodeStatus
-from preform.drape.verdict import (
+from preform.drape.engine.fields import cell_fields
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import CellStatus, NodeStatus
+from preform.drape.judging.verdict import (
     coverage,
     dependency_shadow,
     flat_plan_positions,
@@ -232,7 +232,7 @@ def test_a_finite_law_past_its_break_angle_is_fine(sandbox: PluginSandbox, tmp_p
 
 
 def test_the_vtu_writer_refuses_non_finite_cells(bundled: Any, tmp_path: Path) -> None:
-    from preform.drape.fields import energy_field
+    from preform.drape.engine.fields import energy_field
     from preform.export.vtu import write_drape_vtu
 
     surface = Plane((0.1, 0.1))
@@ -414,7 +414,7 @@ def test_the_dependency_shadow_is_the_rectangle_to_the_start(seed: int) -> None:
 
 def numpy_coverage(result: Any, surface: Any, start_xy: tuple[float, float]) -> dict[str, Any]:
     """The coverage's counts as whole-net numpy masks (the verdict's definitions, module
-    docstring of ``preform.drape.verdict``), a second implementation of the compiled passes."""
+    docstring of ``preform.drape.judging.verdict``), a second implementation of the compiled passes."""
     status, start = result.status, result.start_index
 
     def shadow(mask: np.ndarray) -> np.ndarray:
@@ -752,8 +752,8 @@ class RangedLaw(BrokenLaw):
 
 
 def test_a_law_may_state_its_own_data_range(sandbox: PluginSandbox, tmp_path: Path) -> None:
-    from preform.drape.fields import energy_field
-    from preform.drape.verdict import law_range, shear_limit_warnings
+    from preform.drape.engine.fields import energy_field
+    from preform.drape.judging.verdict import law_range, shear_limit_warnings
     from preform.plugins.surfaces.basic import Hemisphere
 
     law = RangedLaw(math.inf, "nan")

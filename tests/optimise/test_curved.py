@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from preform.drape.generators import geodesic_generators
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
-from preform.drape.result import NodeStatus
+from preform.drape.engine.generators import geodesic_generators
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
+from preform.drape.engine.result import NodeStatus
 from preform.optimise.curved import CurvedGenerators, CurvedResult, optimise_curved_generators
 from preform.optimise.search import DrapeObjective, search_generator_angle
 from preform.plugins.surfaces.basic import Hemisphere, Plane

@@ -11,8 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.optimise.relax import cell_shear_and_gradient, relax_net
 from preform.plugins.surfaces.basic import Hemisphere, Plane
 

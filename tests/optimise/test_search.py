@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.fields import energy_field
-from preform.drape.net import drape
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.fields import energy_field
+from preform.drape.engine.net import drape
+from preform.drape.engine.ply import PlyOutline
 from preform.optimise.search import (
     DrapeObjective,
     SearchError,

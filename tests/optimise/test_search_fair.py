@@ -16,7 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from preform.drape.ply import PlyOutline
+from preform.drape.engine.ply import PlyOutline
 from preform.optimise.search import (
     AngleSearchResult,
     DrapeEvaluation,

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from preform.drape.wrinkling import makeable
+from preform.drape.judging.wrinkling import makeable
 from preform.optimise.search import DrapeEvaluation, SearchError, search_generator_angle
 
 AREA = 1.0  # m², the part's

@@ -17,7 +17,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from preform.api import load_library
-from preform.drape.preform_fields import PreformResponse
+from preform.drape.properties.preform_fields import PreformResponse
 from preform.geometry.sheared_cell import MAX_SHEAR
 from preform.plugins.warpknit.sheared_cell import sheared_stack as warp_knit_stack
 from preform.plugins.woven.compaction import SQUARE_PACKING, BundleCompaction

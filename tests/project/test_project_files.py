@@ -83,7 +83,7 @@ def test_build_artefacts_are_not_tracked():
 
 
 def test_the_cell_status_legend_matches_the_code():
-    from preform.drape.result import CellStatus
+    from preform.drape.engine.result import CellStatus
 
     text = (ROOT / "docs" / "results.md").read_text()
     for status in CellStatus:

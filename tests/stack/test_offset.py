@@ -1,4 +1,4 @@
-"""Offset tools (preform.drape.offset): exact for analytic tools, vertex normals for meshes,
+"""Offset tools (preform.drape.engine.offset): exact for analytic tools, vertex normals for meshes,
 folds reported where a concave radius is smaller than the offset."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.offset import EXACT, VERTEX_NORMALS, OffsetError, offset_tool
+from preform.drape.engine.offset import EXACT, VERTEX_NORMALS, OffsetError, offset_tool
 from preform.plugins.surfaces.basic import Cylinder, Hemisphere, Plane, Sphere
 from preform.plugins.surfaces.domes import Cone
 from preform.plugins.surfaces.mesh import TriangleMesh, tessellate_hemisphere

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
-from preform.drape.surface import Surface
+from preform.drape.engine.surface import Surface
 from preform.plugins.surfaces.domes import Cone, EllipsoidDome, FlangedHemisphere, ParaboloidDome
 
 R, RHO, W = 0.1, 0.02, 0.2  # flanged hemisphere [m]

@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from preform.drape.surface import Surface
+from preform.drape.engine.surface import Surface
 from preform.plugins.surfaces.mesh import (
     TriangleMesh,
     read_obj,

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from preform.drape.result import NodeStatus
+from preform.drape.engine.result import NodeStatus
 from preform.plugins.surfaces.mesh import TriangleMesh
 from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG
 

@@ -24,9 +24,9 @@ from typing import Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from preform.drape.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
-from preform.drape.result import NodeStatus
-from preform.drape.surface import Surface
+from preform.drape.engine.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
+from preform.drape.engine.result import NodeStatus
+from preform.drape.engine.surface import Surface
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -151,7 +151,7 @@ def _surface_queries(
     """Closest points, the normals there and distances for points (m, 3) [m]: compiled for a
     tool with compiled queries, else the tool's own vectorised methods."""
     if isinstance(surface, CompiledQueries):
-        from preform.drape import surface_kernels
+        from preform.drape.kernels import surface_kernels
 
         kind, params = surface.compiled_queries()
         code, values = checked_kind(kind), kernel_parameters(kind, params)
@@ -180,7 +180,7 @@ def _march_geodesics(
     substeps: int,
     tolerance: float,
 ) -> GeneratorNodes:
-    from preform.drape import generator_kernels as kernels
+    from preform.drape.kernels import generator_kernels as kernels
 
     query = _surface_queries(surface)
     m = len(starts)
@@ -303,7 +303,7 @@ def _slide_to_chord(
 ) -> FloatArray:
     """Move surface points ``guess`` to chord ``spacing`` from ``anchor`` keeping their
     direction: alternate rescaling and projection (each round shrinks the error by ~(d/R)²)."""
-    from preform.drape import generator_kernels as kernels
+    from preform.drape.kernels import generator_kernels as kernels
 
     node = np.ascontiguousarray(guess, dtype=float)
     anchor = np.ascontiguousarray(anchor, dtype=float)

@@ -1,11 +1,11 @@
-"""Compiled steps of geodesic generator marching (``preform.drape.generators``).
+"""Compiled steps of geodesic generator marching (``preform.drape.engine.generators``).
 
 The marcher advances every half-line by one sub-step h at a time: straight on, back to the tool
 along the normal at the current point (the discrete geodesic equation), then on to the next
 node once the chord from the last node reaches d. Between the surface queries (the tool's own
 ``closest_point``/``normal``, or the compiled ones of a tool with compiled queries) the
 arithmetic of a sub-step is these kernels, one pass over the running half-lines each; the
-Python loop in ``preform.drape.generators`` only calls them and the queries in turn. Imported
+Python loop in ``preform.drape.engine.generators`` only calls them and the queries in turn. Imported
 when a generator is marched, so numba stays out of start-up.
 """
 
@@ -17,10 +17,10 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.kernel_cache import cache_by_content
+from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: No other preform module is compiled into these kernels; the key they are cached under
-#: is this file's (``preform.drape.kernel_cache``).
+#: is this file's (``preform.drape.kernels.kernel_cache``).
 COMPILED_IN: tuple[str, ...] = ()
 cache_by_content(__name__)
 

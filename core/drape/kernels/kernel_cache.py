@@ -19,7 +19,7 @@ system's temporary directory. Old keys' folders are left for the user to remove 
 
 The key is computed from files alone (no numba import, no kernel module imported), so a
 command can ask whether the kernels are compiled before it loads numba
-(``preform.drape.kernel_compile``).
+(``preform.drape.kernels.kernel_compile``).
 """
 
 from __future__ import annotations

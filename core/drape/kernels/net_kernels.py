@@ -1,16 +1,16 @@
 """Compiled kernels of the pin-jointed net: node placement and the wavefront fill.
 
 Each kernel exists once, here, compiled with numba (``cache=True``: compiled once per
-install). ``preform.drape.net`` imports this module only when it drapes, so commands that do not
+install). ``preform.drape.engine.net`` imports this module only when it drapes, so commands that do not
 drape never import numba.
 
 The per-node steps are plain scalar functions:
 
 - :func:`_sphere_node`: the closed-form node on a sphere (PHYSICS §6); the plate's is
-  ``preform.drape.surface_kernels.plane_node``, and every tool's closest point and normal
-  ``preform.drape.surface_kernels`` (:func:`_query` picks them);
+  ``preform.drape.kernels.surface_kernels.plane_node``, and every tool's closest point and normal
+  ``preform.drape.kernels.surface_kernels`` (:func:`_query` picks them);
 - :func:`_circle_frame` and :func:`_newton_update`: the general placement on the circle where
-  the two distance spheres meet (``preform.drape.net``'s module doc): the start where the
+  the two distance spheres meet (``preform.drape.engine.net``'s module doc): the start where the
   circle crosses the tangent plane at the guess, then one damped Newton step along the circle
   at a time, given the surface's closest point and normal; the angle is carried as the
   offset (r cos φ, r sin φ) and turned without a sine, cosine or arctangent;
@@ -19,7 +19,7 @@ The per-node steps are plain scalar functions:
   the tool's bounds, folded cell, residual) and its write into the net.
 
 Two drivers use them. For a surface with compiled queries
-(:class:`~preform.drape.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
+(:class:`~preform.drape.engine.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
 net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a
 plugin's tool) the front loop stays in Python and calls the vectorised wrappers below once per
 front, with the surface's own vectorised ``closest_point``/``normal`` in between; the per-node
@@ -41,18 +41,18 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape import surface_kernels
-from preform.drape.compiled_surface import PLANE, SPHERE, TRIMMED_SPHERE
-from preform.drape.kernel_cache import cache_by_content
-from preform.drape.result import NodeStatus
+from preform.drape.engine.compiled_surface import PLANE, SPHERE, TRIMMED_SPHERE
+from preform.drape.engine.result import NodeStatus
+from preform.drape.kernels import surface_kernels
+from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernel_cache``).
+#: (``preform.drape.kernels.kernel_cache``).
 COMPILED_IN = (
-    "preform.drape.surface_kernels",
-    "preform.drape.compiled_surface",
-    "preform.drape.result",
+    "preform.drape.kernels.surface_kernels",
+    "preform.drape.engine.compiled_surface",
+    "preform.drape.engine.result",
 )
 cache_by_content(__name__)
 

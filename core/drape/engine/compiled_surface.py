@@ -1,11 +1,11 @@
 """How an analytic tool tells the compiled net kernels what it is, without importing numba.
 
 A surface whose closest point and normal have a closed form or a short root solve can
-describe itself to the compiled wavefront fill (``preform.drape.net_kernels``) as a kind code
+describe itself to the compiled wavefront fill (``preform.drape.kernels.net_kernels``) as a kind code
 and a parameter vector; the fill then runs every front of the net, Newton steps and all, inside
 one compiled loop instead of calling the surface's vectorised methods once per front. Any other
 surface (a mesh, a plugin's own tool) keeps the vectorised path, which uses the same compiled
-per-node steps. The queries themselves are in ``preform.drape.surface_kernels``, once: the
+per-node steps. The queries themselves are in ``preform.drape.kernels.surface_kernels``, once: the
 tools' own ``closest_point`` and ``normal`` answer through :func:`query_tool`.
 
 This module holds only the codes, the protocol and that lazy entry, so the surface plugins can
@@ -76,7 +76,7 @@ def checked_kind(kind: int) -> int:
     if kind not in KINDS:
         raise ValueError(
             f"compiled_queries() gave kind {kind!r}, which is none of the compiled tools' "
-            f"codes {KINDS} (preform.drape.compiled_surface); return one of them, or drop "
+            f"codes {KINDS} (preform.drape.engine.compiled_surface); return one of them, or drop "
             "compiled_queries so the tool is queried through its own methods"
         )
     return int(kind)
@@ -85,7 +85,7 @@ def checked_kind(kind: int) -> int:
 def kernel_parameters(kind: int, params: FloatArray) -> FloatArray:
     """A tool's parameters [m] as the compiled kernels take them: a sphere's as a vector, any
     other tool's as one row (1, 8), padded with zeros. For the vectorised queries
-    (``preform.drape.surface_kernels.query``) the rank picks the code when they are compiled,
+    (``preform.drape.kernels.surface_kernels.query``) the rank picks the code when they are compiled,
     so the other tools share one compilation; the net kernels' fill unpacks either form into
     one tuple of numbers (``net_kernels._param_tuple``) and picks the query by kind code as it
     runs, which measured no slower on the sphere once the per-node steps were inlined."""
@@ -104,7 +104,7 @@ def query_tool(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Closest tool points (..., 3) [m], unit outward normals there (..., 3) and distances
     (...) [m] of points (..., 3) [m], through the tool's compiled queries."""
-    from preform.drape import surface_kernels
+    from preform.drape.kernels import surface_kernels
 
     p = np.ascontiguousarray(points, dtype=float)
     if p.shape[-1:] != (3,):

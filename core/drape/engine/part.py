@@ -21,7 +21,7 @@ images of the square's corners. The part's share of the cell is measured in that
 square: φ is sampled at the four corners and taken as linear on each of the two triangles of
 the square along one diagonal; the share of each triangle where the linear φ ≥ 0 is exact
 (clipping a triangle by a half-plane), and the two ways of splitting the square are averaged so
-a mirrored net has mirrored shares (as the cell areas in ``preform.drape.fields``).
+a mirrored net has mirrored shares (as the cell areas in ``preform.drape.engine.fields``).
 
 Exactness: a flat cell is a parallelogram (pin-jointed: a rhombus), so the map from the
 undeformed square to it is affine; a straight edge makes φ affine on the tool's plane, so φ is
@@ -95,9 +95,9 @@ class PlanPolygon(Part):
             raise ValueError("a plan polygon needs at least 3 (x, y) vertices [m]")
         if not np.all(np.isfinite(v)):
             raise ValueError("plan polygon vertices must be finite")
-        from preform.drape.polygon import outline_problem
+        from preform.drape.engine.polygon import outline_problem
 
-        # the even-odd rule would give a bow tie an inside nobody meant (preform.drape.polygon)
+        # the even-odd rule would give a bow tie an inside nobody meant (preform.drape.engine.polygon)
         problem = outline_problem(v * 1e3, "mm")
         if problem is not None:
             raise ValueError(f"plan polygon: {problem}")
@@ -159,8 +159,8 @@ def cell_part_share(
     (i, j), (i+1, j), (i, j+1), (i+1, j+1) (module docstring: exact for an affine φ). Split
     along (i, j)-(i+1, j+1), then along (i+1, j)-(i, j+1), and averaged; with the corners of a
     triangle sorted a ≤ b ≤ c the zero set cuts off a corner triangle, whose share is a product
-    of two edge fractions (compiled: ``preform.drape.field_kernels``)."""
-    from preform.drape import field_kernels
+    of two edge fractions (compiled: ``preform.drape.kernels.field_kernels``)."""
+    from preform.drape.kernels import field_kernels
 
     corners = np.broadcast_arrays(
         *(np.asarray(f, dtype=float) for f in (phi00, phi10, phi01, phi11))

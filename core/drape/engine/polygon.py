@@ -2,7 +2,7 @@
 its two neighbours at their shared vertex) and of nonzero area.
 
 A ply outline or a part's plan outline that crosses itself (a bow tie) has no inside a user
-meant: the even-odd rule of ``preform.drape.part.PlanPolygon`` would pick one, silently. One
+meant: the even-odd rule of ``preform.drape.engine.part.PlanPolygon`` would pick one, silently. One
 that encloses no area (every vertex on one line) selects nothing. Both are refused when the
 scene is validated, with where the outline crosses itself, rather than draped.
 

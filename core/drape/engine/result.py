@@ -94,7 +94,7 @@ class DrapeResult:
     info: dict[str, object] = field(default_factory=dict)
     #: Share (0..1) of each cell's undeformed area d² inside the part (ni−1, nj−1) [-]: 1 for
     #: a cell wholly inside, between for a cell cut by the part's edge
-    #: (``preform.drape.part``). None: every cell of ``in_part`` counts whole.
+    #: (``preform.drape.engine.part``). None: every cell of ``in_part`` counts whole.
     part_share: FloatArray | None = None
 
     @property
@@ -126,7 +126,7 @@ class DrapeResult:
     def complete(self) -> bool:
         """True when every node inside the ply is placed. A ply larger than the tool is never
         complete in this sense; whether a drape covers what its scene asked (the overhang past
-        the tool's edge allowed) is ``preform.drape.verdict.coverage``, which the case
+        the tool's edge allowed) is ``preform.drape.judging.verdict.coverage``, which the case
         summary's ``complete`` reports."""
         inside = self.status != NodeStatus.OUTSIDE_PLY
         return bool(np.all(self.status[inside] == NodeStatus.PLACED))
@@ -140,7 +140,7 @@ class EnergyField:
     energy_density: FloatArray
     #: Thickness ratio t/t0 per cell (ni−1, nj−1) [-]: 1/cos γ as ``energy_field`` gives it
     #: (the fabric keeps its fibre volume, so the sheared cell's area d² cos γ thickens it);
-    #: the fabric's sheared unit cell where it has one (``preform.drape.thickness``). It is a *thickening*
+    #: the fabric's sheared unit cell where it has one (``preform.drape.properties.thickness``). It is a *thickening*
     #: (≥ 1); the old name ``thinning`` remains as a deprecated alias. No compaction limit is
     #: applied here: exporters report cells above a cap (``preform.export.fe_mapping``).
     thickness_ratio: FloatArray
@@ -148,14 +148,14 @@ class EnergyField:
     past_locking: BoolArray
     past_failure: BoolArray
     #: Cells past the law's jamming angle, and past any limit where the fabric wrinkles
-    #: (jamming, stitch failure, the law's own: ``preform.drape.wrinkling``) (ni−1, nj−1);
+    #: (jamming, stitch failure, the law's own: ``preform.drape.judging.wrinkling``) (ni−1, nj−1);
     #: None when not computed.
     past_jamming: BoolArray | None = field(default=None, kw_only=True)
     wrinkling: BoolArray | None = field(default=None, kw_only=True)
     #: Total strain energy Σ W·A0 over the valid cells in the part [J] (A0 = d², undeformed).
     total_energy: float
     #: The model the thickness ratio comes from, in words, recorded with every export: this
-    #: default, or "sheared unit cell" once ``preform.drape.thickness`` applies the fabric's.
+    #: default, or "sheared unit cell" once ``preform.drape.properties.thickness`` applies the fabric's.
     thickness_model: str = "constant fibre volume fraction (1/cos γ)"
     #: The reference thickness t0 [mm] of the ratio, None when not known.
     thickness_reference_mm: float | None = None

@@ -2,8 +2,8 @@
 
 One pass over the net each, with no whole-net temporaries (a million-cell net's numpy
 temporaries cost more in page faults than in arithmetic). The definitions are those of
-``preform.drape.fields`` (cell shear, centroid, area, fibre directions; node shear) and
-``preform.drape.part`` (a cell's undeformed share inside the part); this module is their only
+``preform.drape.engine.fields`` (cell shear, centroid, area, fibre directions; node shear) and
+``preform.drape.engine.part`` (a cell's undeformed share inside the part); this module is their only
 implementation, imported when a net's fields are computed, so numba stays out of start-up.
 """
 
@@ -15,13 +15,13 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.kernel_cache import cache_by_content
-from preform.drape.result import CellStatus, NodeStatus
+from preform.drape.engine.result import CellStatus, NodeStatus
+from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernel_cache``).
-COMPILED_IN = ("preform.drape.result",)
+#: (``preform.drape.kernels.kernel_cache``).
+COMPILED_IN = ("preform.drape.engine.result",)
 cache_by_content(__name__)
 
 FloatArray = NDArray[np.float64]
@@ -113,7 +113,7 @@ def cell_geometry(
     fibre_v: FloatArray,
 ) -> None:
     """Fill the cell arrays (ni−1, nj−1[, 3]) from node positions (ni, nj, 3) [m] on the
-    ``valid`` cells (``preform.drape.fields.cell_fields`` for the definitions); other cells get
+    ``valid`` cells (``preform.drape.engine.fields.cell_fields`` for the definitions); other cells get
     0 (NaN for the centroid)."""
     ci, cj = valid.shape
     for i in range(ci):
@@ -206,7 +206,7 @@ def _triangle_share(f0: float, f1: float, f2: float) -> float:
 def _square_share(f00: float, f10: float, f01: float, f11: float) -> float:
     """Share (0..1) of a cell's undeformed square inside the part from φ at its corners (i, j),
     (i+1, j), (i, j+1), (i+1, j+1): the mean of the two ways of splitting it into triangles,
-    each exact for an affine φ (``preform.drape.part``)."""
+    each exact for an affine φ (``preform.drape.engine.part``)."""
     split_a = 0.5 * (_triangle_share(f00, f10, f11) + _triangle_share(f00, f11, f01))
     split_b = 0.5 * (_triangle_share(f00, f10, f01) + _triangle_share(f10, f11, f01))
     return 0.5 * (split_a + split_b)
@@ -230,7 +230,7 @@ def grid_part_share(phi: FloatArray, valid: BoolArray, out: FloatArray) -> None:
 @_jit
 def cell_status_codes(status: NDArray[np.int8], out: NDArray[np.int8]) -> None:
     """CellStatus (ni−1, nj−1) into ``out`` from the NodeStatus of the corners (ni, nj), with
-    the precedence of ``preform.drape.fields.cell_status``: OUTSIDE_PLY, FOLDED, INCOMPLETE,
+    the precedence of ``preform.drape.engine.fields.cell_status``: OUTSIDE_PLY, FOLDED, INCOMPLETE,
     VALID."""
     for i in range(status.shape[0] - 1):
         for j in range(status.shape[1] - 1):
@@ -264,7 +264,7 @@ def corner_part_share(
 def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> None:
     """Signed shear γ [rad] at every node (ni, nj), NaN where it cannot be formed: the mean of
     the up to four corner angles ω between the ±u and ±v edges (each taken in its + sense)
-    minus 90° (``preform.drape.fields.node_shear``), written to ``out`` (ni, nj)."""
+    minus 90° (``preform.drape.engine.fields.node_shear``), written to ``out`` (ni, nj)."""
     ni, nj = status.shape
     u = np.empty((2, 3))
     v = np.empty((2, 3))
@@ -318,7 +318,7 @@ def node_shear(nodes: FloatArray, status: NDArray[np.int8], out: FloatArray) -> 
 def shear_extremes(shear: FloatArray, counted: BoolArray, gamma: FloatArray, in_part: BoolArray):
     """(largest |γ| over the ``counted`` cells' shear, largest |γ| over the node shear
     ``gamma`` at nodes ``in_part`` where it is finite) [rad], 0 where there is none and NaN
-    when a counted cell's shear is NaN (as numpy's max): ``preform.drape.fields.extremes``
+    when a counted cell's shear is NaN (as numpy's max): ``preform.drape.engine.fields.extremes``
     without the boolean-indexed copies."""
     cells = 0.0
     for i in range(shear.shape[0]):
@@ -371,7 +371,7 @@ def energy_cells(
     past_failure: BoolArray,
 ) -> float:
     """Fill the energy field's cell arrays and return Σ W·s over the counted cells [J/m²·cell]
-    (``preform.drape.fields.energy_field``): W from ``law_energy`` (the law at the counted
+    (``preform.drape.engine.fields.energy_field``): W from ``law_energy`` (the law at the counted
     cells' shear, in row order), s from ``share`` (the part weight), t/t0 = 1/cos γ, and the
     cells past the locking (|γ| > locking) and failure angles (γ > failure, or
     γ < −failure_negative for a stitch that also breaks the other way) [rad] (inf for a law
@@ -418,7 +418,7 @@ def cell_sums(
     past_locking: BoolArray,
     has_energy: bool,
 ):
-    """The cell sums of ``preform.drape.fields.summary`` in one pass: (valid cells, counted
+    """The cell sums of ``preform.drape.engine.fields.summary`` in one pass: (valid cells, counted
     cells (valid and in the part), counted cells cut by the part's edge (weight < 1), Σ w,
     Σ area·w [m²], Σ |γ|·w [rad], Σ w over cells past locking), w the part weight (``share``
     on counted cells when ``has_share``, else 1 there; 0 elsewhere)."""

@@ -1,8 +1,8 @@
 """Compiled closest-point and normal queries of the analytic tools, one per kind code.
 
-The kind codes and parameter vectors are defined in :mod:`preform.drape.compiled_surface`
+The kind codes and parameter vectors are defined in :mod:`preform.drape.engine.compiled_surface`
 (which imports no numba); each tool's ``compiled_queries()`` says which it is. :func:`query`
-answers one point for any kind, inside the compiled net kernels (``preform.drape.net_kernels``)
+answers one point for any kind, inside the compiled net kernels (``preform.drape.kernels.net_kernels``)
 and, through :func:`query_points`, for the tools' own vectorised ``closest_point`` and
 ``normal``: each query exists once, here. This module is imported only when a tool is queried
 or a net draped, so commands that do not drape never import numba.
@@ -20,7 +20,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.compiled_surface import (
+from preform.drape.engine.compiled_surface import (
     CONE,
     CYLINDER,
     ELLIPSOID_DOME,
@@ -29,13 +29,13 @@ from preform.drape.compiled_surface import (
     PLANE,
     TRIMMED_SPHERE,
 )
-from preform.drape.kernel_cache import cache_by_content
-from preform.drape.result import NodeStatus
+from preform.drape.engine.result import NodeStatus
+from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernel_cache``).
-COMPILED_IN = ("preform.drape.compiled_surface", "preform.drape.result")
+#: (``preform.drape.kernels.kernel_cache``).
+COMPILED_IN = ("preform.drape.engine.compiled_surface", "preform.drape.engine.result")
 cache_by_content(__name__)
 
 FloatArray = NDArray[np.float64]
@@ -451,7 +451,7 @@ def _other_kinds(kind: int, params: FloatArray, x: float, y: float, z: float):
         return _ellipsoid_dome(params, x, y, z)
     if kind == PARABOLOID_DOME:
         return _paraboloid_dome(params, x, y, z)
-    # not a kind of preform.drape.compiled_surface (checked_kind refuses those before)
+    # not a kind of preform.drape.engine.compiled_surface (checked_kind refuses those before)
     return np.nan, np.nan, np.nan, np.nan, np.nan, np.nan, np.nan
 
 

@@ -8,7 +8,7 @@ result that is complete and finite. This module turns a :class:`DrapeResult` and
 What the scene asks of a drape [C]
 ----------------------------------
 The scene asks for *the ply, draped wherever it lies over the tool* (the part, which the
-energies and extremes are of, clips the draped net: ``preform.drape.part``). A ply larger than the tool hangs over its edge, and a kinematic net cannot build a node
+energies and extremes are of, clips the draped net: ``preform.drape.engine.part``). A ply larger than the tool hangs over its edge, and a kinematic net cannot build a node
 whose construction passes through a node off the tool: those nodes are the ply's overhang, not
 missing coverage. Node (i, j) is built from the generators through its whole *dependency
 rectangle*, the nodes between it and the start node (i0, j0) in both indices, so a node missing
@@ -59,8 +59,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import DrapeResult, EnergyField, NodeStatus
-from preform.drape.wrinkling import (
+from preform.drape.engine.result import DrapeResult, EnergyField, NodeStatus
+from preform.drape.judging.wrinkling import (
     PAST_JAMMING,
     PAST_STITCH_FAILURE,
     WrinkleLimit,
@@ -80,7 +80,7 @@ def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
     Per quadrant around the start node, a running OR along both indices away from the start:
     node (a, b) of a quadrant depends on exactly the nodes (a', b') with a' ≤ a, b' ≤ b.
     """
-    from preform.drape import verdict_kernels
+    from preform.drape.kernels import verdict_kernels
 
     out = np.empty(np.shape(mask), dtype=bool)
     verdict_kernels.dependency_shadow(
@@ -162,25 +162,13 @@ def generator_stops_on_tool(result: DrapeResult, surface: Any) -> BoolArray:
 def flat_plan_positions(result: DrapeResult, start_xy_m: tuple[float, float]) -> FloatArray:
     """Undeformed plan position (ni, nj, 2) [m] of every node: the flat ply laid on the plan
     at the start point, +u along the orientation, +v at the generator angle from it."""
-    ni, nj = result.shape
-    i0, j0 = result.start_index
-    d = result.node_spacing
-    theta, alpha = result.orientation, result.generator_angle
-    e_u = np.array([math.cos(theta), math.sin(theta)])
-    e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
-    xi = (np.arange(ni) - i0) * d
-    eta = (np.arange(nj) - j0) * d
-    return (
-        np.asarray(start_xy_m, dtype=float)
-        + xi[:, None, None] * e_u[None, None, :]
-        + eta[None, :, None] * e_v[None, None, :]
-    )
+    return plan_positions_at(result, start_xy_m, *np.indices(result.shape))
 
 
 def plan_positions_at(
     result: DrapeResult, start_xy_m: tuple[float, float], ii: NDArray[np.intp], jj: NDArray[np.intp]
 ) -> FloatArray:
-    """:func:`flat_plan_positions` (m, 2) [m] of the nodes (ii, jj) only (the same numbers)."""
+    """:func:`flat_plan_positions` (..., 2) [m] of the nodes (ii, jj) only."""
     i0, j0 = result.start_index
     d = result.node_spacing
     theta, alpha = result.orientation, result.generator_angle
@@ -188,7 +176,7 @@ def plan_positions_at(
     e_v = np.array([math.cos(theta + alpha), math.sin(theta + alpha)])
     xi = (np.asarray(ii) - i0) * d
     eta = (np.asarray(jj) - j0) * d
-    return np.asarray(start_xy_m, dtype=float) + xi[:, None] * e_u + eta[:, None] * e_v
+    return np.asarray(start_xy_m, dtype=float) + xi[..., None] * e_u + eta[..., None] * e_v
 
 
 @dataclass(frozen=True)
@@ -352,9 +340,9 @@ def coverage(result: DrapeResult, surface: Any, start_xy_m: tuple[float, float])
         ii, jj = np.nonzero(lost)
         _, mask = surface.point_at_plan(plan_positions_at(result, start_xy_m, ii, jj))
         over[ii, jj] = np.asarray(mask, dtype=bool)
-    from preform.drape import verdict_kernels
+    from preform.drape.kernels import verdict_kernels
 
-    # The rest in two compiled passes (``preform.drape.verdict_kernels``): each node's part
+    # The rest in two compiled passes (``preform.drape.kernels.verdict_kernels``): each node's part
     # in the counts, then each cell's from its corners. The failed nodes themselves are
     # counted wherever they lie (they say why the net stopped); the nodes behind them only
     # where they lie over the tool (they are the coverage lost).
@@ -506,7 +494,7 @@ class LawRange:
     data_negative: float | None = None
     beyond: str | None = None
     #: Further limits past which the law's fabric wrinkles, as the law states them
-    #: (``wrinkle_limits``, ``preform.drape.wrinkling``).
+    #: (``wrinkle_limits``, ``preform.drape.judging.wrinkling``).
     further: tuple[WrinkleLimit, ...] = ()
 
 
@@ -571,13 +559,13 @@ def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
 
 
 def _further_limits(law: ShearLaw) -> tuple[WrinkleLimit, ...]:
-    """The law's own ``wrinkle_limits`` (``preform.drape.wrinkling``), checked."""
+    """The law's own ``wrinkle_limits`` (``preform.drape.judging.wrinkling``), checked."""
     stated = tuple(getattr(law, "wrinkle_limits", None) or ())
     for limit in stated:
         if not isinstance(limit, WrinkleLimit):
             raise TypeError(
                 f"{type(law).__name__}.wrinkle_limits must hold "
-                f"preform.drape.wrinkling.WrinkleLimit, not {type(limit).__name__}"
+                f"preform.drape.judging.wrinkling.WrinkleLimit, not {type(limit).__name__}"
             )
     return stated
 
@@ -634,7 +622,7 @@ def shear_limit_notes(
                     {"cause": "past locking", "area_share": _fraction(past, area, counted)},
                 )
             )
-    # Jamming and stitch failure are where the fabric would wrinkle (preform.drape.wrinkling):
+    # Jamming and stitch failure are where the fabric would wrinkle (preform.drape.judging.wrinkling):
     # said with their energy share, where and how far; the same numbers as the wrinkling block.
     wrinkles = wrinkling(result, energy.energy_density, wrinkle_limits(limits))
     for zone in wrinkles.zones:

@@ -13,7 +13,7 @@ Causes [D]
 ----------
 ``past_jamming`` (|γ| > the law's ``packing_angle``) and ``past_stitch_failure``
 (γ > ``failure_angle``, or γ < −``failure_angle_negative``), read from the law through
-:func:`preform.drape.verdict.law_range`. A law may expose further limits of its own as a
+:func:`preform.drape.judging.verdict.law_range`. A law may expose further limits of its own as a
 ``wrinkle_limits`` attribute: a sequence of :class:`WrinkleLimit` (a cause name, the positive
 and negative limit [rad], what happens past it in words); each is reported like the built-in
 two and counts in the same rule. Locking (the onset of tow contact) is no cause: a fabric
@@ -40,8 +40,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 if TYPE_CHECKING:
-    from preform.drape.result import DrapeResult
-    from preform.drape.verdict import LawRange
+    from preform.drape.engine.result import DrapeResult
+    from preform.drape.judging.verdict import LawRange
 
 BoolArray = NDArray[np.bool_]
 FloatArray = NDArray[np.float64]
@@ -326,7 +326,7 @@ def connected_patches(
     """Connected patches of ``cells`` (ni−1, nj−1; edge or corner neighbours): each patch's
     ``weights``-averaged centre (the mean where its weights sum to 0) and total weight, largest
     first. ``centres`` (ni−1, nj−1, 2) and ``weights`` (ni−1, nj−1) are per cell, in any units.
-    Shared by the fold zones (``preform.drape.verdict``) and the wrinkle patches."""
+    Shared by the fold zones (``preform.drape.judging.verdict``) and the wrinkle patches."""
     if not cells.any():
         return []
     from scipy import ndimage

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.result import DrapeResult
+from preform.drape.engine.result import DrapeResult
 from preform.geometry.permeability import Arrangement, fabric_permeability
 from preform.geometry.sheared_cell import MAX_SHEAR, thickness_per_angle
 

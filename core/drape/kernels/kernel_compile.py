@@ -1,7 +1,7 @@
 """Compile the drape kernels once per install, in one process, saying so.
 
 The kernels (``*_kernels.py``) are compiled by numba at their first call and cached by content
-(``preform.drape.kernel_cache``). Left to themselves, the first run after an install compiled
+(``preform.drape.kernels.kernel_cache``). Left to themselves, the first run after an install compiled
 them silently in every worker at once: both workers of a two-core run spent the same ~20 s of
 processor time compiling the same kernels. :func:`ensure_compiled`, which ``preform pipeline
 run`` calls before its cases start, does it once instead: when the kernels of these sources are
@@ -30,15 +30,15 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-from preform.drape.kernel_cache import cache_root, source_key
+from preform.drape.kernels.kernel_cache import cache_root, source_key
 
 #: The kernel modules the default study runs (not the generator marcher's: its geodesics on
 #: the hemisphere are closed forms): their keys together name the compiled state.
 WARMED = (
-    "preform.drape.net_kernels",
-    "preform.drape.surface_kernels",
-    "preform.drape.field_kernels",
-    "preform.drape.verdict_kernels",
+    "preform.drape.kernels.net_kernels",
+    "preform.drape.kernels.surface_kernels",
+    "preform.drape.kernels.field_kernels",
+    "preform.drape.kernels.verdict_kernels",
     "preform.shear.surrogate_kernels",
 )
 
@@ -55,7 +55,7 @@ _WARM_OUTPUTS = ["energy_vs_angle", "optimum", "drape", "cells_csv"]
 
 #: The helper process (:func:`_start_helper`): this module (by name: as ``python -m`` it is
 #: ``__main__``) with this flag and the pid of the process it helps.
-HELPER_MODULE = "preform.drape.kernel_compile"
+HELPER_MODULE = "preform.drape.kernels.kernel_compile"
 HELPER_FLAG = "--helper"
 
 
@@ -186,7 +186,7 @@ def _help() -> None:
     so it compiles no fill and goes on at once to the kernels after the drape."""
     from numba.core.registry import CPUDispatcher
 
-    from preform.drape import net_kernels
+    from preform.drape.kernels import net_kernels
 
     for name, value in list(vars(net_kernels).items()):
         if isinstance(value, CPUDispatcher):
@@ -214,7 +214,7 @@ def _small_case() -> None:
 
 
 def main() -> None:
-    """``python -m preform.drape.kernel_compile``: compile now (e.g. after installing)."""
+    """``python -m preform.drape.kernels.kernel_compile``: compile now (e.g. after installing)."""
     if sys.argv[1:2] == [HELPER_FLAG]:
         from preform.pipeline.engines import watch_parent
 

@@ -5,7 +5,7 @@ thickness is written (the case summary's ``thickness_model``, the FE exports' co
 
 - ``"sheared unit cell"`` when the fabric has one (``FabricBase.sheared_cell``: woven and
   warp-knit architectures): t/t0 = t(|γ|)/t(0) of the cell, read from the table the preform's
-  properties use (``preform.drape.preform_fields.PreformResponse``, not a second tabulation).
+  properties use (``preform.drape.properties.preform_fields.PreformResponse``, not a second tabulation).
   Before the cell locks the thickness is t0 exactly (the fibre volume fraction grows as
   1/cos γ instead); after it the tows compact to their jamming fraction, then the cell
   thickens.
@@ -36,8 +36,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.preform_fields import PreformResponse
-from preform.drape.result import DrapeResult, EnergyField
+from preform.drape.engine.result import DrapeResult, EnergyField
+from preform.drape.properties.preform_fields import PreformResponse
 
 FloatArray = NDArray[np.float64]
 

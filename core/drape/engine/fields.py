@@ -3,7 +3,7 @@
 Cell (i, j) has corners (i, j), (i+1, j), (i+1, j+1), (i, j+1). Its two u edges run
 (i, j)→(i+1, j) and (i, j+1)→(i+1, j+1), its two v edges (i, j)→(i, j+1) and
 (i+1, j)→(i+1, j+1). At each corner one u edge and one v edge meet; ω there is the angle
-between them taken in their +u and +v senses (``preform.drape.result``). The cell's shear is
+between them taken in their +u and +v senses (``preform.drape.engine.result``). The cell's shear is
 
     γ = mean over the four corners of ω − 90°,
 
@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.part import Part
-from preform.drape.result import CellStatus, DrapeResult, EnergyField, NodeStatus
+from preform.drape.engine.part import Part
+from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.shear.law import ShearLaw
 
 FloatArray = NDArray[np.float64]
@@ -38,7 +38,7 @@ def cell_status(status: NDArray[np.int8]) -> NDArray[np.int8]:
     turning the net over; each cell is completed by exactly one node, its corner farthest from
     the start, so this is the cell that folds), INCOMPLETE (another corner missing), VALID.
     """
-    from preform.drape import field_kernels
+    from preform.drape.kernels import field_kernels
 
     status = np.ascontiguousarray(status, dtype=np.int8)
     out = np.empty((max(status.shape[0] - 1, 0), max(status.shape[1] - 1, 0)), dtype=np.int8)
@@ -55,11 +55,11 @@ def cell_fields(
     """The cell arrays of a :class:`DrapeResult` from node positions (ni, nj, 3) [m] and
     statuses (ni, nj): ``cell_status``, ``shear`` [rad], ``centroid`` [m], ``area`` [m²],
     ``fibre_u``, ``fibre_v`` (unit), ``in_part`` and ``part_share``. ``trim`` is a
-    :class:`~preform.drape.part.Part` (cells cut by its edge count by their undeformed area
+    :class:`~preform.drape.engine.part.Part` (cells cut by its edge count by their undeformed area
     inside it: ``part_share``; ``in_part`` is every valid cell with some area inside) or a
     predicate on centroids (a cell is in or out whole). Without it every valid cell counts
     whole. Zero (NaN for centroids) where not VALID."""
-    from preform.drape import field_kernels
+    from preform.drape.kernels import field_kernels
 
     c_status = cell_status(status)
     valid = c_status == CellStatus.VALID
@@ -74,7 +74,7 @@ def cell_fields(
     )
     in_part = valid.copy()
     if isinstance(trim, Part):
-        # Cut cells count by their undeformed area inside the part (preform.drape.part).
+        # Cut cells count by their undeformed area inside the part (preform.drape.engine.part).
         with np.errstate(invalid="ignore"):
             phi = np.asarray(trim.level(nodes), dtype=float)
         share = np.empty(shape)
@@ -106,9 +106,9 @@ def energy_field(
     """Shear strain energy of a draped net under ``law``.
 
     W(γ) [J/m²] per cell from the signed shear (so an asymmetric law takes the branch the
-    convention in ``preform.drape.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
+    convention in ``preform.drape.engine.result`` says), thickness ratio t/t0 = 1/cos γ, cells past the
     locking angle (|γ| > locking), past stitch failure (γ > failure, the parallel sense), past
-    jamming and past any wrinkle limit (``preform.drape.wrinkling``),
+    jamming and past any wrinkle limit (``preform.drape.judging.wrinkling``),
     and the total Σ W·s·d² [J] over the counted cells (d² the undeformed cell, s its share
     inside the part, ``result.part_weight``: 1 for a cell wholly inside).
 
@@ -127,7 +127,7 @@ def energy_field(
             if keep.shape != counted.shape:
                 raise ValueError(f"region mask shape {keep.shape} != cell shape {counted.shape}")
         counted = counted & keep
-    from preform.drape import field_kernels
+    from preform.drape.kernels import field_kernels
 
     counted = np.ascontiguousarray(counted)
     shear = np.ascontiguousarray(result.shear, dtype=float)
@@ -161,10 +161,10 @@ def energy_field(
         past_failure,
     )
     total = float(weighted * result.node_spacing**2)
-    # Where the fabric would wrinkle instead (preform.drape.wrinkling): the same limits the
+    # Where the fabric would wrinkle instead (preform.drape.judging.wrinkling): the same limits the
     # verdicts read, so the cell flags and the wrinkling block count the same cells.
-    from preform.drape.verdict import law_range
-    from preform.drape.wrinkling import PAST_JAMMING, wrinkle_limits
+    from preform.drape.judging.verdict import law_range
+    from preform.drape.judging.wrinkling import PAST_JAMMING, wrinkle_limits
 
     wrinkling = np.zeros(counted.shape, dtype=bool)
     past_jamming = np.zeros(counted.shape, dtype=bool)
@@ -192,7 +192,7 @@ def node_shear(result: DrapeResult) -> FloatArray:
     angles ω minus 90°, as for a cell (so it is centred on the node: second-order accurate
     where all four exist). Unlike the cell value, which is the shear at a cell centre, the
     node value reaches the part's edge itself: nodes are where the extremes are read."""
-    from preform.drape import field_kernels
+    from preform.drape.kernels import field_kernels
 
     nodes = np.ascontiguousarray(result.nodes, dtype=float)
     status = np.ascontiguousarray(result.status, dtype=np.int8)
@@ -209,7 +209,7 @@ def extremes(result: DrapeResult, part: Part | None = None) -> dict[str, float]:
     - ``max_abs_shear_nodes_deg``: over the placed nodes inside ``part`` (every placed node
       when None), the shear at the node (:func:`node_shear`), which reaches the part's edge.
     """
-    from preform.drape import field_kernels
+    from preform.drape.kernels import field_kernels
 
     counted = np.ascontiguousarray(result.valid & result.in_part)
     shape = np.shape(result.status)
@@ -239,7 +239,7 @@ def summary(
     ``max_abs_shear_deg`` is the cell value ``max_abs_shear_cells_deg`` (kept under its old
     name); ``max_abs_shear_nodes_deg`` is read at the nodes inside ``part``
     (:func:`extremes`). ``mean_abs_shear_deg`` weighs each cell by its area in the part."""
-    from preform.drape import field_kernels
+    from preform.drape.kernels import field_kernels
 
     node_counts = field_kernels.code_counts(
         np.ascontiguousarray(result.status, dtype=np.int8), len(NodeStatus)

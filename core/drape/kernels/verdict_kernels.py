@@ -1,8 +1,8 @@
-"""Compiled passes of the drape verdict (``preform.drape.verdict``): the dependency shadows and
+"""Compiled passes of the drape verdict (``preform.drape.judging.verdict``): the dependency shadows and
 the coverage's node and cell counts.
 
 Each pass replaces a chain of whole-net numpy masks (a million-node net's masks cost a pass
-over memory each). The definitions are those of ``preform.drape.verdict``; this module is
+over memory each). The definitions are those of ``preform.drape.judging.verdict``; this module is
 their only implementation, imported when a drape is judged, so numba stays out of start-up.
 """
 
@@ -12,13 +12,13 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.kernel_cache import cache_by_content
-from preform.drape.result import CellStatus, NodeStatus
+from preform.drape.engine.result import CellStatus, NodeStatus
+from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernel_cache``).
-COMPILED_IN = ("preform.drape.result",)
+#: (``preform.drape.kernels.kernel_cache``).
+COMPILED_IN = ("preform.drape.engine.result",)
 cache_by_content(__name__)
 
 BoolArray = NDArray[np.bool_]
@@ -41,7 +41,7 @@ _PAST_EDGE, _MISSING, _FOLD_NODE = 32, 64, 128
 
 @_jit
 def dependency_shadow(mask: BoolArray, i0: int, j0: int, out: BoolArray) -> None:
-    """``preform.drape.verdict.dependency_shadow`` into ``out`` (ni, nj): True where the
+    """``preform.drape.judging.verdict.dependency_shadow`` into ``out`` (ni, nj): True where the
     rectangle between a node and the start node (i0, j0) holds a True node of ``mask``.
 
     Per quadrant, outward from the start, S(i, j) = mask(i, j) or S(i ∓ 1, j) or S(i, j ∓ 1)

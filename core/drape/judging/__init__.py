@@ -1,0 +1,1 @@
+"""What a finished drape is worth: coverage, the law's limits, wrinkling (``docs/results.md``)."""

@@ -1,0 +1,1 @@
+"""The preform's properties read from a drape: thickness, fibre volume fraction, permeability."""
