@@ -1,0 +1,112 @@
+"""Each output of a case against the drape and search it reports (issue 30), in one process.
+
+The case: the default study's scene (``hemisphere-min-energy``: R = 100 mm, 360 mm ply, the
+least-energy search over generator angles, ``--fidelity``) and ``--fabric``. Its physics (the
+surface, shear law, the search's drapes, the drape at the optimum and its thickness: what
+``preform.least_energy`` runs without files) is timed as one call; then each output's own
+pipeline step (``cells_csv``, ``vtu``, ``fibre_pattern_png``) is run on that case's products,
+as the runner runs it, into a scratch folder. Everything runs once untimed first (imports,
+compilation, font caches, the first figure); then the physics and each output take turns
+``--repeat`` times: CPU time of this process (pinned to one core), best and median, and each
+output's best over the physics' best.
+
+    python benchmarks/bench_outputs.py [--fabric E-BXhd-936] [--fidelity standard] [--repeat 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from preform import api
+from preform.pipeline.planner import plan
+from preform.step import CaseContext
+
+if hasattr(os, "sched_setaffinity"):
+    os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+
+PHYSICS = ["energy_vs_angle", "optimum", "drape"]
+OUTPUTS = ["cells_csv", "vtu", "fibre_pattern_png"]
+
+
+def cpu(call: Callable[[], Any]) -> float:
+    """CPU time of ``call`` [s] (this process's own: other work on the machine does not
+    count, nor a write's wait for the disk)."""
+    start = time.process_time()
+    call()
+    return time.process_time() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--fabric", default="E-BXhd-936")
+    parser.add_argument("--fidelity", default="standard")
+    parser.add_argument("--repeat", type=int, default=7)
+    args = parser.parse_args()
+    library = api.load_library()
+
+    def physics() -> Any:
+        return api.least_energy(
+            args.fabric, library=library, fidelity=args.fidelity, outputs=PHYSICS
+        )
+
+    full = api.least_energy(
+        args.fabric, library=library, fidelity=args.fidelity, outputs=PHYSICS + OUTPUTS
+    )
+    full.raise_for_status()
+    steps = {s.name: s for s in plan(full.scene, api._host().registry) if s.name in OUTPUTS}
+    result = full.products["drape"].result
+    with tempfile.TemporaryDirectory(prefix="preform-outputs-") as scratch:
+
+        def output(name: str) -> Callable[[], Any]:
+            def write() -> Any:
+                ctx = CaseContext(
+                    fabric=full.fabric,
+                    scene=full.scene,
+                    registry=api._host().registry,
+                    case_dir=Path(scratch),
+                    products=dict(full.products),
+                    summary=dict(full.summary),
+                )
+                return steps[name].run(ctx)
+
+            return write
+
+        calls = {"drape + search": physics, **{name: output(name) for name in OUTPUTS}}
+        for call in calls.values():  # untimed: imports, compilation, caches, first figure
+            call()
+        times: dict[str, list[float]] = {name: [] for name in calls}
+        for _ in range(args.repeat):
+            for name, call in calls.items():
+                times[name].append(cpu(call))
+        sizes = {n: (Path(scratch) / f).stat().st_size for n, f in _files().items()}
+    base = min(times["drape + search"])
+    drapes = full.summary.get("search_drapes", "?")
+    print(
+        f"default study case: {args.fabric}, fidelity {args.fidelity}, net "
+        f"{result.shape[0]} x {result.shape[1]}, {drapes} drapes in the search; CPU, one "
+        f"core, best of {args.repeat}"
+    )
+    print(f"{'':<18}{'best ms':>9}{'median ms':>11}{'x physics':>11}{'file kB':>9}")
+    for name, values in times.items():
+        size = f"{sizes[name] / 1e3:>9.0f}" if name in sizes else f"{'':>9}"
+        print(
+            f"{name:<18}{1e3 * min(values):>9.1f}{1e3 * statistics.median(values):>11.1f}"
+            f"{min(values) / base:>11.2f}{size}"
+        )
+    every = sum(min(times[name]) for name in OUTPUTS)
+    print(f"{'all three outputs':<18}{1e3 * every:>9.1f}{'':>11}{every / base:>11.2f}")
+
+
+def _files() -> dict[str, str]:
+    return {"cells_csv": "cells.csv", "vtu": "drape.vtu", "fibre_pattern_png": "fibre_pattern.png"}
+
+
+if __name__ == "__main__":
+    main()
