@@ -8,7 +8,10 @@ pipeline step (``cells_csv``, ``vtu``, ``fibre_pattern_png``) is run on that cas
 as the runner runs it, into a scratch folder. Everything runs once untimed first (imports,
 compilation, font caches, the first figure); then the physics and each output take turns
 ``--repeat`` times: CPU time of this process (pinned to one core), best and median, and each
-output's best over the physics' best.
+output's best over the physics' best. Two rows time the code before issue 30 on the same
+case, for the ratio of the change: ``cells_csv`` with every field formatted on its own (the
+per-value ``format_column`` it replaced, frozen here) and ``drape.vtu`` written by meshio (zlib
+level 6; the same grid, read back from today's file, so building the arrays is not counted).
 
     python benchmarks/bench_outputs.py [--fabric E-BXhd-936] [--fidelity standard] [--repeat 7]
 """
@@ -16,6 +19,7 @@ output's best over the physics' best.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import tempfile
@@ -24,7 +28,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import meshio
+import numpy as np
+
 from preform import api
+from preform.export import csv_columns
 from preform.pipeline.planner import plan
 from preform.step import CaseContext
 
@@ -33,6 +41,35 @@ if hasattr(os, "sched_setaffinity"):
 
 PHYSICS = ["energy_vs_angle", "optimum", "drape"]
 OUTPUTS = ["cells_csv", "vtu", "fibre_pattern_png"]
+
+
+def format_column_per_value(values: Any) -> list[str]:
+    """The fields of a column as ``csv_columns.format_column`` wrote them before issue 30, each
+    value formatted on its own (frozen copy, for the "before" row)."""
+    if isinstance(values, np.ma.MaskedArray):
+        missing = np.ma.getmaskarray(values).ravel()
+        fields = format_column_per_value(np.ma.getdata(values).ravel())
+        for k in np.flatnonzero(missing).tolist():
+            fields[k] = ""
+        return fields
+    if isinstance(values, np.ndarray):
+        flat = values.ravel()
+        if flat.dtype.kind == "f":
+            present = ~np.isnan(flat)
+            text = np.full(flat.size, "", dtype=object)
+            text[present] = list(map(repr, flat[present].astype(np.float64).tolist()))
+            return list(text.tolist())
+        if flat.dtype.kind in "iub":
+            return list(map(str, flat.tolist()))
+        values = flat.tolist()
+    return [
+        ""
+        if v is None or (isinstance(v, float) and math.isnan(v))
+        else repr(v)
+        if isinstance(v, float)
+        else str(v)
+        for v in values
+    ]
 
 
 def cpu(call: Callable[[], Any]) -> float:
@@ -78,7 +115,26 @@ def main() -> None:
 
             return write
 
-        calls = {"drape + search": physics, **{name: output(name) for name in OUTPUTS}}
+        def before_csv() -> Any:
+            kept = csv_columns.format_column
+            csv_columns.format_column = format_column_per_value
+            try:
+                return output("cells_csv")()
+            finally:
+                csv_columns.format_column = kept
+
+        output("vtu")()
+        grid = meshio.read(Path(scratch) / "drape.vtu")
+
+        def before_vtu() -> Any:
+            meshio.write(Path(scratch) / "meshio.vtu", grid, file_format="vtu")
+
+        calls = {
+            "drape + search": physics,
+            **{name: output(name) for name in OUTPUTS},
+            "cells_csv before": before_csv,
+            "vtu before": before_vtu,
+        }
         for call in calls.values():  # untimed: imports, compilation, caches, first figure
             call()
         times: dict[str, list[float]] = {name: [] for name in calls}
@@ -86,6 +142,10 @@ def main() -> None:
             for name, call in calls.items():
                 times[name].append(cpu(call))
         sizes = {n: (Path(scratch) / f).stat().st_size for n, f in _files().items()}
+        before_csv()
+        text_before = (Path(scratch) / "cells.csv").read_bytes()
+        output("cells_csv")()
+        same = (Path(scratch) / "cells.csv").read_bytes() == text_before
     base = min(times["drape + search"])
     drapes = full.summary.get("search_drapes", "?")
     print(
@@ -100,12 +160,18 @@ def main() -> None:
             f"{name:<18}{1e3 * min(values):>9.1f}{1e3 * statistics.median(values):>11.1f}"
             f"{min(values) / base:>11.2f}{size}"
         )
+    print(f"cells.csv byte-identical, today's code and the per-value code: {same}")
     every = sum(min(times[name]) for name in OUTPUTS)
     print(f"{'all three outputs':<18}{1e3 * every:>9.1f}{'':>11}{every / base:>11.2f}")
 
 
 def _files() -> dict[str, str]:
-    return {"cells_csv": "cells.csv", "vtu": "drape.vtu", "fibre_pattern_png": "fibre_pattern.png"}
+    return {
+        "cells_csv": "cells.csv",
+        "vtu": "drape.vtu",
+        "fibre_pattern_png": "fibre_pattern.png",
+        "vtu before": "meshio.vtu",
+    }
 
 
 if __name__ == "__main__":
