@@ -13,6 +13,12 @@ case, for the ratio of the change: ``cells_csv`` with every field formatted on i
 per-value ``format_column`` it replaced, frozen here) and ``drape.vtu`` written by meshio (zlib
 level 6; the same grid, read back from today's file, so building the arrays is not counted).
 
+Then the stack's own outputs, on the bundled ``hemisphere-layup`` at the same fidelity, against
+the layup without files of its own (``preform.layup(..., outputs=["layup"])``: its plies with
+their outputs, the offsets, the maps): ``stack_csv`` (today's and per value, as above) and
+``stack_thickness_png`` (its stations as the reference ply's cells, as the pipeline draws it,
+and as one marker a station, as ``Layup.plot`` does).
+
     python benchmarks/bench_outputs.py [--fabric E-BXhd-936] [--fidelity standard] [--repeat 7]
 """
 
@@ -161,8 +167,94 @@ def main() -> None:
             f"{min(values) / base:>11.2f}{size}"
         )
     print(f"cells.csv byte-identical, today's code and the per-value code: {same}")
+    vtu_levels(full, args.repeat)
     every = sum(min(times[name]) for name in OUTPUTS)
     print(f"{'all three outputs':<18}{1e3 * every:>9.1f}{'':>11}{every / base:>11.2f}")
+    stack_outputs(args.fidelity, args.repeat, library)
+
+
+def vtu_levels(full: Any, repeat: int) -> None:
+    """``drape.vtu`` of the case written at zlib levels 0, 1, 3, 6 and 9 (preform's writer,
+    ``preform.export.vtu.VTU_COMPRESS_LEVEL``): time and size."""
+    from preform.export import vtu
+
+    ply = full.products["drape"]
+    energy = full.products["thickness"].applied(ply.result, ply.energy)
+    kept = vtu.VTU_COMPRESS_LEVEL
+    print(f"drape.vtu by zlib level, best of {repeat}:", end="")
+    with tempfile.TemporaryDirectory(prefix="preform-outputs-") as scratch:
+        path = Path(scratch) / "drape.vtu"
+        try:
+            for level in (0, 1, 3, 6, 9):
+                vtu.VTU_COMPRESS_LEVEL = level
+                best = min(
+                    cpu(lambda: vtu.write_drape_vtu(ply.result, energy, path))
+                    for _ in range(repeat)
+                )
+                print(f"  {level}: {1e3 * best:.0f} ms {path.stat().st_size / 1e3:.0f} kB", end="")
+        finally:
+            vtu.VTU_COMPRESS_LEVEL = kept
+    print()
+
+
+def stack_outputs(fidelity: str, repeat: int, library: Any) -> None:
+    """The stack's own files against the layup they report (module docstring)."""
+    from preform.export.fig_stack import stack_figure
+    from preform.pipeline.scene import bundled_scene_dir
+    from preform.stack.steps import write_stack_csv, write_stack_thickness_png
+
+    scene = api.scene(bundled_scene_dir() / "hemisphere-layup.yaml", fidelity=fidelity)
+    with tempfile.TemporaryDirectory(prefix="preform-outputs-") as scratch:
+        folder = Path(scratch)
+
+        def layup() -> Any:
+            with tempfile.TemporaryDirectory(dir=scratch) as out:
+                return api.layup(scene, library=library, out_dir=out, outputs=["layup"])
+
+        made = layup()
+        stack = made.products["layup"]
+
+        def context() -> CaseContext:
+            return CaseContext(
+                fabric=made.fabric,
+                scene=made.scene,
+                registry=api._host().registry,
+                case_dir=folder,
+                products=dict(made.products),
+            )
+
+        def csv_before() -> Any:
+            kept = csv_columns.format_column
+            csv_columns.format_column = format_column_per_value
+            try:
+                return write_stack_csv(context())
+            finally:
+                csv_columns.format_column = kept
+
+        calls = {
+            "layup, no files": layup,
+            "stack_csv": lambda: write_stack_csv(context()),
+            "stack_thickness_png": lambda: write_stack_thickness_png(context()),
+            "stack_csv before": csv_before,
+            "png, markers": lambda: stack_figure(stack.maps, folder / "markers.png", "t"),
+        }
+        for call in calls.values():
+            call()
+        times: dict[str, list[float]] = {name: [] for name in calls}
+        for _ in range(repeat):
+            for name, call in calls.items():
+                times[name].append(cpu(call))
+    base = min(times["layup, no files"])
+    print(
+        f"bundled hemisphere-layup, fidelity {fidelity}, {len(stack.maps.points_mm)} stations, "
+        f"{len(stack.layers)} plies with their outputs; CPU, one core, best of {repeat}"
+    )
+    print(f"{'':<20}{'best ms':>9}{'median ms':>11}{'x layup':>9}")
+    for name, values in times.items():
+        print(
+            f"{name:<20}{1e3 * min(values):>9.1f}{1e3 * statistics.median(values):>11.1f}"
+            f"{min(values) / base:>9.3f}"
+        )
 
 
 def _files() -> dict[str, str]:

@@ -6,7 +6,7 @@ said here and in every array name that has one); angles in degrees because that 
 
 The draped net, written once a case, is written here (``unstructured_grid_xml``) rather than by
 meshio, whose zlib level is fixed at 6: at ``VTU_COMPRESS_LEVEL`` 1 the file is written in about
-0.6 of the time and is about 2 % larger (benchmarks/README.md, section (q)). The unit cell's
+0.6 of level 6's time and is about 2 % larger (benchmarks/README.md, section (q)). The unit cell's
 file, written once a fabric, still goes through meshio.
 """
 
@@ -35,8 +35,8 @@ OTHER_KIND_CODE = 9
 MM_PER_M = 1e3
 
 #: zlib level of the draped net's .vtu [0-9]. Measured on the default study's 145² net
-#: (benchmarks/README.md, section (q)): level 6 (meshio's) 71 ms and 1803 kB, level 1 42 ms and
-#: 1836 kB, level 0 (stored) 12 ms and 3780 kB. 1: most of the saving for 2 % more bytes.
+#: (benchmarks/README.md, section (q)): level 1 44 ms and 1765 kB, level 6 78 ms and 1725 kB,
+#: level 0 (stored) 17 ms and 3648 kB. 1: most of the saving for 2 % more bytes.
 VTU_COMPRESS_LEVEL = 1
 #: Bytes per compressed block (the format's blocks; VTK reads any size, meshio writes 32 KiB).
 VTU_BLOCK_BYTES = 1 << 20
