@@ -42,7 +42,6 @@ def stack_figure(
     from matplotlib.colors import Normalize
     from matplotlib.lines import Line2D
     from matplotlib.markers import MarkerStyle
-    from matplotlib.text import Annotation
     from matplotlib.transforms import IdentityTransform
 
     fig = new_figure((760, 600))
@@ -113,19 +112,7 @@ def stack_figure(
     text = f"{title}: {what}" if title else what
     if wrinkling.any():
         text += "\n× (red): a ply wrinkles (past jamming or stitch failure)"
-    fig.add_artist(
-        Annotation(
-            text,
-            (0.1 + 0.33, top),
-            xycoords="figure fraction",
-            xytext=(0, 8),
-            textcoords="offset points",
-            ha="center",
-            va="bottom",
-            fontsize="large",
-            gid="stack title",
-        )
-    )
+    panel.title(text, top, gid="stack title")
     if path is not None:
         save_figure(fig, path)
     return fig
