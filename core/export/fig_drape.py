@@ -351,6 +351,26 @@ class _Panel:
         self.fig.add_artist(note)
         return note
 
+    def title(self, text: str, top: float, gid: str) -> Any:
+        """``text`` centred over the panel, 6 points above ``top`` (the drawing's top [figure
+        fraction], as ``fit`` returns it), at an axes title's size."""
+        from matplotlib.text import Annotation
+
+        left, _, width, _ = self.rect
+        note = Annotation(
+            text,
+            (left + 0.5 * width, top),
+            xycoords="figure fraction",
+            xytext=(0, 6),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize="large",
+            gid=gid,
+        )
+        self.fig.add_artist(note)
+        return note
+
     def fit(self, x0: float, x1: float, y0: float, y1: float) -> float:
         """Scale [x0, x1] × [y0, y1] to fill the panel's rectangle at one scale, centred;
         returns the top of the drawing [figure fraction]."""
@@ -495,7 +515,6 @@ def _shear_view(
     from matplotlib import colormaps
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import CenteredNorm, to_rgba
-    from matplotlib.text import Annotation
 
     valid = np.asarray(result.cell_status == CellStatus.VALID)
     if result.part_share is not None:
@@ -595,20 +614,7 @@ def _shear_view(
         title += f"\n{beyond} cell(s) beyond ±{half_range:g}° (drawn in the end colours)"
     if view.block > 1:
         title += f"\none quad per {view.block} × {view.block} cells (their largest |γ|)"
-    # centred over the panel, 6 points above the drawing, at an axes title's size
-    fig.add_artist(
-        Annotation(
-            title,
-            (rect[0] + 0.5 * rect[2], top),
-            xycoords="figure fraction",
-            xytext=(0, 6),
-            textcoords="offset points",
-            ha="center",
-            va="bottom",
-            fontsize="large",
-            gid="shear title",
-        )
-    )
+    ax.title(title, top, gid="shear title")
 
 
 def percent(fraction: float) -> str:

@@ -285,9 +285,13 @@ def write_stack_csv(ctx: CaseContext) -> dict[str, Any]:
 
 def write_stack_thickness_png(ctx: CaseContext) -> dict[str, Any]:
     from preform.export.fig_stack import stack_figure
+    from preform.stack.maps import reference_ply
 
     stack: Stack = ctx.products["layup"]
-    stack_figure(stack.maps, ctx.case_dir / "stack_thickness.png", title=ctx.scene.name)
+    # the stations' own cells, drawn as one mesh (preform.export.fig_stack)
+    layer = stack.layers[reference_ply(stack.layers)]
+    net = (1e3 * np.asarray(layer.result.nodes, dtype=float), layer.region)
+    stack_figure(stack.maps, ctx.case_dir / "stack_thickness.png", ctx.scene.name, net)
     return {"stack_thickness_png": "stack_thickness.png"}
 
 

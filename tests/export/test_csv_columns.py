@@ -142,3 +142,82 @@ def test_a_failed_write_leaves_the_old_file(tmp_path):
         write_csv_columns({"a": [1, 2], "b": [1]}, path)
     assert path.read_text() == "old\n"
     assert [p.name for p in tmp_path.iterdir()] == ["t.csv"]
+
+
+def one_by_one(values: np.ndarray) -> list[str]:
+    """A second implementation of a numeric column's fields: Python's own text of each value in
+    turn (``repr`` of a float, '' for NaN, ``str`` of an int or bool), no sharing of texts."""
+    out = []
+    for v in values.tolist():
+        if isinstance(v, float):
+            out.append("" if math.isnan(v) else repr(v))
+        else:
+            out.append(str(v))
+    return out
+
+
+# the floats whose text is hard: signed zeros, subnormals, the extremes, NaN and infinities,
+# values one ulp apart (their texts differ), repeated values and their negatives
+edge_floats = st.sampled_from(
+    [
+        0.0,
+        -0.0,
+        5e-324,
+        -5e-324,
+        2.2250738585072014e-308,
+        1.7976931348623157e308,
+        1e16,
+        9999999999999998.0,
+        1e-5,
+        0.0001,
+        0.1,
+        0.30000000000000004,
+        math.inf,
+        -math.inf,
+        math.nan,
+    ]
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    values=st.lists(
+        st.one_of(floats, edge_floats, st.floats(width=32), st.floats(-1e-300, 1e-300)),
+        min_size=1,
+        max_size=40,
+    ),
+    repeat=st.integers(1, 3),
+    negate=st.booleans(),
+)
+def test_float_fields_are_each_values_own_text(values, repeat, negate):
+    """Each distinct value formatted once and gathered (``distinct_fields``) gives, field by
+    field, what formatting every value on its own gives; with repeats and negatives mixed in,
+    the sharing the gather does."""
+    x = np.array(values * repeat, dtype=float)
+    if negate:
+        x = np.concatenate([x, -x[::2]])
+    fields = format_column(x)
+    assert fields == one_by_one(x)
+    # the round trip is exact: each text reads back as the value's bits (NaN: empty)
+    for field, v in zip(fields, x.tolist(), strict=True):
+        if field:
+            assert np.float64(float(field)).view(np.uint64) == np.float64(v).view(np.uint64)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    ints=st.lists(st.integers(-(2**63), 2**63 - 1), min_size=1, max_size=30),
+    flags=st.data(),
+)
+def test_integer_bool_and_masked_fields_are_each_values_own_text(ints, flags):
+    i = np.array(ints, dtype=np.int64)
+    b = np.array(flags.draw(st.lists(st.booleans(), min_size=len(ints), max_size=len(ints))))
+    mask = np.array(flags.draw(st.lists(st.booleans(), min_size=len(ints), max_size=len(ints))))
+    assert format_column(i) == one_by_one(i)
+    assert format_column(i.astype(np.uint8)) == one_by_one(i.astype(np.uint8))
+    assert format_column(b) == one_by_one(b)
+    expected = ["" if m else t for t, m in zip(one_by_one(b), mask.tolist(), strict=True)]
+    assert format_column(np.ma.MaskedArray(b, mask=mask)) == expected
+    x = np.ma.MaskedArray(i.astype(float), mask=mask)
+    expected = ["" if m else t for t, m in zip(one_by_one(i.astype(float)), mask, strict=True)]
+    assert format_column(x) == expected
