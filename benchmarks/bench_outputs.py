@@ -8,10 +8,9 @@ pipeline step (``cells_csv``, ``vtu``, ``fibre_pattern_png``) is run on that cas
 as the runner runs it, into a scratch folder. Everything runs once untimed first (imports,
 compilation, font caches, the first figure); then the physics and each output take turns
 ``--repeat`` times: CPU time of this process (pinned to one core), best and median, and each
-output's best over the physics' best. Two rows time the code before issue 30 on the same
+output's best over the physics' best. One row times the code before issue 30 on the same
 case, for the ratio of the change: ``cells_csv`` with every field formatted on its own (the
-per-value ``format_column`` it replaced, frozen here) and ``drape.vtu`` written by meshio (zlib
-level 6; the same grid, read back from today's file, so building the arrays is not counted).
+per-value ``format_column`` it replaced, frozen here).
 
 Then the stack's own outputs, on the bundled ``hemisphere-layup`` at the same fidelity, against
 the layup without files of its own (``preform.layup(..., outputs=["layup"])``: its plies with
@@ -34,7 +33,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import meshio
 import numpy as np
 
 from preform import api
@@ -129,17 +127,10 @@ def main() -> None:
             finally:
                 csv_columns.format_column = kept
 
-        output("vtu")()
-        grid = meshio.read(Path(scratch) / "drape.vtu")
-
-        def before_vtu() -> Any:
-            meshio.write(Path(scratch) / "meshio.vtu", grid, file_format="vtu")
-
         calls = {
             "drape + search": physics,
             **{name: output(name) for name in OUTPUTS},
             "cells_csv before": before_csv,
-            "vtu before": before_vtu,
         }
         for call in calls.values():  # untimed: imports, compilation, caches, first figure
             call()
@@ -167,34 +158,9 @@ def main() -> None:
             f"{min(values) / base:>11.2f}{size}"
         )
     print(f"cells.csv byte-identical, today's code and the per-value code: {same}")
-    vtu_levels(full, args.repeat)
     every = sum(min(times[name]) for name in OUTPUTS)
     print(f"{'all three outputs':<18}{1e3 * every:>9.1f}{'':>11}{every / base:>11.2f}")
     stack_outputs(args.fidelity, args.repeat, library)
-
-
-def vtu_levels(full: Any, repeat: int) -> None:
-    """``drape.vtu`` of the case written at zlib levels 0, 1, 3, 6 and 9 (preform's writer,
-    ``preform.export.vtu.VTU_COMPRESS_LEVEL``): time and size."""
-    from preform.export import vtu
-
-    ply = full.products["drape"]
-    energy = full.products["thickness"].applied(ply.result, ply.energy)
-    kept = vtu.VTU_COMPRESS_LEVEL
-    print(f"drape.vtu by zlib level, best of {repeat}:", end="")
-    with tempfile.TemporaryDirectory(prefix="preform-outputs-") as scratch:
-        path = Path(scratch) / "drape.vtu"
-        try:
-            for level in (0, 1, 3, 6, 9):
-                vtu.VTU_COMPRESS_LEVEL = level
-                best = min(
-                    cpu(lambda: vtu.write_drape_vtu(ply.result, energy, path))
-                    for _ in range(repeat)
-                )
-                print(f"  {level}: {1e3 * best:.0f} ms {path.stat().st_size / 1e3:.0f} kB", end="")
-        finally:
-            vtu.VTU_COMPRESS_LEVEL = kept
-    print()
 
 
 def stack_outputs(fidelity: str, repeat: int, library: Any) -> None:
@@ -262,7 +228,6 @@ def _files() -> dict[str, str]:
         "cells_csv": "cells.csv",
         "vtu": "drape.vtu",
         "fibre_pattern_png": "fibre_pattern.png",
-        "vtu before": "meshio.vtu",
     }
 
 

@@ -3,18 +3,11 @@
 Coordinates are written in millimetres, the unit of every other preform output (SI stays inside;
 until 0.1 the drape file was in metres; meshio's VTU writer drops field data, so the unit is
 said here and in every array name that has one); angles in degrees because that is what a ParaView user reads off a colour bar. meshio is an optional extra (``preform[vtk]``).
-
-The draped net, written once a case, is written here (``unstructured_grid_xml``) rather than by
-meshio, whose zlib level is fixed at 6: at ``VTU_COMPRESS_LEVEL`` 1 the file is written in about
-0.6 of level 6's time and is about 2 % larger (benchmarks/README.md, section (q)). The unit cell's
-file, written once a fabric, still goes through meshio.
 """
 
 from __future__ import annotations
 
-import base64
 import os
-import zlib
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -34,22 +27,6 @@ OTHER_KIND_CODE = 9
 #: Millimetres per metre: files are in mm, preform holds metres.
 MM_PER_M = 1e3
 
-#: zlib level of the draped net's .vtu [0-9]. Measured on the default study's 145² net
-#: (benchmarks/README.md, section (q)): level 1 44 ms and 1765 kB, level 6 78 ms and 1725 kB,
-#: level 0 (stored) 17 ms and 3648 kB. 1: most of the saving for 2 % more bytes.
-VTU_COMPRESS_LEVEL = 1
-#: Bytes per compressed block (the format's blocks; VTK reads any size, meshio writes 32 KiB).
-VTU_BLOCK_BYTES = 1 << 20
-#: VTK's codes of the cell kinds written here, and the XML type name of each numpy type.
-VTK_CELL_TYPES = {"vertex": 1, "quad": 9}
-VTK_TYPE_NAMES = {
-    np.dtype(np.float64): "Float64",
-    np.dtype(np.float32): "Float32",
-    np.dtype(np.int64): "Int64",
-    np.dtype(np.int32): "Int32",
-    np.dtype(np.uint8): "UInt8",
-}
-
 
 def _require_meshio() -> ModuleType:
     try:
@@ -57,62 +34,6 @@ def _require_meshio() -> ModuleType:
     except ImportError as exc:  # pragma: no cover - exercised only without the extra
         raise ImportError('Writing .vtu files needs meshio: pip install "preform[vtk]"') from exc
     return meshio
-
-
-def _data_array(name: str | None, values: np.ndarray, level: int) -> str:
-    """One ``DataArray`` element, its values zlib-compressed in blocks and base64-encoded as
-    VTK's "binary" inline format has it: a header of UInt64 (blocks, block size, last block's
-    size, each block's compressed size), encoded on its own, then the blocks, encoded together."""
-    data = np.ascontiguousarray(values)
-    data = data.astype(data.dtype.newbyteorder("<"), copy=False)
-    kind = VTK_TYPE_NAMES.get(np.dtype(data.dtype.newbyteorder("=")))
-    if kind is None:
-        raise TypeError(f"no VTK type for {data.dtype} (array {name!r})")
-    raw = data.tobytes()
-    size = VTU_BLOCK_BYTES
-    blocks = [raw[k : k + size] for k in range(0, len(raw), size)] or [b""]
-    packed = [zlib.compress(block, level) for block in blocks]
-    header = np.array(
-        [len(blocks), size, len(blocks[-1]), *map(len, packed)], dtype="<u8"
-    ).tobytes()
-    components = f' NumberOfComponents="{data.shape[1]}"' if data.ndim == 2 else ""
-    named = f' Name="{name}"' if name is not None else ""
-    text = base64.b64encode(header).decode() + base64.b64encode(b"".join(packed)).decode()
-    return f'<DataArray type="{kind}"{named}{components} format="binary">{text}</DataArray>'
-
-
-def unstructured_grid_xml(
-    points: np.ndarray,
-    kind: str,
-    connectivity: np.ndarray,
-    point_data: dict[str, np.ndarray],
-    cell_data: dict[str, np.ndarray],
-    level: int | None = None,
-) -> str:
-    """The text of a .vtu file (VTK XML UnstructuredGrid, one piece) of ``points`` (n, 3), cells
-    of one ``kind`` (a key of ``VTK_CELL_TYPES``) as ``connectivity`` (m, corners) into the
-    points, and arrays per point and per cell (names must be plain: letters, digits, ``_``);
-    zlib at ``level`` (None: ``VTU_COMPRESS_LEVEL``)."""
-    level = VTU_COMPRESS_LEVEL if level is None else level
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    cells = np.asarray(connectivity, dtype=np.int64)
-    m, corners = cells.shape
-    offsets = corners * np.arange(1, m + 1, dtype=np.int64)
-    types = np.full(m, VTK_CELL_TYPES[kind], dtype=np.uint8)
-
-    def arrays(data: dict[str, np.ndarray]) -> str:
-        return "".join(_data_array(name, values, level) for name, values in data.items())
-
-    return (
-        '<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" '
-        'byte_order="LittleEndian" header_type="UInt64" compressor="vtkZLibDataCompressor">'
-        f'<UnstructuredGrid><Piece NumberOfPoints="{len(points)}" NumberOfCells="{m}">'
-        f"<Points>{_data_array(None, points, level)}</Points>"
-        f"<Cells>{_data_array('connectivity', cells.ravel(), level)}"
-        f"{_data_array('offsets', offsets, level)}{_data_array('types', types, level)}</Cells>"
-        f"<PointData>{arrays(point_data)}</PointData><CellData>{arrays(cell_data)}</CellData>"
-        "</Piece></UnstructuredGrid></VTKFile>\n"
-    )
 
 
 def write_unit_cell_vtu(
@@ -198,6 +119,7 @@ def write_drape_vtu(
     thickness ratio is 1/cos γ, computed from the shear. A net
     with no valid cell is written as its placed nodes, one vertex cell each, without cell data.
     """
+    meshio = _require_meshio()
     ni, nj = result.shape
     placed = np.asarray(result.status == NodeStatus.PLACED)
     # Renumber placed nodes 0..n-1 so unplaced (NaN) nodes never reach the file.
@@ -259,20 +181,19 @@ def write_drape_vtu(
         )
 
     # A net without a valid cell still shows its placed nodes, as vertex cells without cell
-    # data: a file with an empty quad block, or with no cells, is one readers cannot read back.
+    # data: a file with an empty quad block, or with no cells, is one meshio cannot read back.
     has_cells = len(quads) > 0
     vertices = np.arange(len(node_i)).reshape(-1, 1)
-    text = unstructured_grid_xml(
-        points,
-        "quad" if has_cells else "vertex",
-        quads if has_cells else vertices,
+    mesh = meshio.Mesh(
+        points=points,
+        cells=[("quad", quads)] if has_cells else [("vertex", vertices)],
         point_data={
             "i": node_i.astype(np.int32),
             "j": node_j.astype(np.int32),
             "residual_mm": MM_PER_M
             * np.nan_to_num(np.asarray(result.residual, dtype=float)[placed]),
         },
-        cell_data=cell_data if has_cells else {},
+        cell_data={name: [values] for name, values in cell_data.items()} if has_cells else {},
     )
     with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="ascii")
+        meshio.write(tmp, mesh, file_format="vtu")

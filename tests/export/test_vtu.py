@@ -2,7 +2,6 @@ from __future__ import annotations
 
 import meshio
 import numpy as np
-import pytest
 
 from preform.drape.engine.result import CellStatus, NodeStatus
 from preform.export.vtu import TOW_KIND_CODES, write_drape_vtu, write_unit_cell_vtu
@@ -124,71 +123,3 @@ def test_unit_cell_vtu_tow_volumes_hold_each_straight_tows_section_times_length(
             np.testing.assert_allclose(
                 mesh.cell_data_dict["width_mm"]["wedge"][tow == k], 1e3 * t.width
             )
-
-
-@pytest.mark.parametrize("level", [0, 1, 9])
-def test_our_vtu_text_reads_back_as_meshios_own_file_of_the_same_grid(tmp_path, level):
-    """The grid written by ``unstructured_grid_xml`` (any zlib level, blocks split mid-array)
-    and by meshio's writer (a second implementation) read back, by meshio, as the same points,
-    cells and arrays, bit for bit."""
-    rng = np.random.default_rng(level)
-    points = rng.normal(size=(300, 3)) * 1e3
-    quads = rng.integers(0, 300, size=(200, 4))
-    point_data = {"i": rng.integers(-5, 5, 300).astype(np.int32), "r": rng.normal(size=300)}
-    cell_data = {
-        "v": rng.normal(size=(200, 3)),
-        "k9": rng.normal(size=(200, 9)) * 1e-12,
-        "flag": rng.integers(0, 2, 200).astype(np.int32),
-        "n": rng.integers(-(2**40), 2**40, 200),
-    }
-    ours = tmp_path / "ours.vtu"
-    import preform.export.vtu as vtu
-
-    block = vtu.VTU_BLOCK_BYTES
-    vtu.VTU_BLOCK_BYTES = 1000  # many blocks, the last one short
-    try:
-        ours.write_text(
-            vtu.unstructured_grid_xml(points, "quad", quads, point_data, cell_data, level)
-        )
-    finally:
-        vtu.VTU_BLOCK_BYTES = block
-    theirs = tmp_path / "theirs.vtu"
-    meshio.write(
-        theirs,
-        meshio.Mesh(
-            points,
-            [("quad", quads)],
-            point_data=point_data,
-            cell_data={k: [v] for k, v in cell_data.items()},
-        ),
-        file_format="vtu",
-    )
-    a, b = meshio.read(ours), meshio.read(theirs)
-    assert np.array_equal(a.points, b.points)
-    assert np.array_equal(a.cells_dict["quad"], b.cells_dict["quad"])
-    for name in point_data:
-        assert np.array_equal(a.point_data[name], b.point_data[name]), name
-        assert a.point_data[name].dtype == point_data[name].dtype
-    for name in cell_data:
-        assert np.array_equal(a.cell_data_dict[name]["quad"], b.cell_data_dict[name]["quad"])
-        assert a.cell_data_dict[name]["quad"].dtype == cell_data[name].dtype
-
-
-def test_a_lower_zlib_level_writes_the_same_values(tmp_path, damaged_net, make_energy):
-    """The level is a speed-for-bytes choice only: level 0 (stored) and the default give the
-    same arrays."""
-    import preform.export.vtu as vtu
-
-    energy = make_energy(damaged_net)
-    write_drape_vtu(damaged_net, energy, tmp_path / "fast.vtu")
-    kept = vtu.VTU_COMPRESS_LEVEL
-    vtu.VTU_COMPRESS_LEVEL = 0
-    try:
-        write_drape_vtu(damaged_net, energy, tmp_path / "stored.vtu")
-    finally:
-        vtu.VTU_COMPRESS_LEVEL = kept
-    assert (tmp_path / "stored.vtu").stat().st_size > (tmp_path / "fast.vtu").stat().st_size
-    a, b = meshio.read(tmp_path / "fast.vtu"), meshio.read(tmp_path / "stored.vtu")
-    assert np.array_equal(a.points, b.points)
-    for name in a.cell_data_dict:
-        assert np.array_equal(a.cell_data_dict[name]["quad"], b.cell_data_dict[name]["quad"])
