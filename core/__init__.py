@@ -15,7 +15,10 @@ on first use, so ``import preform`` stays fast (see ``docs/api.md``).
 
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from preform import _moved
+from preform.base import __version__
+
+_moved.install()  # the old paths of moved modules, with a warning (preform._moved)
 
 if TYPE_CHECKING:
     from preform.api import (
@@ -36,8 +39,8 @@ if TYPE_CHECKING:
         run,
         scene,
     )
+    from preform.base.status import CaseFailure, CaseStatus
     from preform.material import FabricBase, Location
-    from preform.pipeline.status import CaseFailure, CaseStatus
     from preform.plugin_manager import PluginHost, default_host, hookimpl
     from preform.registry import RegistrationError, Registry
     from preform.shear.law import ShearLaw, force_per_length_N_per_mm
@@ -72,8 +75,8 @@ _API = frozenset(
 _CONTRACT = {
     "FabricBase": "preform.material",
     "Location": "preform.material",
-    "CaseFailure": "preform.pipeline.status",
-    "CaseStatus": "preform.pipeline.status",
+    "CaseFailure": "preform.base.status",
+    "CaseStatus": "preform.base.status",
     "PluginHost": "preform.plugin_manager",
     "default_host": "preform.plugin_manager",
     "hookimpl": "preform.plugin_manager",

@@ -268,14 +268,14 @@ class CaseRun:
 
     def raise_for_status(self) -> None:
         """Raise ``preform.CaseFailure`` with the case's error when it has no result."""
-        from preform.pipeline.status import CaseFailure
+        from preform.base.status import CaseFailure
 
         if self.case.status not in ("ok", "partial"):
             raise CaseFailure(f"{self.case.case_id}: {self.case.status}: {self.case.error}")
 
     def _product(self, name: str) -> Any:
         if name not in self.products:
-            from preform.pipeline.status import CaseFailure
+            from preform.base.status import CaseFailure
 
             raise CaseFailure(
                 f"{self.case.case_id} has no {name} ({self.case.status}: "

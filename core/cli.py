@@ -13,7 +13,7 @@ from typing import Any, Literal
 
 import click
 
-from preform import __version__
+from preform.base import __version__
 from preform.collector import end_startup, startup_phase
 from preform.commands.options import (
     EXIT_INTERNAL,

@@ -43,7 +43,7 @@ class CaseContext:
     files: list[str] = field(default_factory=list)
     #: Why the result covers less than the scene asked (or is mostly no physical energy:
     #: ``preform.drape.wrinkling``), in words; any makes the case
-    #: ``partial`` (see ``preform.pipeline.status``). Set through :meth:`partial`.
+    #: ``partial`` (see ``preform.base.status``). Set through :meth:`partial`.
     partial_reasons: list[str] = field(default_factory=list)
     #: What the user must know about a result that is still complete (cells past locking,
     #: angles outside the law's data range), in words. Set through :meth:`warn`.

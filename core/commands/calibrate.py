@@ -118,7 +118,7 @@ def calibrate_command(
         raise InputError(str(error)) from error
     written = [t.entry for t in carried if t.entry is not None]
     if out:
-        from preform.export.atomic import atomic_open
+        from preform.base.atomic import atomic_open
 
         with atomic_open(out, "w", encoding="utf-8") as handle:
             handle.write(calibration.to_yaml(written))

@@ -29,7 +29,7 @@ VARY = ("start", "orientation", "generator_angle")
 
 def _write(compared: Any, out: Path) -> dict[str, str]:
     """The comparison's files in ``out``; their names by kind."""
-    from preform.export.atomic import atomic_open
+    from preform.base.atomic import atomic_open
     from preform.export.compare_vtu import write_comparison_vtu
     from preform.export.fig_compare import error_map_figure
     from preform.pipeline.rundir import clean_json
@@ -123,9 +123,9 @@ def compare_command(
     shear difference, with flags; rms, max and percentiles, by region. Exit 1 when the drape
     failed; 2 for a bad measurement (a unit slip too)."""
     from preform.api import compare_drape
+    from preform.base.status import CaseFailure
     from preform.compare.measurement import MeasurementError
     from preform.pipeline.scene import SceneError
-    from preform.pipeline.status import CaseFailure
 
     lib = load_library_or_exit(libraries, bundled=not no_bundled)
     fabric_or_exit(lib, name)

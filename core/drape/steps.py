@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from preform.base import fidelity
+from preform.base.status import CaseFailure
 from preform.drape.fields import cell_fields, energy_field, summary
 from preform.drape.net import DrapeError, drape
 from preform.drape.part import HeightCut, Part, PlanPolygon, combine
@@ -33,8 +35,6 @@ from preform.drape.verdict import (
     shear_limit_notes,
 )
 from preform.drape.wrinkling import Wrinkling, wrinkle_limits, wrinkling
-from preform.pipeline import fidelity
-from preform.pipeline.status import CaseFailure
 from preform.shear.surrogate import surrogate
 from preform.step import CaseContext, Step
 
@@ -135,7 +135,7 @@ def _bytes(n: float) -> str:
 
 def drape_settings(scene: Scene, surface: Any) -> dict[str, Any]:
     """Keyword arguments of :func:`preform.drape.net.drape` from a scene (SI units), with the
-    fidelity knobs resolved against the tool (``preform.pipeline.fidelity``).
+    fidelity knobs resolved against the tool (``preform.base.fidelity``).
 
     Raises ``CaseFailure`` when the ply would need more than ``limits.max_nodes`` nodes or has
     no cell at the resolved spacing, before anything of its size is allocated."""

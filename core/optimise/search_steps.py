@@ -45,6 +45,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from preform.base import fidelity
+from preform.base.status import CaseFailure
 from preform.drape.fields import energy_field
 from preform.drape.steps import (
     drape_settings,
@@ -63,8 +65,6 @@ from preform.optimise.search import (
     search_generator_angle,
     search_layout,
 )
-from preform.pipeline import fidelity
-from preform.pipeline.status import CaseFailure
 from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:

@@ -126,6 +126,7 @@ def export_command(
     value. Exit code 0 when written (also when some elements are not covered), 1 when the
     drape or the export failed, 2 for bad input.
     """
+    from preform.base.status import CaseFailure
     from preform.commands.options import fabric_or_exit, load_library_or_exit
     from preform.pipeline.planner import PlanError, plan
     from preform.pipeline.scene import (
@@ -135,7 +136,6 @@ def export_command(
         resolve_scene_path,
         scene_from_data,
     )
-    from preform.pipeline.status import CaseFailure
     from preform.plugin_manager import default_host
     from preform.step import CaseContext
 

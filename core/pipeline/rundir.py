@@ -27,8 +27,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from preform.export.atomic import atomic_open, atomic_path, remove_stale_temporaries
-from preform.pipeline.status import CaseStatus
+from preform.base.atomic import atomic_open, atomic_path, remove_stale_temporaries
+from preform.base.status import CaseStatus
 
 LOCK_NAME = ".preform.lock"
 MANIFEST = "manifest.json"
@@ -223,7 +223,7 @@ class RunDirectory:
         try:
             # a worker stopped mid-write (interrupt, time limit) leaves its temporary file; a
             # live writer's (a `preform export` beside the run, which takes no run lock) is
-            # locked by it and kept (preform.export.atomic)
+            # locked by it and kept (preform.base.atomic)
             remove_stale_temporaries(self.path)
         finally:
             self._unlock()

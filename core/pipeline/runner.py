@@ -1,7 +1,7 @@
 """Run every (material, scene) case of a library into a results directory.
 
 The directory's layout, lock, manifest and tables are ``preform.pipeline.rundir``'s; the
-engines are ``preform.pipeline.engines``'; what a status means is ``preform.pipeline.status``.
+engines are ``preform.pipeline.engines``'; what a status means is ``preform.base.status``.
 Here: what a case is (and the hash that says when its result can be reused), how one case runs
 and what its status is, and the loop that runs a set of cases so that a case that fails, dies,
 hangs or is interrupted costs only itself, and everything that finished is kept.
@@ -26,7 +26,8 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
-from preform import __version__
+from preform.base import __version__
+from preform.base.status import REUSABLE, CaseFailure, CaseStatus
 from preform.library import Library, fabric_from_data
 from preform.pipeline.batching import plan_batches, recorded_wall_time_s
 from preform.pipeline.engines import (
@@ -47,7 +48,6 @@ from preform.pipeline.rundir import (
 )
 from preform.pipeline.rundir import clean_json as _clean_json
 from preform.pipeline.scene import Scene, scene_from_data
-from preform.pipeline.status import REUSABLE, CaseFailure, CaseStatus
 from preform.plugin_manager import PluginHost
 from preform.step import CaseContext
 

@@ -16,7 +16,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
-from preform.pipeline.export_section import ExportSection
+from preform.base.export_section import ExportSection
 from preform.pipeline.layup_section import LayupSection
 from preform.registry import LazyLoadError, Registry
 from preform.validation import located_errors
@@ -234,7 +234,7 @@ class SearchSection(BaseModel):
 
 
 class NumericsSection(BaseModel):
-    """Hand-set numerical knobs; each overrides the fidelity preset (preform.pipeline.fidelity)."""
+    """Hand-set numerical knobs; each overrides the fidelity preset (preform.base.fidelity)."""
 
     model_config = _STRICT
     solver_tolerance: float | None = Field(
@@ -456,13 +456,13 @@ def _preflight(scene: Scene, err: Any) -> list[SourceError]:
     outside the ply or off the tool, and the tool's own preflight (an analytic tool is built,
     microseconds; a mesh file is checked for existence, type and size, not read).
     """
+    from preform.base import fidelity
     from preform.drape.steps import (
         node_budget_problem,
         ply_outline,
         ply_too_coarse_problem,
         start_problem,
     )
-    from preform.pipeline import fidelity
 
     errors: list[SourceError] = []
     surface = None
@@ -580,8 +580,8 @@ def _export_mesh_problems(scene: Scene, err: Any) -> list[SourceError]:
 def _section_problems(scene: Scene, err: Any) -> list[SourceError]:
     """Problems of the start, search and shear sections that would only surface at run time
     (or take the machine first): checked by arithmetic."""
+    from preform.base import fidelity
     from preform.optimise.search import scan_size
-    from preform.pipeline import fidelity
 
     errors: list[SourceError] = []
     start = scene.start

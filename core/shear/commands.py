@@ -518,7 +518,7 @@ def fit_command(
         raise InputError(str(error)) from error
     text = block_to_yaml(report.block, report.comments)
     if out:
-        from preform.export.atomic import atomic_open
+        from preform.base.atomic import atomic_open
 
         with atomic_open(out, "w", encoding="utf-8") as handle:
             handle.write(text)

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from pydantic import BaseModel, ConfigDict
 
+from preform.base.status import CaseFailure
 from preform.drape.fields import cell_fields
 from preform.drape.net import drape
 from preform.drape.ply import PlyOutline
@@ -31,7 +32,6 @@ from preform.drape.verdict import (
 )
 from preform.pipeline.planner import plan
 from preform.pipeline.scene import load_scene
-from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext
 from preform.plugin_manager import hookimpl
 from preform.plugins.surfaces.basic import Hemisphere, Plane

@@ -21,9 +21,9 @@ from typing import Any
 
 import pytest
 
+from preform.base.status import CaseFailure
 from preform.drape.steps import run_surface
 from preform.pipeline.scene import SceneError, bundled_scene_dir, load_scene, validate_scene_data
-from preform.pipeline.status import CaseFailure
 from preform.pipeline.step import CaseContext
 from preform.plugins.surfaces.mesh import (
     MeshFileError,
