@@ -13,12 +13,14 @@ The functions and result classes of ``preform.api`` (``drape``, ``least_energy``
 on first use, so ``import preform`` stays fast (see ``docs/api.md``).
 """
 
+import sys
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from preform import _moved
 from preform.base import __version__
 
-_moved.install()  # the old paths of moved modules, with a warning (preform._moved)
+sys.meta_path.insert(0, _moved.MovedModuleFinder())  # old paths of moved modules, warning
 
 if TYPE_CHECKING:
     from preform.api import (
@@ -87,6 +89,27 @@ _CONTRACT = {
     "CaseContext": "preform.step",
     "Step": "preform.step",
 }
+
+
+class _DrapePackage(ModuleType):
+    """``preform.drape``, called, is the API's ``preform.drape(...)`` (mm, degrees, a case): the
+    import system binds the package to the name, so the API function cannot own it. Made so
+    here, on binding, as the engine imports nothing of the API above it."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        from preform.api import drape
+
+        return drape(*args, **kwargs)
+
+
+class _Root(ModuleType):
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "drape" and type(value) is ModuleType:  # the import system binding it
+            value.__class__ = _DrapePackage
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Root
 
 
 def __getattr__(name: str) -> Any:

@@ -1,20 +1,16 @@
-"""Old names: moved modules stay as aliases that warn until the next minor release (0.2.0);
-retired outputs and their writers are refused with a message naming what replaced them."""
-
-from __future__ import annotations
+"""Old names: a moved module's old path is an alias that warns until the next minor release
+(0.2.0); retired outputs and their writers are refused with a message naming what replaced it."""
 
 import importlib
-import importlib.abc
-import importlib.machinery
 import importlib.util
 import sys
 import warnings
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
-#: Moved modules, old import path -> new one. Importing the old path gives the new module itself
-#: (every name, private ones and patching included) and a DeprecationWarning at the importer's
-#: line. Removed at the next minor release (docs/design.md "Layers", CHANGELOG).
+#: Moved modules, old import path -> new one. The old path gives the new module itself (every
+#: name, private ones and patching included) with a DeprecationWarning at the importer's line.
 MOVED_MODULES: dict[str, str] = {
     # issue 16: the harness and the optimisation on top of the drape engine
     "preform.tradeoff": "preform.bench.tradeoff",
@@ -27,56 +23,42 @@ MOVED_MODULES: dict[str, str] = {
     "preform.pipeline.status": "preform.base.status",
     "preform.pipeline.fidelity": "preform.base.fidelity",
     "preform.pipeline.export_section": "preform.base.export_section",
+    "preform.commands.options": "preform.command_line",
+    # issue 31: a comparison's writers sit with the comparison, above the exporters
+    "preform.export.compare_vtu": "preform.compare.vtu",
+    "preform.export.fig_compare": "preform.compare.figure",
 }
 
-#: Frames of the import machinery, skipped when the warning looks for the importer's line.
-_IMPORT_MACHINERY = (__file__, str(Path(importlib.__file__).parent), "<frozen importlib")
+#: Frames between the importing line and the warning: this module's, importlib's.
+_MACHINERY = (__file__, str(Path(importlib.__file__).parent), "<frozen importlib")
 
 
 def _importer_stacklevel() -> int:
-    """The ``stacklevel`` that puts a warning, raised by this module's loader, at the line of
-    the code that imports (``import``, ``from ... import`` or ``importlib.import_module``).
-    ``warnings`` itself steps over the frames of importlib's bootstrap without counting them."""
-    frame = sys._getframe(1)
-    level = 1
-    while frame.f_back is not None and frame.f_code.co_filename.startswith(_IMPORT_MACHINERY):
+    """The warning's ``stacklevel`` at the importing line (``warnings`` itself steps over
+    importlib's bootstrap frames without counting them)."""
+    frame, level = sys._getframe(1), 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_MACHINERY):
         frame = frame.f_back
-        filename = frame.f_code.co_filename
-        level += not ("importlib" in filename and "_bootstrap" in filename)
+        level += "_bootstrap" not in frame.f_code.co_filename
     return level
 
 
-class MovedModuleFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
-    """A ``sys.meta_path`` finder serving ``MOVED_MODULES``: the old path is the new module."""
+class MovedModuleFinder:
+    """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` puts
+    it there)."""
 
-    def find_spec(
-        self, fullname: str, path: object = None, target: object = None
-    ) -> importlib.machinery.ModuleSpec | None:
-        if fullname not in MOVED_MODULES:
-            return None
-        return importlib.util.spec_from_loader(fullname, self)
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
+        return importlib.util.spec_from_loader(name, self) if name in MOVED_MODULES else None
 
-    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
-        new = MOVED_MODULES[spec.name]
-        module = importlib.import_module(new)
-        # the import system sets the alias spec on the module it is given: keep the real one
-        spec.loader_state = module.__spec__
-        warnings.warn(
-            f"{spec.name} is deprecated: import {new}",
-            DeprecationWarning,
-            stacklevel=_importer_stacklevel(),
-        )
+    def create_module(self, spec: Any) -> ModuleType:
+        module = importlib.import_module(MOVED_MODULES[spec.name])
+        spec.loader_state = module.__spec__  # the import system sets ``spec`` on it: undone below
+        message = f"{spec.name} is deprecated: import {module.__name__}"
+        warnings.warn(message, DeprecationWarning, stacklevel=_importer_stacklevel())
         return module
 
     def exec_module(self, module: ModuleType) -> None:
-        if module.__spec__ is not None and module.__spec__.loader_state is not None:
-            module.__spec__ = module.__spec__.loader_state
-
-
-def install() -> None:
-    """Put the finder on ``sys.meta_path`` (once; ``import preform`` does it)."""
-    if not any(isinstance(finder, MovedModuleFinder) for finder in sys.meta_path):
-        sys.meta_path.insert(0, MovedModuleFinder())
+        module.__spec__ = module.__spec__.loader_state  # type: ignore[union-attr]
 
 
 #: Scene outputs (and ``preform export`` targets) that were replaced: old name -> the message

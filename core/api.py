@@ -955,14 +955,14 @@ class Compared:
 
     def plot(self, path: PathLike | None = None) -> Figure:
         """The error map (plan view and 3D), saved to ``path`` when given."""
-        from preform.export.fig_compare import error_map_figure
+        from preform.compare.figure import error_map_figure
 
         result = self.drape._product("drape").result
         return error_map_figure(self.comparison, result, path, title=self.drape.case.case_id)
 
     def to_vtu(self, path: PathLike) -> Path:
         """The measured points with their errors and flags, for ParaView."""
-        from preform.export.compare_vtu import write_comparison_vtu
+        from preform.compare.vtu import write_comparison_vtu
 
         write_comparison_vtu(self.comparison, path)
         return Path(path)

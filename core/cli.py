@@ -15,7 +15,7 @@ import click
 
 from preform.base import __version__
 from preform.collector import end_startup, startup_phase
-from preform.commands.options import (
+from preform.command_line import (
     EXIT_INTERNAL,
     LIBRARY_HELP,
     echo_json,

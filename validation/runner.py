@@ -30,7 +30,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import InputError, echo_json, json_option
+from preform.command_line import InputError, echo_json, json_option
 
 #: The constants the suite fits (PATH=LO:HI), per law; see the module docstring for why these.
 #: The bounds are the fields' plausible ranges (docs/ranges.md), pre-tension from 1 N.

@@ -1,9 +1,5 @@
-"""The bottom layer: what every package of preform may use and that imports none of them.
-
-Atomic writes (``atomic``), the status vocabulary of a case (``status``), the fidelity knobs
-(``fidelity``), the scene's export section (``export_section``) and the version. The order of
-the packages above it is in docs/design.md ("Layers") and held by
-tests/framework/test_import_cycles.py.
-"""
+"""The bottom layer: atomic writes, the status vocabulary, the fidelity knobs, the scene's
+export section, strict JSON, the version. It imports no other package of preform (the order of
+the packages is in docs/design.md, "Layers")."""
 
 __version__ = "0.1.0"

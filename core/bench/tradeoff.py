@@ -50,7 +50,7 @@ import click
 import numpy as np
 
 from preform.base import fidelity
-from preform.commands.options import InputError, echo_json, json_option, library_options
+from preform.command_line import InputError, echo_json, json_option, library_options
 from preform.pipeline.scene import (
     NumericsSection,
     Scene,

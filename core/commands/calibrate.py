@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from preform.commands.options import (
+from preform.command_line import (
     InputError,
     echo_json,
     fabric_or_exit,

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import (
+from preform.command_line import (
     EXIT_FAILED,
     InputError,
     echo_json,
@@ -30,9 +30,9 @@ VARY = ("start", "orientation", "generator_angle")
 def _write(compared: Any, out: Path) -> dict[str, str]:
     """The comparison's files in ``out``; their names by kind."""
     from preform.base.atomic import atomic_open
-    from preform.export.compare_vtu import write_comparison_vtu
-    from preform.export.fig_compare import error_map_figure
-    from preform.pipeline.rundir import clean_json
+    from preform.base.strict_json import clean_json
+    from preform.compare.figure import error_map_figure
+    from preform.compare.vtu import write_comparison_vtu
 
     out.mkdir(parents=True, exist_ok=True)
     files: dict[str, str] = {}

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import echo_json, fail, json_option
+from preform.command_line import echo_json, fail, json_option
 
 
 def _registry() -> Any:

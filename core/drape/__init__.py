@@ -2,12 +2,10 @@
 
 The optimisation on top of it (the least-energy search, curved generators, relaxation) is
 ``preform.optimise``; ``preform.drape.search``, ``.curved``, ``.relax`` and ``.search_steps``
-are deprecated aliases of its modules.
+are deprecated aliases of its modules. Called, this package is the Python API's
+``preform.drape(...)``: the root package makes it so (``preform/__init__``), as the engine sits
+below the API and imports nothing of it.
 """
-
-import sys as _sys
-import types as _types
-from typing import Any as _Any
 
 from preform.drape.chebyshev import chebyshev_angle
 from preform.drape.fields import energy_field, summary
@@ -37,19 +35,3 @@ __all__ = [
     "energy_field",
     "summary",
 ]
-
-
-class _DrapePackage(_types.ModuleType):
-    """``preform.drape`` is this package and, called, the Python API's ``preform.drape(...)``
-    (``preform.api.drape``: mm and degrees, a pipeline case). The import system binds the
-    package to ``preform.drape`` whenever it is imported, so the API function cannot own the
-    name; a callable package gives ``preform.drape(fabric, ...)`` and keeps
-    ``preform.drape.net`` and ``from preform.drape import drape`` (the SI engine) working."""
-
-    def __call__(self, *args: _Any, **kwargs: _Any) -> _Any:
-        from preform.api import drape as api_drape
-
-        return api_drape(*args, **kwargs)
-
-
-_sys.modules[__name__].__class__ = _DrapePackage

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import EXIT_FAILED, echo_json, fail, json_option, library_options
+from preform.command_line import EXIT_FAILED, echo_json, fail, json_option, library_options
 
 #: Command-line target -> the scene output (exporter product) it asks for.
 TARGETS: dict[str, str] = {
@@ -127,7 +127,7 @@ def export_command(
     drape or the export failed, 2 for bad input.
     """
     from preform.base.status import CaseFailure
-    from preform.commands.options import fabric_or_exit, load_library_or_exit
+    from preform.command_line import fabric_or_exit, load_library_or_exit
     from preform.pipeline.planner import PlanError, plan
     from preform.pipeline.scene import (
         SceneError,

@@ -28,6 +28,7 @@ from typing import Any, TypeVar
 
 from preform.base import __version__
 from preform.base.status import REUSABLE, CaseFailure, CaseStatus
+from preform.base.strict_json import clean_json as _clean_json
 from preform.library import Library, fabric_from_data
 from preform.pipeline.batching import plan_batches, recorded_wall_time_s
 from preform.pipeline.engines import (
@@ -46,7 +47,6 @@ from preform.pipeline.rundir import (
     read_json,
     write_json,
 )
-from preform.pipeline.rundir import clean_json as _clean_json
 from preform.pipeline.scene import Scene, scene_from_data
 from preform.plugin_manager import PluginHost
 from preform.step import CaseContext

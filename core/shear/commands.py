@@ -28,7 +28,7 @@ import click
 import numpy as np
 from numpy.typing import ArrayLike
 
-from preform.commands.options import (
+from preform.command_line import (
     InputError,
     echo_json,
     fabric_or_exit,

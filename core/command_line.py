@@ -60,7 +60,7 @@ def echo_json(obj: Any) -> None:
     """``obj`` as JSON on stdout: numpy values and paths made plain, non-finite numbers null."""
     import json  # here, not at the top: most commands print no JSON
 
-    from preform.pipeline.rundir import clean_json
+    from preform.base.strict_json import clean_json
 
     click.echo(json.dumps(clean_json(obj), indent=2, sort_keys=False, default=str))
 
