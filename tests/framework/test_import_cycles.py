@@ -83,8 +83,7 @@ ALLOWED_UPWARD = {
     ("pipeline/runner.py", "preform.stack.cases"): "the layup's case made through a hook",
     ("pipeline/runner.py", "preform.report"): "report.html written by a run-end hook or the CLI",
     **dict.fromkeys(
-        [("shear/calibrate.py", "preform.export.fig_curves")]
-        + [("shear/commands.py", "preform.export.fig_curves")],
+        [(f"shear/{m}.py", "preform.export.fig_curves") for m in ("calibrate", "commands")],
         "shear's figures in shear/ once export.figures' new_figure/save_figure are in base",
     ),
 }
