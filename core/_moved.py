@@ -24,6 +24,7 @@ MOVED_MODULES: dict[str, str] = {
     "preform.pipeline.fidelity": "preform.base.fidelity",
     "preform.pipeline.export_section": "preform.base.export_section",
     "preform.commands.options": "preform.command_line",
+    "preform.stack.cases": "preform.pipeline.layup_case",
     # issue 31: a comparison's writers sit with the comparison, above the exporters
     "preform.export.compare_vtu": "preform.compare.vtu",
     "preform.export.fig_compare": "preform.compare.figure",

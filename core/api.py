@@ -624,8 +624,8 @@ def layup(
     sub-folder per ply). Returns a :class:`Layup`; a failed stack is returned, not raised.
     """
     from preform.library import Library as LibraryType
+    from preform.pipeline.layup_case import layup_case
     from preform.pipeline.runner import execute_case
-    from preform.stack.cases import layup_case
 
     if library is not None and not isinstance(library, LibraryType):
         raise TypeError(f"library must be a loaded library or None, got {type(library).__name__}")

@@ -748,6 +748,7 @@ def pipeline_run(
     from rich.progress import Progress
 
     from preform.drape.kernel_compile import ensure_compiled
+    from preform.report import write_report
 
     # the first run after an install compiles the drape kernels here, once and saying so,
     # before any worker needs them (they then load them from the cache)
@@ -766,7 +767,7 @@ def pipeline_run(
                 inputs=inputs,
                 on_done=lambda r: progress.advance(task),
                 batch_size=batch_size,
-                report_page=not no_report,
+                report_page=None if no_report else write_report,
             )
     except RunDirectoryError as exc:
         _fail([f"error: {exc}; nothing was run."])

@@ -392,7 +392,7 @@ def make_cases(
         limit = scene.limits.case_timeout_s or timeout_s
         if scene.layup is not None:
             # one case per layup scene: it drapes the fabrics its plies name (preform.stack)
-            from preform.stack.cases import layup_case
+            from preform.pipeline.layup_case import layup_case
 
             try:
                 case = layup_case(library, scene, scene_data, out_dir, host)
@@ -529,7 +529,7 @@ def run_cases(
     inputs: dict[str, Any] | None = None,
     on_done: Callable[[CaseResult], None] | None = None,
     batch_size: int | None = None,
-    report_page: bool = False,
+    report_page: Callable[[Path], Path] | None = None,
 ) -> RunReport:
     """Run the cases on an engine, keeping finished ones; keep manifest and tables current.
 
@@ -543,9 +543,9 @@ def run_cases(
     chooses; 1: none). A batch whose worker dies or overruns keeps the cases it finished; the
     others are run again, each on its own. The run-level outputs run on the engine too.
 
-    ``report_page``: write the folder's report.html (``preform.report``) when the run ends
-    uninterrupted; a report that cannot be written is said in ``report_error``, never fails
-    the run.
+    ``report_page``: writes the folder's page when the run ends uninterrupted (given the
+    folder, returns the file: ``preform.report.write_report``, which sits above the pipeline);
+    a page that cannot be written is said in ``report_error``, never fails the run.
     """
     from preform.pipeline.main_guard import refuse_unguarded_run
 
@@ -590,7 +590,7 @@ def _run_in_directory(
     inputs: dict[str, Any] | None,
     on_done: Callable[[CaseResult], None] | None,
     batch_size: int | None,
-    report_page: bool = False,
+    report_page: Callable[[Path], Path] | None = None,
 ) -> RunReport:
     with RunDirectory(out_dir) as rundir:
         run: dict[str, Any] = {
@@ -666,17 +666,15 @@ def _run_in_directory(
         run["counts"] = report.counts()
         rundir.write_manifest(run)
         rundir.write_tables()
-        if report_page and not interrupted:
-            _write_report_page(report)
+        if report_page is not None and not interrupted:
+            _write_report_page(report, report_page)
         return report
 
 
-def _write_report_page(report: RunReport) -> None:
-    """The folder's report.html, under the run's lock, from the files just written."""
-    from preform.report import write_report
-
+def _write_report_page(report: RunReport, write_page: Callable[[Path], Path]) -> None:
+    """The folder's page, under the run's lock, from the files just written."""
     try:
-        report.report_file = write_report(report.out_dir)
+        report.report_file = write_page(report.out_dir)
     except Exception as exc:  # a page must not lose the run's results
         report.report_error = f"{type(exc).__name__}: {exc}"
     except KeyboardInterrupt:  # every case is recorded: only the page is left to write
