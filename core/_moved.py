@@ -25,6 +25,7 @@ MOVED_MODULES: dict[str, str] = {
     "preform.pipeline.export_section": "preform.base.export_section",
     "preform.commands.options": "preform.command_line",
     "preform.stack.cases": "preform.pipeline.layup_case",
+    "preform.export.figures": "preform.base.figures",
     # issue 31: a comparison's writers sit with the comparison, above the exporters
     "preform.export.compare_vtu": "preform.compare.vtu",
     "preform.export.fig_compare": "preform.compare.figure",

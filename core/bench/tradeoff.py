@@ -662,7 +662,7 @@ def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
     """Error against wall time (log-log): optimum-angle error and relative energy error, one
     panel each, the Pareto front joined; errors below the reference's resolution (zero for the
     reference itself) drawn on a floor that says so (:func:`error_floors`)."""
-    from preform.export.figures import new_figure, save_figure
+    from preform.base.figures import new_figure, save_figure
 
     fig = new_figure((1400, 650))
     floors = error_floors(result)

@@ -96,7 +96,7 @@ def shear_curves(
 
 def plot_shear_curves(curves: dict[str, Any], path: str | Path) -> None:
     """Write a PNG with F_s/L and energy against |γ| for both senses (cf. paper Figs 8–9)."""
-    from preform.export.fig_curves import shear_curve_figure
+    from preform.shear.figures import shear_curve_figure
 
     title = f"{curves.get('material', '')} ({curves.get('law', '')})"
     shear_curve_figure(curves, path, title=title)
@@ -412,7 +412,7 @@ def fit_report(
 
 def plot_fit(report: FitReport, path: str | Path, title: str | None = None) -> None:
     """The fitted F_s/L against the normalised test data [N/mm over deg], one colour per sense."""
-    from preform.export.fig_curves import fit_figure
+    from preform.shear.figures import fit_figure
 
     curves = {}
     for sense, fit in report.fits.items():

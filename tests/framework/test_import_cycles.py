@@ -79,11 +79,6 @@ ALLOWED_UPWARD = {
     ("shear/surrogate_kernels.py", "preform.drape.kernel_cache"): (
         "numba's cache by content serves the kernels of every package: it belongs in base"
     ),
-    # not fixed yet on this branch (issue 31, open): what each needs
-    **dict.fromkeys(
-        [(f"shear/{m}.py", "preform.export.fig_curves") for m in ("calibrate", "commands")],
-        "shear's figures in shear/ once export.figures' new_figure/save_figure are in base",
-    ),
 }
 
 #: Modules moved, old path -> new path; the old path is a deprecated alias served by
