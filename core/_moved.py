@@ -12,7 +12,8 @@ from typing import Any
 #: Moved modules, old import path -> new one. The old path gives the new module itself (every
 #: name, private ones and patching included) with a DeprecationWarning at the importer's line.
 MOVED_MODULES: dict[str, str] = {
-    # issue 16: the harness and the optimisation on top of the drape engine
+    # issue 16: the step contract below the pipeline, the harness, the optimisation on the drape
+    "preform.pipeline.step": "preform.step",
     "preform.tradeoff": "preform.bench.tradeoff",
     "preform.drape.search": "preform.optimise.search",
     "preform.drape.curved": "preform.optimise.curved",

@@ -4,7 +4,7 @@ The contract between plugins, the registry and the pipeline: the registry checks
 the way in and the pipeline runs it with a ``CaseContext``. It lives outside ``preform.pipeline``
 so the registry can import it without importing the pipeline, whose planner and scene import
 the registry (imports flow one way: pipeline -> registry -> step). Public as ``preform.Step``
-and ``preform.CaseContext``; ``preform.pipeline.step`` re-exports both.
+and ``preform.CaseContext``; ``preform.pipeline.step`` is its deprecated old path.
 """
 
 from __future__ import annotations

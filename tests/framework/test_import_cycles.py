@@ -386,8 +386,11 @@ def test_each_module_imports_first_in_a_fresh_interpreter(module):
 
 def test_step_and_case_context_keep_their_old_import_path():
     import preform
-    import preform.pipeline.step
     import preform.step
+
+    sys.modules.pop("preform.pipeline.step", None)
+    with pytest.warns(DeprecationWarning, match="import preform.step"):
+        import preform.pipeline.step
 
     assert preform.Step is preform.step.Step is preform.pipeline.step.Step
     assert preform.CaseContext is preform.step.CaseContext is preform.pipeline.step.CaseContext

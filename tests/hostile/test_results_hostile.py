@@ -32,10 +32,10 @@ from preform.drape.verdict import (
 )
 from preform.pipeline.planner import plan
 from preform.pipeline.scene import load_scene
-from preform.pipeline.step import CaseContext
 from preform.plugin_manager import hookimpl
 from preform.plugins.surfaces.basic import Hemisphere, Plane
 from preform.plugins.surfaces.mesh import tessellate_hemisphere, write_stl
+from preform.step import CaseContext
 from preform.testing import PluginSandbox
 
 # --------------------------------------------------------------------------------------------
