@@ -3,9 +3,7 @@
 
 import importlib
 import importlib.util
-import sys
 import warnings
-from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -21,34 +19,20 @@ MOVED_MODULES: dict[str, str] = {
     "preform.drape.search_steps": "preform.optimise.search_steps",
     # issue 31: the primitives every package uses, at the bottom
     "preform.export.atomic": "preform.base.atomic",
+    "preform.export.figures": "preform.base.figures",
     "preform.pipeline.status": "preform.base.status",
     "preform.pipeline.fidelity": "preform.base.fidelity",
     "preform.pipeline.export_section": "preform.base.export_section",
+    # issue 31: each where the package order puts it (docs/design.md, "Layers")
     "preform.commands.options": "preform.command_line",
     "preform.stack.cases": "preform.pipeline.layup_case",
-    "preform.export.figures": "preform.base.figures",
-    # issue 31: a comparison's writers sit with the comparison, above the exporters
     "preform.export.compare_vtu": "preform.compare.vtu",
     "preform.export.fig_compare": "preform.compare.figure",
 }
 
-#: Frames between the importing line and the warning: this module's, importlib's.
-_MACHINERY = (__file__, str(Path(importlib.__file__).parent), "<frozen importlib")
-
-
-def _importer_stacklevel() -> int:
-    """The warning's ``stacklevel`` at the importing line (``warnings`` itself steps over
-    importlib's bootstrap frames without counting them)."""
-    frame, level = sys._getframe(1), 1
-    while frame.f_back is not None and frame.f_code.co_filename.startswith(_MACHINERY):
-        frame = frame.f_back
-        level += "_bootstrap" not in frame.f_code.co_filename
-    return level
-
 
 class MovedModuleFinder:
-    """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` puts
-    it there)."""
+    """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` adds it)."""
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
         return importlib.util.spec_from_loader(name, self) if name in MOVED_MODULES else None
@@ -56,8 +40,8 @@ class MovedModuleFinder:
     def create_module(self, spec: Any) -> ModuleType:
         module = importlib.import_module(MOVED_MODULES[spec.name])
         spec.loader_state = module.__spec__  # the import system sets ``spec`` on it: undone below
-        message = f"{spec.name} is deprecated: import {module.__name__}"
-        warnings.warn(message, DeprecationWarning, stacklevel=_importer_stacklevel())
+        # stacklevel 2: the importing line (``warnings`` does not count importlib's bootstrap)
+        warnings.warn(f"{spec.name} is deprecated: import {module.__name__}", DeprecationWarning, 2)
         return module
 
     def exec_module(self, module: ModuleType) -> None:

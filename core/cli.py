@@ -21,6 +21,7 @@ from preform.command_line import (
     echo_json,
     fabric_or_exit,
     fail,
+    file_option,
     json_option,
     library_options,
     load_library_or_exit,
@@ -426,21 +427,8 @@ def _case_timeout(_ctx: Any, _param: Any, value: float | None) -> float | None:
     show_default=True,
     help="Unit cells to draw along each direction, NxM.",
 )
-@click.option(
-    "--out",
-    "png",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    default=None,
-    help="Figure file; .png, .svg or .pdf (default NAME.png).",
-)
-@click.option(
-    "--vtu",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    default=None,
-    help="Also write the tow paths as a VTK .vtu file for ParaView.",
-)
+@file_option("--out", "png", help="Figure file; .png, .svg or .pdf (default NAME.png).")
+@file_option("--vtu", help="Also write the tow paths as a VTK .vtu file for ParaView.")
 @click.option(
     "--colour-by", type=click.Choice(["level", "type"]), default="level", show_default=True
 )

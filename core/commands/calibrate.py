@@ -14,6 +14,7 @@ from preform.command_line import (
     InputError,
     echo_json,
     fabric_or_exit,
+    file_option,
     json_option,
     library_options,
     load_library_or_exit,
@@ -48,17 +49,9 @@ from preform.shear.commands import specimen_options
     help="Residuals relative to the measured force (floored at 5 % of its peak: scatter that "
     "grows with force) or in N/mm (minimises the reported rms).",
 )
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the calibrated entry (and --apply-to's) as a library YAML file.",
-)
-@click.option(
-    "--plot",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the data against the calibrated law as a figure (.png, .svg, .pdf).",
+@file_option("--out", help="Write the calibrated entry (and --apply-to's) as a library YAML file.")
+@file_option(
+    "--plot", help="Write the data against the calibrated law as a figure (.png, .svg, .pdf)."
 )
 @click.option(
     "--apply-to",

@@ -667,18 +667,13 @@ def _run_in_directory(
         rundir.write_manifest(run)
         rundir.write_tables()
         if report_page is not None and not interrupted:
-            _write_report_page(report, report_page)
+            try:  # the folder's page, under the run's lock, from the files just written
+                report.report_file = report_page(report.out_dir)
+            except Exception as exc:  # a page must not lose the run's results
+                report.report_error = f"{type(exc).__name__}: {exc}"
+            except KeyboardInterrupt:  # every case is recorded: only the page is left to write
+                report.report_error = "interrupted; `preform report DIR` writes it"
         return report
-
-
-def _write_report_page(report: RunReport, write_page: Callable[[Path], Path]) -> None:
-    """The folder's page, under the run's lock, from the files just written."""
-    try:
-        report.report_file = write_page(report.out_dir)
-    except Exception as exc:  # a page must not lose the run's results
-        report.report_error = f"{type(exc).__name__}: {exc}"
-    except KeyboardInterrupt:  # every case is recorded: only the page is left to write
-        report.report_error = "interrupted; `preform report DIR` writes it"
 
 
 def execute_batch(cases: Sequence[Case]) -> list[CaseResult]:

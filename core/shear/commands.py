@@ -32,6 +32,7 @@ from preform.command_line import (
     InputError,
     echo_json,
     fabric_or_exit,
+    file_option,
     json_option,
     library_options,
     load_library_or_exit,
@@ -111,12 +112,8 @@ def _law_name(entry: Any) -> str:
 @click.command("shear")
 @click.argument("name")
 @click.option("--angles", default="0:60:5", show_default=True, help="START:STOP:STEP [deg].")
-@click.option(
-    "--out",
-    "figure",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the force and energy curves as a figure (.png, .svg, .pdf).",
+@file_option(
+    "--out", "figure", help="Write the force and energy curves as a figure (.png, .svg, .pdf)."
 )
 @click.option("--png", "png", type=click.Path(dir_okay=False), hidden=True)  # old name of --out
 @library_options
@@ -465,18 +462,8 @@ def specimen_options(func: Any) -> Any:
     "force), or with a fitted one. The comments give a free fit's constant either way.",
 )
 @click.option("--step-deg", type=float, default=2.0, show_default=True, help="Table bin [deg].")
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the YAML block to FILE instead of printing it.",
-)
-@click.option(
-    "--plot",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the fit against the data as a figure (.png, .svg, .pdf).",
-)
+@file_option("--out", help="Write the YAML block to FILE instead of printing it.")
+@file_option("--plot", help="Write the fit against the data as a figure (.png, .svg, .pdf).")
 @json_option
 def fit_command(
     data: str,
