@@ -2,6 +2,7 @@
 (0.2.0); retired outputs and their writers are refused with a message naming what replaced it."""
 
 import importlib
+import importlib.abc
 import importlib.util
 import warnings
 from types import ModuleType
@@ -31,7 +32,7 @@ MOVED_MODULES: dict[str, str] = {
 }
 
 
-class MovedModuleFinder:
+class MovedModuleFinder(importlib.abc.Loader):
     """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` adds it)."""
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
