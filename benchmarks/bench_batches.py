@@ -20,7 +20,7 @@ from pathlib import Path
 
 import yaml
 
-from preform.commands.options import load_library_or_exit
+from preform.command_line import load_library_or_exit
 from preform.pipeline.runner import make_cases, run_cases
 from preform.pipeline.scene import load_scene
 from preform.plugin_manager import default_host

@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from preform.base.atomic import atomic_path
 from preform.drape.engine.part import Part
 from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
-from preform.export.atomic import atomic_path
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -13,9 +13,14 @@ The functions and result classes of ``preform.api`` (``drape``, ``least_energy``
 on first use, so ``import preform`` stays fast (see ``docs/api.md``).
 """
 
+import sys
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from preform import _moved
+from preform.base import __version__
+
+sys.meta_path.insert(0, _moved.MovedModuleFinder())  # old paths of moved modules, warning
 
 if TYPE_CHECKING:
     from preform.api import (
@@ -36,8 +41,8 @@ if TYPE_CHECKING:
         run,
         scene,
     )
+    from preform.base.status import CaseFailure, CaseStatus
     from preform.material import FabricBase, Location
-    from preform.pipeline.status import CaseFailure, CaseStatus
     from preform.plugin_manager import PluginHost, default_host, hookimpl
     from preform.registry import RegistrationError, Registry
     from preform.shear.law import ShearLaw, force_per_length_N_per_mm
@@ -72,8 +77,8 @@ _API = frozenset(
 _CONTRACT = {
     "FabricBase": "preform.material",
     "Location": "preform.material",
-    "CaseFailure": "preform.pipeline.status",
-    "CaseStatus": "preform.pipeline.status",
+    "CaseFailure": "preform.base.status",
+    "CaseStatus": "preform.base.status",
     "PluginHost": "preform.plugin_manager",
     "default_host": "preform.plugin_manager",
     "hookimpl": "preform.plugin_manager",
@@ -84,6 +89,27 @@ _CONTRACT = {
     "CaseContext": "preform.step",
     "Step": "preform.step",
 }
+
+
+class _DrapePackage(ModuleType):
+    """``preform.drape``, called, is the API's ``preform.drape(...)`` (mm, degrees, a case): the
+    import system binds the package to the name, so the API function cannot own it. Made so
+    here, on binding, as the engine imports nothing of the API above it."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        from preform.api import drape
+
+        return drape(*args, **kwargs)
+
+
+class _Root(ModuleType):
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "drape" and type(value) is ModuleType:  # the import system binding it
+            value.__class__ = _DrapePackage
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Root
 
 
 def __getattr__(name: str) -> Any:

@@ -1,22 +1,15 @@
-"""Old names: moved modules stay one release as an alias that warns; retired outputs and
-their writers are refused with a message naming what replaced them."""
+"""Old names: a moved module's old path is an alias that warns until the next minor release
+(0.2.0); retired outputs and their writers are refused with a message naming what replaced it."""
 
 import importlib
-import sys
+import importlib.abc
+import importlib.util
 import warnings
+from types import ModuleType
+from typing import Any
 
-
-def alias_moved_module(old: str, new: str) -> None:
-    """Make the module being imported as ``old`` the module ``new`` itself (every name, private
-    ones and patching included), with a DeprecationWarning at the importer's line."""
-    moved = importlib.import_module(new)
-    # 1: here, 2: the alias module's body, 3+: the import machinery, then the importer
-    warnings.warn(f"{old} is deprecated: import {new}", DeprecationWarning, stacklevel=3)
-    sys.modules[old] = moved
-
-
-#: Every moved module, old path -> new path (issue 16: the optimisation out of the drape, the
-#: trade study into ``bench``; issue 31: the drape's modules into its rooms).
+#: Moved modules, old import path -> new one. The old path gives the new module itself (every
+#: name, private ones and patching included) with a DeprecationWarning at the importer's line.
 MOVED_MODULES: dict[str, str] = {
     "preform.tradeoff": "preform.bench.tradeoff",
     **{f"preform.drape.{m}": f"preform.optimise.{m}" for m in ("search", "curved", "relax")},
@@ -33,7 +26,41 @@ MOVED_MODULES: dict[str, str] = {
         }.items()
         for module in modules.split()
     },
+    # issue 16: the step contract below the pipeline, the harness, the optimisation on the drape
+    "preform.pipeline.step": "preform.step",
+    # issue 31: the primitives every package uses, at the bottom
+    "preform.export.atomic": "preform.base.atomic",
+    "preform.export.figures": "preform.base.figures",
+    "preform.pipeline.status": "preform.base.status",
+    "preform.pipeline.fidelity": "preform.base.fidelity",
+    "preform.pipeline.export_section": "preform.base.export_section",
+    # issue 31: each where the package order puts it (docs/design.md, "Layers")
+    "preform.commands.options": "preform.command_line",
+    "preform.stack.cases": "preform.pipeline.layup_case",
+    "preform.export.compare_vtu": "preform.compare.vtu",
+    "preform.export.fig_compare": "preform.compare.figure",
 }
+
+
+class MovedModuleFinder(importlib.abc.Loader):
+    """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` adds it)."""
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
+        return importlib.util.spec_from_loader(name, self) if name in MOVED_MODULES else None
+
+    def create_module(self, spec: Any) -> ModuleType:
+        module = importlib.import_module(MOVED_MODULES[spec.name])
+        spec.loader_state = module.__spec__  # the import system sets ``spec`` on it: undone below
+        # stacklevel 2: the importing line (``warnings`` does not count importlib's bootstrap)
+        warnings.warn(f"{spec.name} is deprecated: import {module.__name__}", DeprecationWarning, 2)
+        return module
+
+    def exec_module(self, module: ModuleType) -> None:
+        module.__spec__ = module.__spec__.loader_state  # type: ignore[union-attr]
+
+
+#: Every moved module, old path -> new path (issue 16: the optimisation out of the drape, the
+#: trade study into ``bench``; issue 31: the drape's modules into its rooms).
 
 #: Scene outputs (and ``preform export`` targets) that were replaced: old name -> the message
 #: that refuses it, naming what replaced it. Refused rather than aliased: the old output wrote

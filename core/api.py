@@ -268,14 +268,14 @@ class CaseRun:
 
     def raise_for_status(self) -> None:
         """Raise ``preform.CaseFailure`` with the case's error when it has no result."""
-        from preform.pipeline.status import CaseFailure
+        from preform.base.status import CaseFailure
 
         if self.case.status not in ("ok", "partial"):
             raise CaseFailure(f"{self.case.case_id}: {self.case.status}: {self.case.error}")
 
     def _product(self, name: str) -> Any:
         if name not in self.products:
-            from preform.pipeline.status import CaseFailure
+            from preform.base.status import CaseFailure
 
             raise CaseFailure(
                 f"{self.case.case_id} has no {name} ({self.case.status}: "
@@ -624,8 +624,8 @@ def layup(
     sub-folder per ply). Returns a :class:`Layup`; a failed stack is returned, not raised.
     """
     from preform.library import Library as LibraryType
+    from preform.pipeline.layup_case import layup_case
     from preform.pipeline.runner import execute_case
-    from preform.stack.cases import layup_case
 
     if library is not None and not isinstance(library, LibraryType):
         raise TypeError(f"library must be a loaded library or None, got {type(library).__name__}")
@@ -955,14 +955,14 @@ class Compared:
 
     def plot(self, path: PathLike | None = None) -> Figure:
         """The error map (plan view and 3D), saved to ``path`` when given."""
-        from preform.export.fig_compare import error_map_figure
+        from preform.compare.figure import error_map_figure
 
         result = self.drape._product("drape").result
         return error_map_figure(self.comparison, result, path, title=self.drape.case.case_id)
 
     def to_vtu(self, path: PathLike) -> Path:
         """The measured points with their errors and flags, for ParaView."""
-        from preform.export.compare_vtu import write_comparison_vtu
+        from preform.compare.vtu import write_comparison_vtu
 
         write_comparison_vtu(self.comparison, path)
         return Path(path)

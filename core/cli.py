@@ -13,14 +13,15 @@ from typing import Any, Literal
 
 import click
 
-from preform import __version__
+from preform.base import __version__
 from preform.collector import end_startup, startup_phase
-from preform.commands.options import (
+from preform.command_line import (
     EXIT_INTERNAL,
     LIBRARY_HELP,
     echo_json,
     fabric_or_exit,
     fail,
+    file_option,
     json_option,
     library_options,
     load_library_or_exit,
@@ -426,21 +427,8 @@ def _case_timeout(_ctx: Any, _param: Any, value: float | None) -> float | None:
     show_default=True,
     help="Unit cells to draw along each direction, NxM.",
 )
-@click.option(
-    "--out",
-    "png",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    default=None,
-    help="Figure file; .png, .svg or .pdf (default NAME.png).",
-)
-@click.option(
-    "--vtu",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    default=None,
-    help="Also write the tow paths as a VTK .vtu file for ParaView.",
-)
+@file_option("--out", "png", help="Figure file; .png, .svg or .pdf (default NAME.png).")
+@file_option("--vtu", help="Also write the tow paths as a VTK .vtu file for ParaView.")
 @click.option(
     "--colour-by", type=click.Choice(["level", "type"]), default="level", show_default=True
 )
@@ -748,6 +736,7 @@ def pipeline_run(
     from rich.progress import Progress
 
     from preform.drape.kernels.kernel_compile import ensure_compiled
+    from preform.report import write_report
 
     # the first run after an install compiles the drape kernels here, once and saying so,
     # before any worker needs them (they then load them from the cache)
@@ -766,7 +755,7 @@ def pipeline_run(
                 inputs=inputs,
                 on_done=lambda r: progress.advance(task),
                 batch_size=batch_size,
-                report_page=not no_report,
+                report_page=None if no_report else write_report,
             )
     except RunDirectoryError as exc:
         _fail([f"error: {exc}; nothing was run."])

@@ -4,7 +4,7 @@ The contract between plugins, the registry and the pipeline: the registry checks
 the way in and the pipeline runs it with a ``CaseContext``. It lives outside ``preform.pipeline``
 so the registry can import it without importing the pipeline, whose planner and scene import
 the registry (imports flow one way: pipeline -> registry -> step). Public as ``preform.Step``
-and ``preform.CaseContext``; ``preform.pipeline.step`` re-exports both.
+and ``preform.CaseContext``; ``preform.pipeline.step`` is its deprecated old path.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ class CaseContext:
     files: list[str] = field(default_factory=list)
     #: Why the result covers less than the scene asked (or is mostly no physical energy:
     #: ``preform.drape.judging.wrinkling``), in words; any makes the case
-    #: ``partial`` (see ``preform.pipeline.status``). Set through :meth:`partial`.
+    #: ``partial`` (see ``preform.base.status``). Set through :meth:`partial`.
     partial_reasons: list[str] = field(default_factory=list)
     #: What the user must know about a result that is still complete (cells past locking,
     #: angles outside the law's data range), in words. Set through :meth:`warn`.

@@ -30,7 +30,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import InputError, echo_json, json_option
+from preform.command_line import InputError, echo_json, json_option
 
 #: The constants the suite fits (PATH=LO:HI), per law; see the module docstring for why these.
 #: The bounds are the fields' plausible ranges (docs/ranges.md), pre-tension from 1 N.
@@ -110,10 +110,10 @@ def run_dataset(folder: Path, library: Any, out_dir: Path) -> tuple[list[Compari
     """Compare the three laws with one dataset; write its figure; its table rows."""
     import numpy as np
 
-    from preform.export.fig_curves import calibration_figure
     from preform.library import build_shear_law
     from preform.shear.calibrate import calibrate_law, file_sha256, quality, resolve_constants
     from preform.shear.commands import normalise_rows, read_test_csv
+    from preform.shear.figures import calibration_figure
     from preform.shear.law import force_per_length_N_per_mm
 
     meta = load_dataset(folder)

@@ -16,7 +16,7 @@ own steps (surface → shear law → energy_vs_angle → optimum → drape), so 
   error, i.e. the smallest error this study can resolve.
 
 Every knob is set through the scene (hand-set ``ply.node_spacing_mm``, ``numerics``,
-``search``) and resolved by :func:`preform.pipeline.fidelity.resolve`; the scene's own hand-set
+``search``) and resolved by :func:`preform.base.fidelity.resolve`; the scene's own hand-set
 knobs are cleared first, so the presets choose what the scene does not set.
 
 Per setting: wall time [s] (best of ``repeat`` when a run is short; the machine may be shared),
@@ -49,8 +49,8 @@ from typing import Any
 import click
 import numpy as np
 
-from preform.commands.options import InputError, echo_json, json_option, library_options
-from preform.pipeline import fidelity
+from preform.base import fidelity
+from preform.command_line import InputError, echo_json, json_option, library_options
 from preform.pipeline.scene import (
     NumericsSection,
     Scene,
@@ -621,7 +621,7 @@ def run_tradeoff(
 
 def write_csv(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
     """One row per setting, columns :data:`CSV_COLUMNS` (units in the names; MB = 1e6 bytes)."""
-    from preform.export.atomic import atomic_path
+    from preform.base.atomic import atomic_path
 
     with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(CSV_COLUMNS), extrasaction="ignore")
@@ -662,7 +662,7 @@ def plot_tradeoff(result: TradeoffResult, path: str | os.PathLike[str]) -> None:
     """Error against wall time (log-log): optimum-angle error and relative energy error, one
     panel each, the Pareto front joined; errors below the reference's resolution (zero for the
     reference itself) drawn on a floor that says so (:func:`error_floors`)."""
-    from preform.export.figures import new_figure, save_figure
+    from preform.base.figures import new_figure, save_figure
 
     fig = new_figure((1400, 650))
     floors = error_floors(result)

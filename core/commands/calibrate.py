@@ -10,10 +10,11 @@ from pathlib import Path
 
 import click
 
-from preform.commands.options import (
+from preform.command_line import (
     InputError,
     echo_json,
     fabric_or_exit,
+    file_option,
     json_option,
     library_options,
     load_library_or_exit,
@@ -48,17 +49,9 @@ from preform.shear.commands import specimen_options
     help="Residuals relative to the measured force (floored at 5 % of its peak: scatter that "
     "grows with force) or in N/mm (minimises the reported rms).",
 )
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the calibrated entry (and --apply-to's) as a library YAML file.",
-)
-@click.option(
-    "--plot",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the data against the calibrated law as a figure (.png, .svg, .pdf).",
+@file_option("--out", help="Write the calibrated entry (and --apply-to's) as a library YAML file.")
+@file_option(
+    "--plot", help="Write the data against the calibrated law as a figure (.png, .svg, .pdf)."
 )
 @click.option(
     "--apply-to",
@@ -118,7 +111,7 @@ def calibrate_command(
         raise InputError(str(error)) from error
     written = [t.entry for t in carried if t.entry is not None]
     if out:
-        from preform.export.atomic import atomic_open
+        from preform.base.atomic import atomic_open
 
         with atomic_open(out, "w", encoding="utf-8") as handle:
             handle.write(calibration.to_yaml(written))

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import (
+from preform.command_line import (
     EXIT_FAILED,
     InputError,
     echo_json,
@@ -29,10 +29,10 @@ VARY = ("start", "orientation", "generator_angle")
 
 def _write(compared: Any, out: Path) -> dict[str, str]:
     """The comparison's files in ``out``; their names by kind."""
-    from preform.export.atomic import atomic_open
-    from preform.export.compare_vtu import write_comparison_vtu
-    from preform.export.fig_compare import error_map_figure
-    from preform.pipeline.rundir import clean_json
+    from preform.base.atomic import atomic_open
+    from preform.base.strict_json import clean_json
+    from preform.compare.figure import error_map_figure
+    from preform.compare.vtu import write_comparison_vtu
 
     out.mkdir(parents=True, exist_ok=True)
     files: dict[str, str] = {}
@@ -123,9 +123,9 @@ def compare_command(
     shear difference, with flags; rms, max and percentiles, by region. Exit 1 when the drape
     failed; 2 for a bad measurement (a unit slip too)."""
     from preform.api import compare_drape
+    from preform.base.status import CaseFailure
     from preform.compare.measurement import MeasurementError
     from preform.pipeline.scene import SceneError
-    from preform.pipeline.status import CaseFailure
 
     lib = load_library_or_exit(libraries, bundled=not no_bundled)
     fabric_or_exit(lib, name)

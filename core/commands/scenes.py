@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import echo_json, fail, json_option
+from preform.command_line import echo_json, fail, json_option
 
 
 def _registry() -> Any:
@@ -103,7 +103,7 @@ def scenes_list(as_json: bool) -> None:
 @json_option
 def scenes_show(scene: str, as_json: bool) -> None:
     """A scene (bundled name or file): its YAML, the fidelity knobs in force and its plan."""
-    from preform.pipeline import fidelity
+    from preform.base import fidelity
     from preform.pipeline.planner import explain
     from preform.pipeline.scene import (
         SceneError,

@@ -1,10 +1,9 @@
 """The kinematic drape, in rooms (``docs/design.md``): ``engine`` (tools, the pin-jointed net,
 its fields), ``kernels``, ``judging``, ``properties``, and the steps. The optimisation on top
-of it is ``preform.optimise``; old module paths are in ``preform._moved.MOVED_MODULES``."""
-
-import sys as _sys
-import types as _types
-from typing import Any as _Any
+of it is ``preform.optimise``; old module paths are in ``preform._moved.MOVED_MODULES``.
+Called, this package is the Python API's ``preform.drape(...)``: the root package makes it so
+(``preform/__init__``), as the engine sits below the API and imports nothing of it.
+"""
 
 from preform.drape.engine.chebyshev import chebyshev_angle
 from preform.drape.engine.fields import energy_field, summary
@@ -34,19 +33,3 @@ __all__ = [
     "energy_field",
     "summary",
 ]
-
-
-class _DrapePackage(_types.ModuleType):
-    """``preform.drape`` is this package and, called, the Python API's ``preform.drape(...)``
-    (``preform.api.drape``: mm and degrees, a pipeline case). The import system binds the
-    package to ``preform.drape`` whenever it is imported, so the API function cannot own the
-    name; a callable package gives ``preform.drape(fabric, ...)`` and keeps
-    ``preform.drape.engine.net`` and ``from preform.drape import drape`` (the SI engine) working."""
-
-    def __call__(self, *args: _Any, **kwargs: _Any) -> _Any:
-        from preform.api import drape as api_drape
-
-        return api_drape(*args, **kwargs)
-
-
-_sys.modules[__name__].__class__ = _DrapePackage

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.pipeline.status import CaseFailure
+from preform.base.status import CaseFailure
 from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:

@@ -20,6 +20,9 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from preform.base import fidelity
+from preform.base.limits import MAX_POLYGON_VERTICES
+from preform.base.status import CaseFailure
 from preform.drape.engine.fields import cell_fields, energy_field, summary
 from preform.drape.engine.net import DrapeError, drape
 from preform.drape.engine.part import HeightCut, Part, PlanPolygon, combine
@@ -34,9 +37,6 @@ from preform.drape.judging.verdict import (
     shear_limit_notes,
 )
 from preform.drape.judging.wrinkling import Wrinkling, wrinkle_limits, wrinkling
-from preform.drape.preform_steps import preform_if_asked
-from preform.pipeline import fidelity
-from preform.pipeline.status import CaseFailure
 from preform.shear.surrogate import surrogate
 from preform.step import CaseContext, Step
 
@@ -138,7 +138,7 @@ def _bytes(n: float) -> str:
 
 def drape_settings(scene: Scene, surface: Any) -> DrapeSettings:
     """The scene's drape set-up (SI units), its fidelity knobs resolved once against the tool
-    (``preform.pipeline.fidelity``) and carried in it, to be recorded as they ran.
+    (``preform.base.fidelity``) and carried in it, to be recorded as they ran.
 
     Raises ``CaseFailure`` when the ply would need more than ``limits.max_nodes`` nodes or has
     no cell at the resolved spacing, before anything of its size is allocated."""
@@ -417,46 +417,6 @@ def _needs_optimum(scene: Scene) -> tuple[str, ...]:
     return ("optimum",) if scene.search is not None else ()
 
 
-def write_cells_csv(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.csv_columns import write_csv_columns
-    from preform.export.tables import cell_columns
-
-    ply: DrapedPly = ctx.products["drape"]
-    energy = ctx.products["thickness"].applied(ply.result, ply.energy)  # the case's one thickness
-    preform = ctx.products.get("permeability")  # only when the scene asks for it
-    # without pandas: its import costs a worker more than the table (preform.export.csv_columns)
-    write_csv_columns(cell_columns(ply.result, energy, preform), ctx.case_dir / "cells.csv")
-    return {"cells_csv": "cells.csv"}
-
-
-def write_vtu(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.vtu import write_drape_vtu
-
-    ply: DrapedPly = ctx.products["drape"]
-    energy = ctx.products["thickness"].applied(ply.result, ply.energy)  # the case's one thickness
-    preform = ctx.products.get("permeability")  # only when the scene asks for it
-    write_drape_vtu(ply.result, energy, ctx.case_dir / "drape.vtu", preform)
-    return {"vtu": "drape.vtu"}
-
-
-def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
-    from preform.export.fig_drape import fibre_pattern_figure
-
-    ply: DrapedPly = ctx.products["drape"]
-    every = max(1, round(5e-3 / ply.result.node_spacing))  # a tow line every ~5 mm
-    surface = ctx.products.get("surface")
-    fibre_pattern_figure(
-        ply.result,
-        ply.energy,
-        ctx.case_dir / "fibre_pattern.png",
-        title=ctx.fabric.name,  # the figure adds the angle, coverage and energy
-        tow_every=every,
-        part=scene_part(ctx.scene, surface) if surface is not None else None,
-        covered_fraction=ctx.summary.get("covered_fraction"),
-    )
-    return {"fibre_pattern_png": "fibre_pattern.png"}
-
-
 def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceError]:
     """Problems a scene's tool, ply, start and part have before anything runs, located (the
     drape step's ``check``).
@@ -533,8 +493,6 @@ def scene_problems(scene: Scene, doc: Document, registry: Any) -> list[SourceErr
 
 def _generator_problems(scene: Scene, doc: Document) -> list[SourceError]:
     """Polyline generators without their polylines, or with too few or too many vertices."""
-    from preform.pipeline.scene import MAX_POLYGON_VERTICES
-
     start = scene.start
     if start is None or start.generators != "polyline":
         return []
@@ -613,38 +571,5 @@ STEPS = [
         extra_requires=_needs_optimum,
         sections=dict.fromkeys(("tool", "ply", "start", "part")),
         check=scene_problems,
-    ),
-]
-
-EXPORTERS = [
-    Step(
-        "cells_csv",
-        ("cells_csv",),
-        ("drape", "thickness"),
-        "1",
-        write_cells_csv,
-        "cells.csv: one row per cell (shear, energy, status, thickness; Vf, permeability "
-        "when the scene asks for permeability)",
-        writes_files=True,
-        extra_requires=preform_if_asked,
-    ),
-    Step(
-        "vtu",
-        ("vtu",),
-        ("drape", "thickness"),
-        "1",
-        write_vtu,
-        "drape.vtu for ParaView",
-        writes_files=True,
-        extra_requires=preform_if_asked,
-    ),
-    Step(
-        "fibre_pattern_png",
-        ("fibre_pattern_png",),
-        ("drape",),
-        "1",
-        write_fibre_pattern_png,
-        "fibre_pattern.png: top view with tows, 3D view by shear",
-        writes_files=True,
     ),
 ]

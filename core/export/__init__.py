@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     )
     from preform.export.element_table import element_table, write_element_table
     from preform.export.fe_mapping import MeshMapping, map_to_mesh
-    from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
+    from preform.export.fig_curves import energy_vs_angle_figure
     from preform.export.fig_drape import fibre_pattern_figure
     from preform.export.fig_unit_cell import unit_cell_figure
     from preform.export.flat_pattern import flat_pattern
@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from preform.export.stack_lsdyna import write_stack_lsdyna
     from preform.export.tables import cells_table, write_json, write_table
     from preform.export.vtu import write_drape_vtu, write_unit_cell_vtu
+    from preform.shear.figures import shear_curve_figure
 
 # Each writer is imported when first asked for: `import preform.export.export_steps` (every
 # command's plugin registration) must not pay for every format's module.
@@ -53,7 +54,7 @@ _HOME = {
     "flat_pattern": "preform.export.flat_pattern",
     "map_to_mesh": "preform.export.fe_mapping",
     "read_shell_mesh": "preform.export.shell_mesh",
-    "shear_curve_figure": "preform.export.fig_curves",
+    "shear_curve_figure": "preform.shear.figures",
     "shell_mesh": "preform.export.shell_mesh",
     "unit_cell_figure": "preform.export.fig_unit_cell",
     "write_abaqus_include": "preform.export.abaqus",

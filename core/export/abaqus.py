@@ -31,7 +31,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from preform.export.atomic import atomic_open
+from preform.base.atomic import atomic_open
 from preform.export.fe_mapping import MeshMapping
 
 #: Abaqus allows at most 16 entries on a data line of a set.
@@ -53,7 +53,7 @@ def abaqus_include_text(
     mapping: MeshMapping, *, prefix: str = "PREFORM", title: str | None = None
 ) -> str:
     """The include file's text (module docstring)."""
-    from preform.pipeline.export_section import prefix_problem
+    from preform.base.export_section import prefix_problem
 
     problem = prefix_problem(prefix)
     if problem is not None:

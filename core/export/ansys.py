@@ -31,7 +31,7 @@ import os
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.export.atomic import atomic_open
+from preform.base.atomic import atomic_open
 from preform.export.fe_mapping import MeshMapping
 
 FloatArray = NDArray[np.float64]

@@ -34,8 +34,8 @@ from typing import Any, Literal
 
 import numpy as np
 
+from preform.base.atomic import atomic_open
 from preform.export.abaqus import _num, _set_lines
-from preform.export.atomic import atomic_open
 from preform.export.fe_mapping import MeshMapping
 from preform.export.shell_mesh import ShellMesh
 
@@ -101,7 +101,7 @@ def calculix_include_text(
     the orthotropic form (default ``<P>_FABRIC``); ``materials``: the u and v layers' names for
     the two-layer form (default ``<P>_UD`` for both); ``u_fraction``: share of the thickness in
     the u layer. Needs the ply's nominal thickness t0 (a section needs a thickness [mm])."""
-    from preform.pipeline.export_section import prefix_problem
+    from preform.base.export_section import prefix_problem
 
     problem = prefix_problem(prefix)
     if problem is not None:

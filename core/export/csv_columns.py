@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from preform.export.atomic import atomic_open
+from preform.base.atomic import atomic_open
 
 #: A column: a numpy array (float, integer or bool), a numpy masked array (masked entries are
 #: missing: a nullable column), or a sequence of Python scalars (str, int, float, bool, None).

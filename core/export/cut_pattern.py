@@ -64,8 +64,8 @@ from xml.sax.saxutils import escape
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.atomic import atomic_open, atomic_path
 from preform.drape.engine.result import DrapeResult
-from preform.export.atomic import atomic_open, atomic_path
 from preform.export.flat_pattern import flat_pattern
 
 if TYPE_CHECKING:

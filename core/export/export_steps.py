@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.pipeline.export_section import ExportSection
-from preform.pipeline.status import CaseFailure
+from preform.base.export_section import ExportSection
+from preform.base.status import CaseFailure
 from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:

@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from preform.base.figures import new_figure, save_figure
 from preform.drape.engine.part import Part
 from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
-from preform.export.figures import new_figure, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from preform.base.figures import new_figure, save_figure
 from preform.export.fig_drape import _colour_scale, _nice_ticks, _Panel, _tick_text
-from preform.export.figures import new_figure, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from preform.export.figures import new_figure, save_figure
+from preform.base.figures import new_figure, save_figure
 from preform.geometry.unit_cell import TowPath, UnitCell
 
 if TYPE_CHECKING:

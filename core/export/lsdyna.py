@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from preform.export.atomic import atomic_open
+from preform.base.atomic import atomic_open
 from preform.export.fe_mapping import MeshMapping
 
 #: Largest id an 8-character field holds.

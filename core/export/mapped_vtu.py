@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-from preform.export.atomic import atomic_path
+from preform.base.atomic import atomic_path
 from preform.export.fe_mapping import MeshMapping
 from preform.export.vtu import _require_meshio
 

@@ -43,7 +43,7 @@ def stack_sections_text(
 ) -> str:
     """The include's text (module docstring); ``section_points``: integration points through
     each layer (Abaqus; ccx chooses its own)."""
-    from preform.pipeline.export_section import prefix_problem
+    from preform.base.export_section import prefix_problem
 
     problem = prefix_problem(prefix)
     if problem is not None:

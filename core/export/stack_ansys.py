@@ -45,7 +45,7 @@ def stack_ansys_text(
 ) -> str:
     """The APDL input (module docstring); systems numbered from ``first_system`` (> 10),
     sections from ``first_section``."""
-    from preform.pipeline.export_section import prefix_problem
+    from preform.base.export_section import prefix_problem
 
     problem = prefix_problem(prefix)
     if problem is not None:

@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from preform.base.atomic import atomic_open, atomic_path
 from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField
-from preform.export.atomic import atomic_open, atomic_path
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from preform.base.atomic import atomic_path
 from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
-from preform.export.atomic import atomic_path
 
 if TYPE_CHECKING:
     from preform.drape.properties.preform_fields import PreformField

@@ -45,6 +45,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from preform.base import fidelity
+from preform.base.status import CaseFailure
 from preform.drape.engine.fields import energy_field
 from preform.drape.engine.settings import DrapeSettings
 from preform.drape.judging.verdict import coverage, law_nonfinite_angle, law_range
@@ -65,8 +67,6 @@ from preform.optimise.search import (
     search_generator_angle,
     search_layout,
 )
-from preform.pipeline import fidelity
-from preform.pipeline.status import CaseFailure
 from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:

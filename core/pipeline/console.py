@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from preform.pipeline.status import MEANING, CaseStatus
+from preform.base.status import MEANING, CaseStatus
 from preform.step import WARNING_CAUSES
 
 if TYPE_CHECKING:

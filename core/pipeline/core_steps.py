@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from preform.base.status import CaseFailure
 from preform.library import build_shear_law
-from preform.pipeline.status import CaseFailure
 from preform.step import CaseContext, Step
 
 if TYPE_CHECKING:

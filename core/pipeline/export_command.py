@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from preform.commands.options import EXIT_FAILED, echo_json, fail, json_option, library_options
+from preform.command_line import EXIT_FAILED, echo_json, fail, json_option, library_options
 
 #: Command-line target -> the scene output (exporter product) it asks for.
 TARGETS: dict[str, str] = {
@@ -126,7 +126,8 @@ def export_command(
     value. Exit code 0 when written (also when some elements are not covered), 1 when the
     drape or the export failed, 2 for bad input.
     """
-    from preform.commands.options import fabric_or_exit, load_library_or_exit
+    from preform.base.status import CaseFailure
+    from preform.command_line import fabric_or_exit, load_library_or_exit
     from preform.pipeline.planner import PlanError, plan
     from preform.pipeline.scene import (
         SceneError,
@@ -135,7 +136,6 @@ def export_command(
         resolve_scene_path,
         scene_from_data,
     )
-    from preform.pipeline.status import CaseFailure
     from preform.plugin_manager import default_host
     from preform.step import CaseContext
 

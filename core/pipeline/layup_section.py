@@ -19,9 +19,12 @@ drop-off: a ply that covers only part of the part). ``preform.stack`` runs the p
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+if TYPE_CHECKING:
+    from preform.pipeline.scene import Scene
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 #: Most plies of one stack: far beyond any preform (a hundred 0.3 mm plies is a 30 mm wall),
@@ -115,3 +118,10 @@ class LayupSection(BaseModel):
     def ply_names(self) -> list[str]:
         """Every ply's name: its own, else ply-<k>-<fabric> (k from 1, tool side)."""
         return [p.name or f"ply-{k}-{p.fabric}" for k, p in enumerate(self.plies, start=1)]
+
+
+def layup_of(scene: Scene) -> LayupSection:
+    """The scene's layup section; a ValueError for a scene without one."""
+    if scene.layup is None:
+        raise ValueError(f"scene {scene.name!r} has no layup section")
+    return scene.layup

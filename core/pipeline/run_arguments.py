@@ -11,7 +11,7 @@ import math
 from typing import Any
 
 #: The engines a run can use (``preform.pipeline.engines``) and the fidelity presets
-#: (``preform.pipeline.fidelity``), as the command line offers them.
+#: (``preform.base.fidelity``), as the command line offers them.
 ENGINE_NAMES = ("serial", "process", "dask")
 FIDELITY_NAMES = ("draft", "standard", "fine")
 

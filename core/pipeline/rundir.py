@@ -27,8 +27,9 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from preform.export.atomic import atomic_open, atomic_path, remove_stale_temporaries
-from preform.pipeline.status import CaseStatus
+from preform.base.atomic import atomic_open, atomic_path, remove_stale_temporaries
+from preform.base.status import CaseStatus
+from preform.base.strict_json import clean_json
 
 LOCK_NAME = ".preform.lock"
 MANIFEST = "manifest.json"
@@ -70,22 +71,6 @@ def _json_default(obj: Any) -> Any:
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
-def clean_json(obj: Any) -> Any:
-    """NaN/inf → None so that every JSON we write is strict JSON. (A case whose results hold a
-    non-finite number is failed before its summary is written, so nothing is silently nulled.)"""
-    if isinstance(obj, float):
-        return obj if obj == obj and abs(obj) != float("inf") else None
-    if isinstance(obj, dict):
-        return {str(k): clean_json(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [clean_json(v) for v in obj]
-    if hasattr(obj, "tolist"):
-        return clean_json(obj.tolist())
-    if hasattr(obj, "item"):
-        return clean_json(obj.item())
-    return obj
 
 
 def write_json(path: Path, obj: Any) -> None:
@@ -223,7 +208,7 @@ class RunDirectory:
         try:
             # a worker stopped mid-write (interrupt, time limit) leaves its temporary file; a
             # live writer's (a `preform export` beside the run, which takes no run lock) is
-            # locked by it and kept (preform.export.atomic)
+            # locked by it and kept (preform.base.atomic)
             remove_stale_temporaries(self.path)
         finally:
             self._unlock()

@@ -1,7 +1,7 @@
 """Run every (material, scene) case of a library into a results directory.
 
 The directory's layout, lock, manifest and tables are ``preform.pipeline.rundir``'s; the
-engines are ``preform.pipeline.engines``'; what a status means is ``preform.pipeline.status``.
+engines are ``preform.pipeline.engines``'; what a status means is ``preform.base.status``.
 Here: what a case is (and the hash that says when its result can be reused), how one case runs
 and what its status is, and the loop that runs a set of cases so that a case that fails, dies,
 hangs or is interrupted costs only itself, and everything that finished is kept.
@@ -26,7 +26,9 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
-from preform import __version__
+from preform.base import __version__
+from preform.base.status import REUSABLE, CaseFailure, CaseStatus
+from preform.base.strict_json import clean_json as _clean_json
 from preform.library import Library, fabric_from_data
 from preform.pipeline.batching import plan_batches, recorded_wall_time_s
 from preform.pipeline.engines import (
@@ -45,9 +47,7 @@ from preform.pipeline.rundir import (
     read_json,
     write_json,
 )
-from preform.pipeline.rundir import clean_json as _clean_json
 from preform.pipeline.scene import Scene, scene_from_data
-from preform.pipeline.status import REUSABLE, CaseFailure, CaseStatus
 from preform.plugin_manager import PluginHost
 from preform.step import CaseContext
 
@@ -392,7 +392,7 @@ def make_cases(
         limit = scene.limits.case_timeout_s or timeout_s
         if scene.layup is not None:
             # one case per layup scene: it drapes the fabrics its plies name (preform.stack)
-            from preform.stack.cases import layup_case
+            from preform.pipeline.layup_case import layup_case
 
             try:
                 case = layup_case(library, scene, scene_data, out_dir, host)
@@ -529,7 +529,7 @@ def run_cases(
     inputs: dict[str, Any] | None = None,
     on_done: Callable[[CaseResult], None] | None = None,
     batch_size: int | None = None,
-    report_page: bool = False,
+    report_page: Callable[[Path], Path] | None = None,
 ) -> RunReport:
     """Run the cases on an engine, keeping finished ones; keep manifest and tables current.
 
@@ -543,9 +543,9 @@ def run_cases(
     chooses; 1: none). A batch whose worker dies or overruns keeps the cases it finished; the
     others are run again, each on its own. The run-level outputs run on the engine too.
 
-    ``report_page``: write the folder's report.html (``preform.report``) when the run ends
-    uninterrupted; a report that cannot be written is said in ``report_error``, never fails
-    the run.
+    ``report_page``: writes the folder's page when the run ends uninterrupted (given the
+    folder, returns the file: ``preform.report.write_report``, which sits above the pipeline);
+    a page that cannot be written is said in ``report_error``, never fails the run.
     """
     from preform.pipeline.main_guard import refuse_unguarded_run
 
@@ -590,7 +590,7 @@ def _run_in_directory(
     inputs: dict[str, Any] | None,
     on_done: Callable[[CaseResult], None] | None,
     batch_size: int | None,
-    report_page: bool = False,
+    report_page: Callable[[Path], Path] | None = None,
 ) -> RunReport:
     with RunDirectory(out_dir) as rundir:
         run: dict[str, Any] = {
@@ -666,21 +666,14 @@ def _run_in_directory(
         run["counts"] = report.counts()
         rundir.write_manifest(run)
         rundir.write_tables()
-        if report_page and not interrupted:
-            _write_report_page(report)
+        if report_page is not None and not interrupted:
+            try:  # the folder's page, under the run's lock, from the files just written
+                report.report_file = report_page(report.out_dir)
+            except Exception as exc:  # a page must not lose the run's results
+                report.report_error = f"{type(exc).__name__}: {exc}"
+            except KeyboardInterrupt:  # every case is recorded: only the page is left to write
+                report.report_error = "interrupted; `preform report DIR` writes it"
         return report
-
-
-def _write_report_page(report: RunReport) -> None:
-    """The folder's report.html, under the run's lock, from the files just written."""
-    from preform.report import write_report
-
-    try:
-        report.report_file = write_report(report.out_dir)
-    except Exception as exc:  # a page must not lose the run's results
-        report.report_error = f"{type(exc).__name__}: {exc}"
-    except KeyboardInterrupt:  # every case is recorded: only the page is left to write
-        report.report_error = "interrupted; `preform report DIR` writes it"
 
 
 def execute_batch(cases: Sequence[Case]) -> list[CaseResult]:

@@ -16,17 +16,14 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
 
-from preform.pipeline.export_section import ExportSection
+from preform.base.export_section import ExportSection
+from preform.base.limits import MAX_POLYGON_VERTICES
 from preform.pipeline.layup_section import LayupSection
 from preform.registry import LazyLoadError, Registry
 from preform.validation import located_errors, unknown_field_message
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
 
 _STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-#: Most vertices of a ply outline or a generator polyline: the inside test walks the edges one
-#: by one, so a million-vertex outline would take the machine for hours; no ply needs more.
-MAX_POLYGON_VERTICES = 10_000
 
 
 class PlySection(BaseModel):
@@ -218,7 +215,7 @@ class SearchSection(BaseModel):
 
 
 class NumericsSection(BaseModel):
-    """Hand-set numerical knobs; each overrides the fidelity preset (preform.pipeline.fidelity)."""
+    """Hand-set numerical knobs; each overrides the fidelity preset (preform.base.fidelity)."""
 
     model_config = _STRICT
     solver_tolerance: float | None = Field(

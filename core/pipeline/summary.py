@@ -11,7 +11,7 @@ if TYPE_CHECKING:
 
 def case_summary(result: CaseResult) -> dict[str, Any]:
     """One case: its identity, status in words and why (reasons, warnings, error)."""
-    from preform.pipeline.status import CaseStatus
+    from preform.base.status import CaseStatus
 
     return {
         "case_id": result.case_id,
@@ -33,7 +33,7 @@ def case_summary(result: CaseResult) -> dict[str, Any]:
 def run_summary(report: RunReport) -> dict[str, Any]:
     """The run: its directory, counts by status (``skipped``: kept from an earlier run), the
     exit code the command line gives it, and every case of this run."""
-    from preform.pipeline.status import MEANING, CaseStatus
+    from preform.base.status import MEANING, CaseStatus
 
     failed = any(r.status in ("failed", "timed_out") for r in report.results)
     statuses = sorted({CaseStatus(r.status) for r in report.results})

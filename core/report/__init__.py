@@ -46,7 +46,7 @@ def build_report(run_dir: Path, run: Run | None = None) -> str:
 def write_report(run_dir: Path, run: Run | None = None) -> Path:
     """Write ``report.html`` into the run folder ``run_dir`` (atomically) and return its path.
     The caller holds the folder (a run's lock, or ``preform report``'s)."""
-    from preform.export.atomic import atomic_open
+    from preform.base.atomic import atomic_open
 
     path = Path(run_dir) / REPORT_NAME
     text = build_report(Path(run_dir), run)

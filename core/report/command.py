@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from preform.commands.options import EXIT_USAGE, echo_json, fail, json_option
+from preform.command_line import EXIT_USAGE, echo_json, fail, json_option
 
 
 @click.command("report")

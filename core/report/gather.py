@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from preform.pipeline.status import REUSABLE, CaseStatus
+from preform.base.status import REUSABLE, CaseStatus
 
 #: The order cases are shown in: what needs reading first (no result, then an incomplete one).
 STATUS_ORDER: tuple[str, ...] = (

@@ -18,8 +18,8 @@ from importlib import resources
 from typing import Any
 from urllib.parse import quote
 
-from preform import __version__
-from preform.pipeline.status import MEANING, CaseStatus
+from preform.base import __version__
+from preform.base.status import MEANING, CaseStatus
 from preform.report import figures
 from preform.report.gather import CaseData, Run, cause_of, warnings_by_cause
 

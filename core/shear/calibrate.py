@@ -545,7 +545,7 @@ class Calibration:
         over γ [deg]; the locking angle and fit range marked. Returns the saved figure."""
         import numpy as np
 
-        from preform.export.fig_curves import calibration_figure
+        from preform.shear.figures import calibration_figure
 
         top = float(np.max(self.angle_deg))
         grid = np.linspace(0.0, top, 300)

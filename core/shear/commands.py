@@ -28,10 +28,11 @@ import click
 import numpy as np
 from numpy.typing import ArrayLike
 
-from preform.commands.options import (
+from preform.command_line import (
     InputError,
     echo_json,
     fabric_or_exit,
+    file_option,
     json_option,
     library_options,
     load_library_or_exit,
@@ -96,7 +97,7 @@ def shear_curves(
 
 def plot_shear_curves(curves: dict[str, Any], path: str | Path) -> None:
     """Write a PNG with F_s/L and energy against |γ| for both senses (cf. paper Figs 8–9)."""
-    from preform.export.fig_curves import shear_curve_figure
+    from preform.shear.figures import shear_curve_figure
 
     title = f"{curves.get('material', '')} ({curves.get('law', '')})"
     shear_curve_figure(curves, path, title=title)
@@ -111,12 +112,8 @@ def _law_name(entry: Any) -> str:
 @click.command("shear")
 @click.argument("name")
 @click.option("--angles", default="0:60:5", show_default=True, help="START:STOP:STEP [deg].")
-@click.option(
-    "--out",
-    "figure",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the force and energy curves as a figure (.png, .svg, .pdf).",
+@file_option(
+    "--out", "figure", help="Write the force and energy curves as a figure (.png, .svg, .pdf)."
 )
 @click.option("--png", "png", type=click.Path(dir_okay=False), hidden=True)  # old name of --out
 @library_options
@@ -412,7 +409,7 @@ def fit_report(
 
 def plot_fit(report: FitReport, path: str | Path, title: str | None = None) -> None:
     """The fitted F_s/L against the normalised test data [N/mm over deg], one colour per sense."""
-    from preform.export.fig_curves import fit_figure
+    from preform.shear.figures import fit_figure
 
     curves = {}
     for sense, fit in report.fits.items():
@@ -465,18 +462,8 @@ def specimen_options(func: Any) -> Any:
     "force), or with a fitted one. The comments give a free fit's constant either way.",
 )
 @click.option("--step-deg", type=float, default=2.0, show_default=True, help="Table bin [deg].")
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the YAML block to FILE instead of printing it.",
-)
-@click.option(
-    "--plot",
-    type=click.Path(dir_okay=False),
-    metavar="FILE",
-    help="Write the fit against the data as a figure (.png, .svg, .pdf).",
-)
+@file_option("--out", help="Write the YAML block to FILE instead of printing it.")
+@file_option("--plot", help="Write the fit against the data as a figure (.png, .svg, .pdf).")
 @json_option
 def fit_command(
     data: str,
@@ -518,7 +505,7 @@ def fit_command(
         raise InputError(str(error)) from error
     text = block_to_yaml(report.block, report.comments)
     if out:
-        from preform.export.atomic import atomic_open
+        from preform.base.atomic import atomic_open
 
         with atomic_open(out, "w", encoding="utf-8") as handle:
             handle.write(text)

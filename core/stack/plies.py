@@ -7,17 +7,12 @@ from __future__ import annotations
 import copy
 from typing import TYPE_CHECKING, Any
 
+from preform.pipeline.layup_section import layup_of
+
 if TYPE_CHECKING:
     from preform.pipeline.layup_section import LayupPly, LayupSection
     from preform.pipeline.scene import Scene
     from preform.registry import Registry
-
-
-def layup_of(scene: Scene) -> LayupSection:
-    """The scene's layup section; a ValueError for a scene without one."""
-    if scene.layup is None:
-        raise ValueError(f"scene {scene.name!r} has no layup section")
-    return scene.layup
 
 
 def plan_orientation_deg(layup: LayupSection, ply: LayupPly) -> float:

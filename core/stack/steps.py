@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from preform.pipeline.status import CaseFailure, CaseStatus
+from preform.base.status import CaseFailure, CaseStatus
 from preform.stack.maps import PlyLayer, StackMaps, stack_at, stations
 from preform.stack.plies import layup_of, ply_scene
 from preform.stack.validate import layup_problems

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import preform
+from preform.base import fidelity
 from preform.drape.engine.fields import energy_field
 from preform.drape.steps import run_drape
-from preform.pipeline import fidelity
 from preform.shear.surrogate import TabulatedSurrogate
 from preform.step import CaseContext
 

@@ -207,8 +207,8 @@ def test_cells_past_the_sheared_cell_are_held_at_89_degrees_and_said() -> None:
 def test_a_fabric_without_a_sheared_cell_fails_the_case_in_words() -> None:
     from types import SimpleNamespace
 
+    from preform.base.status import CaseFailure
     from preform.drape.preform_steps import run_permeability
-    from preform.pipeline.status import CaseFailure
 
     bare = SimpleNamespace(name="x", architecture="felt", sheared_cell=lambda _g: None)
     with pytest.raises(CaseFailure, match="'felt' has no sheared unit cell"):

@@ -12,11 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import preform
+from preform.base import fidelity
 from preform.drape import NodeStatus, PlyOutline, drape
 from preform.drape.engine.net import place_fronts, place_generators, place_start
 from preform.drape.engine.settings import DrapeError, DrapeSettings
 from preform.drape.steps import drape_settings, run_drape
-from preform.pipeline import fidelity
 from preform.plugins.surfaces.basic import Hemisphere
 from preform.step import CaseContext
 

@@ -119,7 +119,7 @@ def test_a_runs_figures_share_the_scale_and_say_the_coverage(tmp_path, monkeypat
     a complete drape says 100 %."""
     import preform.export.fig_drape as fig_drape
     from preform.drape.steps import write_fibre_pattern_png
-    from preform.pipeline.step import CaseContext
+    from preform.step import CaseContext
 
     drawn = []
     original = fig_drape.fibre_pattern_figure

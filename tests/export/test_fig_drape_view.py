@@ -12,7 +12,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from preform.export import figures
+from preform.base import figures
+from preform.base.figures import new_figure, png_bytes, save_figure
 from preform.export.fig_drape import (
     VIEW_AZIMUTH_DEG,
     VIEW_ELEVATION_DEG,
@@ -21,7 +22,6 @@ from preform.export.fig_drape import (
     shear_view_quads,
     view_axes,
 )
-from preform.export.figures import new_figure, png_bytes, save_figure
 
 angles = dict(
     elevation=st.floats(-89.0, 89.0),

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from preform.drape.engine.result import CellStatus
-from preform.export.fig_curves import energy_vs_angle_figure, shear_curve_figure
+from preform.export.fig_curves import energy_vs_angle_figure
 from preform.export.fig_drape import (
     SHEAR_SCALE_DEG,
     SHEAR_VIEW_MAX_QUADS,
@@ -19,6 +19,7 @@ from preform.export.fig_drape import (
     shear_view_quads,
 )
 from preform.export.fig_unit_cell import refine_polyline, tow_ribbon, unit_cell_figure
+from preform.shear.figures import shear_curve_figure
 
 
 def by_gid(fig, gid):

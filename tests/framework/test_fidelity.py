@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from pydantic import ValidationError
 
-from preform.pipeline import fidelity
+from preform.base import fidelity
 from preform.pipeline.scene import Scene
 
 BASE = {"name": "s", "outputs": ["drape"], "ply": {"size_mm": [100, 100]}, "start": {}}

@@ -33,7 +33,7 @@ def builtin_host(monkeypatch):
 def test_every_builtin_lazy_entry_loads_and_is_what_it_declares(builtin_host):
     from preform.drape import preform_steps
     from preform.drape import steps as drape_steps
-    from preform.export import export_steps
+    from preform.export import drape_outputs, export_steps
     from preform.optimise import search_steps
     from preform.pipeline import core_steps
     from preform.plugins.surfaces.tools import SURFACES
@@ -45,7 +45,15 @@ def test_every_builtin_lazy_entry_loads_and_is_what_it_declares(builtin_host):
 
     registry = builtin_host.registry
     assert all(r.error is None and not r.problems for r in builtin_host.records.values())
-    modules = (core_steps, drape_steps, preform_steps, search_steps, export_steps, stack_steps)
+    modules = (
+        core_steps,
+        drape_steps,
+        drape_outputs,
+        preform_steps,
+        search_steps,
+        export_steps,
+        stack_steps,
+    )
     for kind, listing in (("steps", "STEPS"), ("exporters", "EXPORTERS")):
         expected = {s.name: s for m in modules for s in getattr(m, listing, ())}
         assert registry.names(kind) == sorted(expected)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from preform.export.atomic import is_temporary_name
+from preform.base.atomic import is_temporary_name
 from preform.pipeline.planner import PlanError, plan
 from preform.pipeline.runner import make_cases, run_cases
 from preform.pipeline.scene import SceneError, load_scene

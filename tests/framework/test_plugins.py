@@ -39,7 +39,7 @@ def test_broken_plugins_are_recorded_and_the_rest_work(host):
 
 def test_failed_registration_leaves_nothing_behind(third_party_site):
     from preform import hookimpl
-    from preform.pipeline.step import Step
+    from preform.step import Step
 
     def run(ctx):
         return {"a": 1}

@@ -21,7 +21,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from preform.export.atomic import is_temporary_name
+from preform.base.atomic import is_temporary_name
 
 
 def _descendants(pid: int) -> set[int]:

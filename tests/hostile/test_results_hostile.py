@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from pydantic import BaseModel, ConfigDict
 
+from preform.base.status import CaseFailure
 from preform.drape.engine.fields import cell_fields
 from preform.drape.engine.net import drape
 from preform.drape.engine.ply import PlyOutline
@@ -31,11 +32,10 @@ from preform.drape.judging.verdict import (
 )
 from preform.pipeline.planner import plan
 from preform.pipeline.scene import load_scene
-from preform.pipeline.status import CaseFailure
-from preform.pipeline.step import CaseContext
 from preform.plugin_manager import hookimpl
 from preform.plugins.surfaces.basic import Hemisphere, Plane
 from preform.plugins.surfaces.mesh import tessellate_hemisphere, write_stl
+from preform.step import CaseContext
 from preform.testing import PluginSandbox
 
 # --------------------------------------------------------------------------------------------

@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from preform.export.atomic import atomic_open, is_temporary_name
+from preform.base.atomic import atomic_open, is_temporary_name
 from preform.library import load_library
 from preform.pipeline.rundir import LOCK_NAME, RunDirectory
 from preform.pipeline.runner import folder_name, input_hash, make_cases, run_cases
@@ -309,7 +309,7 @@ def test_killed_writer_leaves_a_temporary_that_the_next_run_removes(runenv, host
     victim = runenv.out / "work-scene" / "a" / "half.json"
     code = (
         "import os, sys\n"
-        "from preform.export.atomic import atomic_open\n"
+        "from preform.base.atomic import atomic_open\n"
         f"with atomic_open({str(victim)!r}) as f:\n"
         "    f.write('{\"half\": ')\n"
         "    f.flush()\n"
@@ -345,7 +345,7 @@ def test_users_files_that_look_temporary_are_kept(runenv, host, name):
 def test_temporary_names_are_recognised():
     made = []
     target = Path(os.environ.get("TMPDIR", "/tmp")) / f"preform-probe-{os.getpid()}.json"
-    from preform.export.atomic import atomic_path
+    from preform.base.atomic import atomic_path
 
     with atomic_path(target) as tmp:
         made.append(tmp.name)
@@ -592,7 +592,7 @@ def test_outputs_follow_the_umask(runenv, host, mask):
 
 
 def test_full_disk_fails_the_case_and_the_run_says_so(runenv, host, monkeypatch):
-    import preform.export.atomic as atomic
+    import preform.base.atomic as atomic
 
     real_fsync = os.fsync
     calls = {"n": 0}
@@ -617,7 +617,7 @@ def test_full_disk_fails_the_case_and_the_run_says_so(runenv, host, monkeypatch)
 def test_full_disk_through_the_cli_is_a_clear_error(runenv, monkeypatch):
     from click.testing import CliRunner
 
-    import preform.export.atomic as atomic
+    import preform.base.atomic as atomic
     import preform.plugin_manager as pm
     from preform.cli import cli
 

@@ -21,10 +21,9 @@ from typing import Any
 
 import pytest
 
+from preform.base.status import CaseFailure
 from preform.drape.steps import run_surface
 from preform.pipeline.scene import SceneError, bundled_scene_dir, load_scene, validate_scene_data
-from preform.pipeline.status import CaseFailure
-from preform.pipeline.step import CaseContext
 from preform.plugins.surfaces.mesh import (
     MeshFileError,
     read_obj,
@@ -32,6 +31,7 @@ from preform.plugins.surfaces.mesh import (
     tessellate_hemisphere,
     write_stl,
 )
+from preform.step import CaseContext
 from preform.testing import PluginSandbox
 from preform.yamlsource import load_yaml
 

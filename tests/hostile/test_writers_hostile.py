@@ -2,7 +2,7 @@
 killed writers left, and no live writer's temporary may go with them, whoever the writer is
 (``preform export``, a script, another run) and whatever lock it holds or does not hold.
 
-The mechanism (``preform.export.atomic``): a writer holds a flock on its temporary until it is
+The mechanism (``preform.base.atomic``): a writer holds a flock on its temporary until it is
 renamed into place; the clean-up removes only temporaries it can lock.
 """
 
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from preform.export.atomic import atomic_open, is_temporary_name, remove_stale_temporaries
+from preform.base.atomic import atomic_open, is_temporary_name, remove_stale_temporaries
 from preform.pipeline.rundir import RunDirectory
 
 
@@ -44,7 +44,7 @@ def test_a_dead_writers_temporary_is_removed(tmp_path):
     target = tmp_path / "half.json"
     code = (
         "import os\n"
-        "from preform.export.atomic import atomic_open\n"
+        "from preform.base.atomic import atomic_open\n"
         f"with atomic_open({str(target)!r}) as f:\n"
         "    f.write('{')\n"
         "    f.flush()\n"
@@ -66,7 +66,7 @@ def test_a_run_entering_and_leaving_keeps_another_processs_write(tmp_path):
         f"""
         import os, sys, time
         from pathlib import Path
-        from preform.export.atomic import atomic_open
+        from preform.base.atomic import atomic_open
         with atomic_open({str(target)!r}) as f:
             f.write("x,y\\n")
             f.flush()

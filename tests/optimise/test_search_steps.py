@@ -17,8 +17,8 @@ from preform.optimise import search_steps
 from preform.optimise.search_steps import EXPORTERS, STEPS, search_knobs
 from preform.pipeline.runner import make_cases, run_cases
 from preform.pipeline.scene import Scene, bundled_scene_dir, load_scene
-from preform.pipeline.step import CaseContext
 from preform.plugin_manager import hookimpl
+from preform.step import CaseContext
 
 ISSUE_SCENE = """\
 name: hemisphere-min-energy

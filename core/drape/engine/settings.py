@@ -13,7 +13,7 @@ import numpy as np
 from preform.drape.engine.ply import PlyOutline
 
 if TYPE_CHECKING:
-    from preform.pipeline.fidelity import Knobs
+    from preform.base.fidelity import Knobs
 
 
 class DrapeError(ValueError):

@@ -1,6 +1,6 @@
 """What a drape result is worth: its coverage, its finiteness, and where it leaves the law.
 
-The pipeline's status vocabulary (``preform.pipeline.status``) promises ``ok`` only for a
+The pipeline's status vocabulary (``preform.base.status``) promises ``ok`` only for a
 result that is complete and finite. This module turns a :class:`DrapeResult` and its
 :class:`EnergyField` into the words that back that promise; the steps route them to
 ``CaseContext.partial`` / ``warn`` or raise ``CaseFailure``. See ``docs/results.md``.

@@ -8,10 +8,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from preform.base.figures import new_figure, save_figure
 from preform.compare.comparison import Comparison
+from preform.compare.vtu import largest_angle_error
 from preform.drape.engine.result import DrapeResult
-from preform.export.compare_vtu import largest_angle_error
-from preform.export.figures import new_figure, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -1,4 +1,8 @@
-"""Options every command spells the same way (see ``preform.commands``)."""
+"""The grammar every command of ``preform`` spells the same way: ``--library PATH``
+(repeatable) adds to the bundled library and ``PREFORM_LIBRARY``, ``--no-bundled`` leaves the
+bundled library out; ``--json`` prints nothing but one JSON document on stdout (words go to
+stderr); ``--out`` is a directory for a run and a file for a single artefact, and its metavar
+says which; the exit codes. Below every package that has a command (docs/design.md, "Layers")."""
 
 from __future__ import annotations
 
@@ -56,11 +60,16 @@ def json_option(func: F) -> F:
     return click.option("--json", "as_json", is_flag=True, help=JSON_HELP)(func)
 
 
+def file_option(*names: str, help: str) -> Callable[[F], F]:
+    """``--NAME FILE``: one file to write (a directory is refused)."""
+    return click.option(*names, type=click.Path(dir_okay=False), metavar="FILE", help=help)
+
+
 def echo_json(obj: Any) -> None:
     """``obj`` as JSON on stdout: numpy values and paths made plain, non-finite numbers null."""
     import json  # here, not at the top: most commands print no JSON
 
-    from preform.pipeline.rundir import clean_json
+    from preform.base.strict_json import clean_json
 
     click.echo(json.dumps(clean_json(obj), indent=2, sort_keys=False, default=str))
 

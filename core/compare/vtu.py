@@ -11,8 +11,8 @@ import os
 
 import numpy as np
 
+from preform.base.atomic import atomic_path
 from preform.compare.comparison import FLAGS, Comparison
-from preform.export.atomic import atomic_path
 from preform.export.vtu import _require_meshio
 
 

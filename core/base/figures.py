@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from preform.export.atomic import atomic_path
+from preform.base.atomic import atomic_path
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

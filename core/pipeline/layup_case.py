@@ -1,4 +1,5 @@
-"""The one pipeline case of a layup scene: it carries every fabric its plies name."""
+"""The one pipeline case of a layup scene: it carries every fabric its plies name (the layup
+step, ``preform.stack``, drapes them)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from preform.stack.plies import layup_of
+from preform.pipeline.layup_section import layup_of
 
 if TYPE_CHECKING:
     from preform.library import Library

@@ -1,8 +1,0 @@
-"""Deprecated: this module is ``preform.optimise.search_steps`` (the optimisation on top of the drape).
-
-Kept for one release: importing it warns and gives the same module object.
-"""
-
-from preform._moved import alias_moved_module
-
-alias_moved_module(__name__, "preform.optimise.search_steps")
