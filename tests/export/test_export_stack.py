@@ -195,3 +195,36 @@ def test_a_stack_needs_the_mesh_and_a_single_ply_scene_one_name(tmp_path) -> Non
     )
     assert code == 2 and "has no layup, so it drapes one fabric" in stderr, stderr
     assert not (tmp_path / "out").exists() and not (tmp_path / "one").exists()
+
+
+def test_reports_and_summaries_name_the_users_mesh_by_its_file_name(tmp_path) -> None:
+    """Issue 26: a report goes to other machines, where the folder the mesh was read from
+    means nothing; the decks already named the file only."""
+    folder = tmp_path / "somewhere" / "deep"
+    folder.mkdir(parents=True)
+    shutil.copy(MESH, folder / "my_cap.inp")
+    scene = tmp_path / "small.yaml"
+    scene.write_text(
+        "name: small\ntool: {surface: hemisphere, radius_mm: 100}\n"
+        "ply: {node_spacing_mm: 10, size_mm: [60, 60]}\n"
+        "start: {point_mm: [0, 0], orientation_deg: 0, generator_angle_deg: 90}\n"
+        f"export: {{mesh: {folder / 'my_cap.inp'}}}\noutputs: [drape, abaqus_include]\n"
+    )
+    code, stdout, stderr = export(
+        "plain-weave-600", "abaqus", "--scene", str(scene), "--out", str(tmp_path / "e"), "--json"
+    )
+    assert code == 0, stderr
+    report = json.loads(stdout)
+    assert report["status"] == "partial"  # a 60 mm ply leaves the 80 mm cap's rim bare
+    assert report["mesh"]["mesh"] == "my_cap.inp"
+    assert "my_cap.inp" in report["reasons"][0]
+    assert "somewhere" not in stdout + stderr
+    result = CliRunner().invoke(
+        cli,
+        ["pipeline", "run", "--scene", str(scene), "--materials", "plain-weave-600",
+         "--engine", "serial", "--out", str(tmp_path / "run")],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    (summary,) = (tmp_path / "run").glob("*/*/summary.json")
+    text = summary.read_text()
+    assert "my_cap.inp" in text and "somewhere" not in text
