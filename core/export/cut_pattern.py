@@ -492,7 +492,7 @@ def cut_pattern(
         f"{ply_name}: u fibres along x here, laid at {orientation:.1f} deg to the tool x axis "
         f"(v at {alpha:.1f} deg from u at the start); d = {d_mm:g} mm; units mm"
     )
-    lines = (
+    lines: tuple[str, ...] = (
         f"{ply_name}",
         f"u fibres along x, laid at {orientation:.1f} deg to the tool x axis",
         f"v at {alpha:.1f} deg from u at the start",

@@ -29,24 +29,6 @@ MESH = EXAMPLES / "calculix_cap_mesh.inp"
 MODULI = (140000.0, 10000.0, 10000.0, 0.3, 0.3, 0.5, 5000.0, 5000.0, 3500.0)
 
 
-def layup_scene(orientations: tuple[float, float], fabrics: tuple[str, str]) -> dict:
-    return {
-        "name": "cap-stack",
-        "tool": {"surface": "hemisphere", "radius_mm": 100},
-        "ply": {"node_spacing_mm": 10, "size_mm": [160, 160]},
-        "start": {"point_mm": [0, 0]},
-        "layup": {
-            "plies": [
-                {"fabric": f, "orientation_deg": a, "thickness_mm": 0.5}
-                for f, a in zip(fabrics, orientations, strict=True)
-            ],
-            "ply_outputs": ["drape"],
-        },
-        "export": {"mesh": "calculix_cap_mesh.inp", "reference_direction": [1, 0, 0]},
-        "outputs": ["layup"],
-    }
-
-
 def write_scene(folder: Path, scene: dict) -> Path:
     """The scene as YAML (JSON is YAML) beside a copy of the mesh it names relatively."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -61,8 +43,10 @@ def export(*args: str) -> tuple[int, str, str]:
     return result.exit_code, result.stdout, result.stderr
 
 
-def test_a_layup_scenes_stack_exports_to_every_solver_as_the_api_writes_it(tmp_path) -> None:
-    scene = layup_scene((0, 45), ("plain-weave-600", "satin-4hs-crowfoot"))
+def test_a_layup_scenes_stack_exports_to_every_solver_as_the_api_writes_it(
+    tmp_path, cap_layup
+) -> None:
+    scene = cap_layup([("plain-weave-600", 0), ("satin-4hs-crowfoot", 45)], MESH.name)
     path = write_scene(tmp_path / "scene", scene)
     out = tmp_path / "out"
     code, stdout, stderr = export(
@@ -132,14 +116,14 @@ def pulled(tmp_path: Path, ccx, folder: Path, direction: int, tag: str) -> np.nd
 
 
 def test_the_exported_stack_deck_runs_in_calculix_and_its_orientations_take_effect(
-    tmp_path, ccx
+    tmp_path, ccx, cap_layup
 ) -> None:
     folders = {}
     for angle in (0, 90):
         # a NAME per ply replaces the scene's fabrics: both plies the plain weave
         path = write_scene(
             tmp_path / f"scene-{angle}",
-            layup_scene((angle, angle), ("satin-4hs-crowfoot", "satin-4hs-crowfoot")),
+            cap_layup([("satin-4hs-crowfoot", angle)] * 2, MESH.name),
         )
         folders[angle] = tmp_path / f"out-{angle}"
         code, _, stderr = export(
@@ -169,23 +153,23 @@ def test_the_exported_stack_deck_runs_in_calculix_and_its_orientations_take_effe
         (["lsdyna", "--lsdyna-form", "beta"], "--lsdyna-form: a stack is written as"),
     ],
 )
-def test_bad_input_for_a_stack_is_refused_where_it_is(tmp_path, words, said) -> None:
-    path = write_scene(
-        tmp_path / "scene", layup_scene((0, 90), ("plain-weave-600", "plain-weave-600"))
-    )
+def test_bad_input_for_a_stack_is_refused_where_it_is(tmp_path, cap_layup, words, said) -> None:
+    scene = cap_layup([("plain-weave-600", 0), ("plain-weave-600", 90)], MESH.name)
+    path = write_scene(tmp_path / "scene", scene)
     code, _, stderr = export(*words, "--scene", str(path), "--out", str(tmp_path / "out"))
     assert code == 2 and said in stderr, stderr
     assert not (tmp_path / "out").exists()  # nothing was run
 
 
-def test_a_layup_fabric_the_library_lacks_is_located_at_its_ply(tmp_path) -> None:
-    path = write_scene(tmp_path / "scene", layup_scene((0, 90), ("plain-weave-600", "nosuch")))
+def test_a_layup_fabric_the_library_lacks_is_located_at_its_ply(tmp_path, cap_layup) -> None:
+    scene = cap_layup([("plain-weave-600", 0), ("nosuch", 90)], MESH.name)
+    path = write_scene(tmp_path / "scene", scene)
     code, _, stderr = export("abaqus", "--scene", str(path), "--out", str(tmp_path / "out"))
     assert code == 2 and "layup.plies[1].fabric: no fabric named 'nosuch'" in stderr, stderr
 
 
-def test_a_stack_needs_the_mesh_and_a_single_ply_scene_one_name(tmp_path) -> None:
-    scene = layup_scene((0, 90), ("plain-weave-600", "plain-weave-600"))
+def test_a_stack_needs_the_mesh_and_a_single_ply_scene_one_name(tmp_path, cap_layup) -> None:
+    scene = cap_layup([("plain-weave-600", 0), ("plain-weave-600", 90)], MESH.name)
     del scene["export"]["mesh"]
     path = write_scene(tmp_path / "scene", scene)
     code, _, stderr = export("calculix", "--scene", str(path), "--out", str(tmp_path / "out"))
