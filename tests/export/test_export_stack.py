@@ -212,3 +212,20 @@ def test_reports_and_summaries_name_the_users_mesh_by_its_file_name(tmp_path) ->
     (summary,) = (tmp_path / "run").glob("*/*/summary.json")
     text = summary.read_text()
     assert "my_cap.inp" in text and "somewhere" not in text
+
+
+def test_a_mesh_no_ply_covers_fails_and_writes_no_deck(tmp_path, cap_layup) -> None:
+    """The cap read in metres as mm lies 82 m from the drape: every section would be
+    missing, so the export fails (exit 1) saying how far apart they are, and writes no deck."""
+    scene = cap_layup([("plain-weave-600", 0), ("plain-weave-600", 90)], MESH.name)
+    path = write_scene(tmp_path / "scene", scene)
+    out = tmp_path / "out"
+    code, stdout, stderr = export(
+        "calculix", "table", "--scene", str(path), "--mesh-unit-mm", "1000",
+        "--out", str(out), "--json",
+    )  # fmt: skip
+    assert code == 1, stderr
+    report = json.loads(stdout)
+    assert report["status"] == "failed" and report["written"] == {}
+    assert "no ply covers any element" in report["error"] and "mm apart" in report["error"]
+    assert not list(out.glob("stack_*"))
