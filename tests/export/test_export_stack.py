@@ -50,7 +50,7 @@ def test_a_layup_scenes_stack_exports_to_every_solver_as_the_api_writes_it(
     path = write_scene(tmp_path / "scene", scene)
     out = tmp_path / "out"
     code, stdout, stderr = export(
-        "abaqus", "calculix", "lsdyna", "ansys", "table", "cut-pattern",
+        "abaqus", "calculix", "lsdyna", "ansys", "table", "cut-pattern", "vtu",
         "--scene", str(path), "--out", str(out), "--json",
     )  # fmt: skip
     assert code == 0, stderr
@@ -67,6 +67,7 @@ def test_a_layup_scenes_stack_exports_to_every_solver_as_the_api_writes_it(
             for ply in ("ply-1-plain-weave-600", "ply-2-satin-4hs-crowfoot")
             for kind in ("dxf", "svg", "csv")
         ],
+        "vtu": ["ply-1-plain-weave-600/elements.vtu", "ply-2-satin-4hs-crowfoot/elements.vtu"],
     }
     assert [(p["name"], p["offset_mm"]) for p in report["plies"]] == [
         ("ply-1-plain-weave-600", 0.0),
