@@ -28,6 +28,7 @@ import shutil
 import subprocess
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import settings
@@ -112,3 +113,30 @@ def ccx() -> Callable[[Path, str], str]:
         return output
 
     return run
+
+
+@pytest.fixture
+def cap_layup() -> Callable[..., dict[str, Any]]:
+    """A layup scene over the R = 100 mm hemisphere, for the S8R cap of
+    docs/examples/calculix_cap_mesh.inp: ``cap_layup([(fabric, angle_deg), ...], mesh,
+    outputs)``, each ply 0.5 mm thick, draped only (``ply_outputs: [drape]``), angles from x."""
+
+    def scene(
+        plies: list[tuple[str, float]], mesh: str, outputs: list[str] | None = None
+    ) -> dict[str, Any]:
+        return {
+            "name": "cap-stack",
+            "tool": {"surface": "hemisphere", "radius_mm": 100},
+            "ply": {"node_spacing_mm": 10, "size_mm": [160, 160]},
+            "start": {"point_mm": [0, 0]},
+            "layup": {
+                "plies": [
+                    {"fabric": f, "orientation_deg": a, "thickness_mm": 0.5} for f, a in plies
+                ],
+                "ply_outputs": ["drape"],
+            },
+            "export": {"mesh": mesh, "reference_direction": [1, 0, 0]},
+            "outputs": outputs or ["layup"],
+        }
+
+    return scene

@@ -28,7 +28,13 @@ The outline is one of:
 The seam allowance is the outline offset outwards by ``seam_allowance_mm`` with round joins
 (area grows by a·perimeter + O(a²)). Fibre marks are short u (along x) and v (along y) lines
 on a grid inside the outline; the label names the ply and how it is laid on the tool, in a few
-lines centred inside the largest piece, its text height fitted to the piece (``label_place``).
+lines centred inside a piece, its text height fitted to the piece (``label_place``). Every
+piece is labelled that holds its label at ``LABEL_MIN_HEIGHT_MM`` or more (a piece cut loose
+must still say which ply it is): when a cut splits the pattern, the largest piece's label says
+all with a second line ``piece 1 of n``, the others the ply's name and ``piece k of n`` only
+(their blocks stay small and leave their fibre marks standing); the largest piece is always
+labelled, a smaller one that cannot hold its two lines is counted (``unlabelled_pieces``), not
+drawn over.
 
 Darts and cuts are where the scene puts them (``export.darts``, ``export.cuts``), in the flat
 coordinates above, because where a ply must be opened is the designer's decision (a dart
@@ -87,6 +93,10 @@ LABEL_CHAR_WIDTH = 1.0
 LABEL_LINE_PITCH = 1.6
 #: Largest label text height [mm]: a large piece gets legible text, not a poster.
 LABEL_MAX_HEIGHT_MM = 10.0
+#: Smallest text height [mm] a piece other than the largest is labelled at: a plotted or
+#: printed letter much smaller than 2 mm is not read on the cutting table (a practical choice,
+#: not a standard's number).
+LABEL_MIN_HEIGHT_MM = 2.0
 
 
 def _require_shapely() -> Any:
@@ -129,6 +139,18 @@ class Cut:
 
 
 @dataclass(frozen=True)
+class PieceLabel:
+    """A label drawn inside one piece of the pattern: its lines centred on ``at`` [mm],
+    ``LABEL_LINE_PITCH`` text heights apart."""
+
+    #: The piece, 1 the largest by area (the order of ``CutPattern.pieces_by_area``).
+    piece: int
+    lines: tuple[str, ...]
+    at: Point2
+    text_height_mm: float
+
+
+@dataclass(frozen=True)
 class CutPattern:
     """The ply in the flat, ready to cut: all lengths mm."""
 
@@ -158,11 +180,28 @@ class CutPattern:
     #: The label as it is drawn: one line each, centred on ``label_at``, ``LABEL_LINE_PITCH``
     #: text heights apart (empty: the label on one line).
     label_lines: tuple[str, ...] = ()
+    #: Every piece's label (the largest piece's first: ``label_at``, ``label_lines``); empty:
+    #: the one label above.
+    piece_labels: tuple[PieceLabel, ...] = ()
+    #: Pieces too small for even a one-line label at ``LABEL_MIN_HEIGHT_MM``.
+    unlabelled_pieces: int = 0
 
     @property
     def drawn_label(self) -> tuple[str, ...]:
-        """The lines the DXF and SVG draw."""
+        """The lines of the largest piece's label."""
         return self.label_lines or (self.label,)
+
+    @property
+    def drawn_labels(self) -> tuple[PieceLabel, ...]:
+        """The labels the DXF and SVG draw, one per labelled piece, the largest first."""
+        if self.piece_labels:
+            return self.piece_labels
+        return (PieceLabel(1, self.drawn_label, self.label_at, self.text_height_mm),)
+
+    @property
+    def pieces_by_area(self) -> list[Any]:
+        """The outline's pieces, largest first (piece k is entry k − 1)."""
+        return sorted(self.outline.geoms, key=lambda g: -g.area)
 
     @property
     def area_mm2(self) -> float:
@@ -187,6 +226,8 @@ class CutPattern:
             "allowance_area_mm2": self.allowance_area_mm2,
             "fibre_marks": len(self.marks),
             "label": self.label,
+            "labelled_pieces": len(self.drawn_labels) if not self.outline.is_empty else 0,
+            "unlabelled_pieces": self.unlabelled_pieces,
             "darts": len(self.darts),
             "darts_removed_area_mm2": sum(d.removed_area_mm2 for d in self.darts),
             "cuts": len(self.cuts),
@@ -451,16 +492,19 @@ def cut_pattern(
         f"{ply_name}: u fibres along x here, laid at {orientation:.1f} deg to the tool x axis "
         f"(v at {alpha:.1f} deg from u at the start); d = {d_mm:g} mm; units mm"
     )
-    lines = (
+    lines: tuple[str, ...] = (
         f"{ply_name}",
         f"u fibres along x, laid at {orientation:.1f} deg to the tool x axis",
         f"v at {alpha:.1f} deg from u at the start",
         f"d = {d_mm:g} mm; units mm",
     )
-    label_at, height = label_place(outline, lines)
-    # fibre marks through the label would strike its text out: the label's block keeps clear
-    block = _label_block(label_at, height, lines, margin=0.5 * height)
-    marks = [m for m in marks if not block.intersects(LineString([m.start, m.end]))]
+    labels, unlabelled = _piece_labels(outline, lines, marks)
+    label_at, height, lines = labels[0].at, labels[0].text_height_mm, labels[0].lines
+    # fibre marks through a label would strike its text out: the labels' blocks keep clear
+    for placed in labels:
+        h = placed.text_height_mm
+        block = _label_block(placed.at, h, placed.lines, margin=0.5 * h)
+        marks = [m for m in marks if not block.intersects(LineString([m.start, m.end]))]
     return CutPattern(
         outline=outline,
         allowance=allowance,
@@ -470,6 +514,8 @@ def cut_pattern(
         label_at=label_at,
         text_height_mm=height,
         label_lines=lines,
+        piece_labels=labels,
+        unlabelled_pieces=unlabelled,
         node_spacing_mm=d_mm,
         cell_count=cell_count,
         cells_area_mm2=cell_count * d_mm * d_mm,
@@ -491,21 +537,66 @@ def _label_block(at: Point2, height: float, lines: Sequence[str], margin: float 
     return box(at[0] - half_w, at[1] - half_h, at[0] + half_w, at[1] + half_h)
 
 
+def _piece_labels(
+    outline: MultiPolygon, lines: tuple[str, ...], marks: Sequence[FibreMark] = ()
+) -> tuple[tuple[PieceLabel, ...], int]:
+    """The label of every piece that holds one (module docstring), the largest piece's first,
+    and the count of pieces too small for any. A smaller piece's label goes where it clears
+    the fibre marks when it can (at ``LABEL_MIN_HEIGHT_MM`` or more): a small piece has few
+    marks, and a label over them would take them away."""
+    from shapely.geometry import LineString
+
+    segments = [LineString([m.start, m.end]) for m in marks]
+    if outline.is_empty:
+        return (PieceLabel(1, lines, (0.0, 0.0), 1.0),), 0
+    pieces = sorted(outline.geoms, key=lambda g: -g.area)
+    n = len(pieces)
+    labels: list[PieceLabel] = []
+    unlabelled = 0
+    for k, piece in enumerate(pieces, 1):
+        if n == 1:
+            tries = [lines]
+        else:
+            # the largest piece says all; the others name the ply and the piece, so their
+            # labels stay small and leave their fibre marks standing
+            which = f"piece {k} of {n}"
+            tries = [(lines[0], which, *lines[1:])] if k == 1 else [(lines[0], which)]
+        for text in tries:
+            at, height = _place_in(piece, text)
+            if k > 1 and segments:
+                clear_at, clear_height = _place_in(piece, text, avoid=segments)
+                if clear_height >= LABEL_MIN_HEIGHT_MM:
+                    at, height = clear_at, clear_height
+            if k == 1 or height >= LABEL_MIN_HEIGHT_MM:
+                labels.append(PieceLabel(k, tuple(text), at, height))
+                break
+        else:
+            unlabelled += 1
+    return tuple(labels), unlabelled
+
+
 def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, float]:
+    """Where the label block goes in the largest piece and its text height [mm]
+    (:func:`_place_in`)."""
+    if outline.is_empty:
+        return (0.0, 0.0), 1.0
+    return _place_in(max(outline.geoms, key=lambda g: g.area), lines)
+
+
+def _place_in(piece: Any, lines: Sequence[str], avoid: Sequence[Any] = ()) -> tuple[Point2, float]:
     """Where the label block goes and its text height [mm]: the block, ``LABEL_CHAR_WIDTH``
     text heights a character wide and ``LABEL_LINE_PITCH`` a line tall, at the largest
-    height (at most ``LABEL_MAX_HEIGHT_MM``) at which it lies inside the largest piece, its
-    holes kept out. Centres tried: the piece's pole of inaccessibility (the point farthest
-    from its edges: best on a round piece) and a 12 × 12 grid over it (a long strip's best
-    place is anywhere along its middle); the height at each by bisection. A label that ran
-    past the piece would be cut through or printed on the scrap."""
+    height (at most ``LABEL_MAX_HEIGHT_MM``) at which it lies inside ``piece``, its holes
+    kept out. Centres tried: the piece's pole of inaccessibility (the point farthest from its
+    edges: best on a round piece) and a 12 × 12 grid over it (a long strip's best place is
+    anywhere along its middle); the height at each by bisection. A label that ran past the
+    piece would be cut through or printed on the scrap. With ``avoid`` (shapely lines), a
+    centre counts only where the block, grown by half a text height, touches none of them
+    (height 0 when no centre does)."""
     import shapely
     from shapely.geometry import Point
     from shapely.ops import polylabel
 
-    if outline.is_empty:
-        return (0.0, 0.0), 1.0
-    piece = max(outline.geoms, key=lambda g: g.area)
     shapely.prepare(piece)
     x0, y0, x1, y1 = piece.bounds
     width = LABEL_CHAR_WIDTH * max(len(line) for line in lines)
@@ -536,6 +627,10 @@ def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, fl
                 low, high = (middle, high) if fits(centre, middle) else (low, middle)
                 if high - low < 1e-4 * high:
                     break
+        if avoid:
+            block = _label_block((centre.x, centre.y), low, lines, margin=0.5 * low)
+            if any(block.intersects(line) for line in avoid):
+                continue
         if low > best_h:
             best, best_h = centre, low
     return (float(best.x), float(best.y)), best_h
@@ -646,20 +741,19 @@ def _dart_polyline(dart: Dart) -> list[Point2]:
     return [dart.mouth[0], dart.apex, dart.mouth[1]]
 
 
-def _label_line_centres(pattern: CutPattern) -> list[Point2]:
-    """The middle of each drawn label line [mm], first line on top, the block centred."""
-    lines = pattern.drawn_label
-    cx, cy = pattern.label_at
-    pitch = LABEL_LINE_PITCH * pattern.text_height_mm
-    top = cy + 0.5 * pitch * (len(lines) - 1)
-    return [(cx, top - k * pitch) for k in range(len(lines))]
+def _label_line_centres(label: PieceLabel) -> list[Point2]:
+    """The middle of each line of ``label`` [mm], first line on top, the block centred."""
+    cx, cy = label.at
+    pitch = LABEL_LINE_PITCH * label.text_height_mm
+    top = cy + 0.5 * pitch * (len(label.lines) - 1)
+    return [(cx, top - k * pitch) for k in range(len(label.lines))]
 
 
 def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> None:
     """DXF (R2010, units mm) with layers OUTLINE, ALLOWANCE, FIBRE_MARKS, LABELS, DARTS,
     CUTS and PAST_LOCKING: closed LWPOLYLINEs for every ring (none on a layer with nothing to
-    draw), LINEs for the fibre marks, one TEXT per label line (centred, inside the largest
-    piece: :func:`label_place`), an open LWPOLYLINE (mouth₁, apex, mouth₂) per dart and a LINE per cut."""
+    draw), LINEs for the fibre marks, one TEXT per label line (centred, inside its piece:
+    every piece that holds its label, ``CutPattern.drawn_labels``), an open LWPOLYLINE (mouth₁, apex, mouth₂) per dart and a LINE per cut."""
     try:
         import ezdxf
         from ezdxf import units
@@ -685,9 +779,10 @@ def write_cut_pattern_dxf(pattern: CutPattern, path: str | os.PathLike[str]) -> 
         msp.add_lwpolyline(_dart_polyline(dart), close=False, dxfattribs={"layer": "DARTS"})
     for cut in pattern.cuts:
         msp.add_line(cut.start, cut.end, dxfattribs={"layer": "CUTS"})
-    for (x, y), line in zip(_label_line_centres(pattern), pattern.drawn_label, strict=True):
-        text = msp.add_text(line, height=pattern.text_height_mm, dxfattribs={"layer": "LABELS"})
-        text.set_placement((x, y), align=TextEntityAlignment.MIDDLE_CENTER)
+    for label in pattern.drawn_labels:
+        for (x, y), line in zip(_label_line_centres(label), label.lines, strict=True):
+            text = msp.add_text(line, height=label.text_height_mm, dxfattribs={"layer": "LABELS"})
+            text.set_placement((x, y), align=TextEntityAlignment.MIDDLE_CENTER)
     with atomic_path(path) as tmp:
         doc.saveas(tmp)
 
@@ -696,7 +791,7 @@ def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> 
     """SVG at 1:1 (mm; y negated so it looks as the DXF): the outline filled, the allowance
     dashed, cells past locking shaded red (``id="past-locking"``), fibre marks in blue (u)
     and red (v), darts (class ``dart``, a polyline) and cuts
-    (class ``cut``, a line) in magenta, the label as text."""
+    (class ``cut``, a line) in magenta, each piece's label as text."""
     from shapely.geometry import MultiPoint
 
     geoms: list[Any] = [
@@ -759,12 +854,13 @@ def write_cut_pattern_svg(pattern: CutPattern, path: str | os.PathLike[str]) -> 
             f'  <line class="cut" x1="{ax:.4f}" y1="{-ay:.4f}" x2="{bx:.4f}" y2="{-by:.4f}" '
             f'stroke="#b0179a" stroke-width="{2 * stroke:.4f}"/>'
         )
-    for (lx, ly), line in zip(_label_line_centres(pattern), pattern.drawn_label, strict=True):
-        lines.append(
-            f'  <text class="label" x="{lx:.4f}" y="{-ly:.4f}" '
-            f'font-size="{pattern.text_height_mm:.3f}" text-anchor="middle" '
-            f'dominant-baseline="central">{escape(line)}</text>'
-        )
+    for label in pattern.drawn_labels:
+        for (lx, ly), line in zip(_label_line_centres(label), label.lines, strict=True):
+            lines.append(
+                f'  <text class="label" data-piece="{label.piece}" x="{lx:.4f}" y="{-ly:.4f}" '
+                f'font-size="{label.text_height_mm:.3f}" text-anchor="middle" '
+                f'dominant-baseline="central">{escape(line)}</text>'
+            )
     lines.append("</svg>")
     with atomic_open(path, "w", encoding="utf-8") as handle:
         handle.write("\n".join(lines) + "\n")

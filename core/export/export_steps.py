@@ -115,20 +115,21 @@ def run_mesh_mapping(ctx: CaseContext) -> dict[str, Any]:
             ctx.summary[f"mesh_{key}"] = summary[key]
     uncovered = summary["elements_uncovered"]
     if summary["elements"] and not summary["elements_covered"]:
-        raise CaseFailure(no_element_covered(ply.result, mesh, str(options.mesh)))
+        # the mesh by its file name, as the decks name it: a summary goes to other machines too
+        raise CaseFailure(no_element_covered(ply.result, mesh, mesh.source_name))
     if uncovered:
         first = ", ".join(str(e) for e in summary["uncovered_element_ids"][:10])
         more = " ..." if uncovered > 10 else ""
         ctx.partial(
             f"the drape covers {summary['elements_covered']} of {summary['elements']} "
-            f"elements of {options.mesh}; {uncovered} uncovered (ids {first}{more}) are listed "
+            f"elements of {mesh.source_name}; {uncovered} uncovered (ids {first}{more}) are listed "
             "in the exports and given no value",
             summary["covered_fraction"],
         )
     capped = summary["elements_above_thickness_cap"]
     if capped:
         ctx.warn(
-            f"{capped} element(s) of {options.mesh} have t/t0 above the compaction cap "
+            f"{capped} element(s) of {mesh.source_name} have t/t0 above the compaction cap "
             f"{options.thickness_cap_ratio:g} (up to {summary['max_thickness_ratio']:.3g}); "
             "the thickness is reported as computed, not capped"
         )

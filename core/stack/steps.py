@@ -344,6 +344,7 @@ def run_stack_sections(ctx: CaseContext) -> dict[str, Any]:
         count += mapping.covered
         columns[f"angle_u_deg_{layer.name}"] = mapping.angle_u_deg
         columns[f"thickness_mm_{layer.name}"] = mapping.thickness_mm
+    _bare_elements_judged(ctx, mesh, count, stack)  # before any file: a failure writes none
     ids = getattr(mesh, "element_ids", None)
     table: dict[str, Any] = {
         "element": ids if ids is not None else np.arange(1, mesh.n_elements + 1),
@@ -362,6 +363,31 @@ def run_stack_sections(ctx: CaseContext) -> dict[str, Any]:
         k: v for k, v in stack_sections.summary().items() if not k.endswith("_ids")
     }
     return {"stack_sections": stack_sections}
+
+
+def _bare_elements_judged(ctx: CaseContext, mesh: Any, count: Any, stack: Stack) -> None:
+    """Elements no ply covers, judged as a single ply's uncovered elements are: none covered
+    fails the case (every section would be missing: a mesh in another unit or place), some
+    bare make it partial with covered_fraction = elements with a ply / elements. A ply absent
+    where another is (a drop-off) is the layup's design, not a gap."""
+    from preform.export.export_steps import no_element_covered
+
+    n = int(mesh.n_elements)
+    bare = np.nonzero(count == 0)[0]
+    if not bare.size:
+        return
+    if bare.size == n:
+        raise CaseFailure(
+            "no ply covers any element: "
+            + no_element_covered(stack.layers[0].result, mesh, mesh.source_name)
+        )
+    ids = np.asarray(mesh.element_ids)[bare].tolist()
+    first = ", ".join(str(e) for e in ids[:10]) + (" ..." if len(ids) > 10 else "")
+    ctx.partial(
+        f"the stack covers {n - bare.size} of {n} elements of {mesh.source_name}; {bare.size} "
+        f"with no ply (ids {first}) are listed in the decks (the bare set) with no section",
+        (n - bare.size) / n,
+    )
 
 
 STEPS = [

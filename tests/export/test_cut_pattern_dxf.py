@@ -11,7 +11,7 @@ import ezdxf
 import ezdxf.bbox
 import numpy as np
 import pytest
-from shapely.geometry import LineString, Polygon, box
+from shapely.geometry import LineString, Point, Polygon, box
 
 from preform.drape.engine.net import drape
 from preform.drape.engine.ply import PlyOutline
@@ -85,20 +85,25 @@ def test_no_layer_draws_an_empty_or_degenerate_ring(written) -> None:
     assert not [p for p in root.iter() if p.attrib.get("id") == "past-locking"]
 
 
-def test_the_label_lies_inside_its_piece(written) -> None:
+def test_every_label_lies_inside_its_piece(written) -> None:
     pattern, folder = written
     msp = ezdxf.readfile(folder / "p.dxf").modelspace()
     texts = [e for e in msp.query("TEXT") if e.dxf.layer == "LABELS"]
-    assert [t.dxf.text for t in texts] == list(pattern.label_lines)
-    assert "E-BX-318, ply 2 of 6" in texts[0].dxf.text
-    piece = max(pattern.outline.geoms, key=lambda g: g.area)
+    labels = pattern.drawn_labels
+    assert [t.dxf.text for t in texts] == [line for label in labels for line in label.lines]
+    assert texts[0].dxf.text.startswith("E-BX-318, ply 2 of 6")
+    pieces = pattern.pieces_by_area
+    # every piece is labelled here (the split plate's 100 mm piece too), each once
+    assert sorted(label.piece for label in labels) == list(range(1, len(pieces) + 1))
     marks = [
         LineString([m.dxf.start.vec2, m.dxf.end.vec2])
         for m in msp.query("LINE")
         if m.dxf.layer == "FIBRE_MARKS"
     ]
     assert marks
-    for text in texts:
+    owner = [label.piece for label in labels for _ in label.lines]
+    for text, k in zip(texts, owner, strict=True):
+        piece = pieces[k - 1]
         extents = ezdxf.bbox.extents([text])
         drawn = box(extents.extmin.x, extents.extmin.y, extents.extmax.x, extents.extmax.y)
         assert piece.contains(drawn), (text.dxf.text, drawn.bounds, piece.bounds)
@@ -108,8 +113,40 @@ def test_the_label_lies_inside_its_piece(written) -> None:
         x, y = text.dxf.align_point.x, text.dxf.align_point.y
         half = 0.5 * len(text.dxf.text) * h
         assert piece.contains(box(x - half, y - 0.6 * h, x + half, y + 0.6 * h)), text.dxf.text
+        if len(pieces) > 1:
+            assert h >= 2.0  # LABEL_MIN_HEIGHT_MM, legible
     # legible where there is room: the square plate's label is not shrunk to nothing
+    piece = pieces[0]
     assert pattern.text_height_mm >= min(2.0, 0.05 * piece.minimum_rotated_rectangle.length)
+    # the SVG draws the same lines, each tagged with its piece
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    svg = ET.parse(folder / "p.svg").getroot().findall("s:text", ns)
+    assert [(int(t.attrib["data-piece"]), t.text) for t in svg] == [
+        (label.piece, line) for label in labels for line in label.lines
+    ]
+
+
+def test_a_piece_too_small_for_a_label_is_counted_not_drawn_over() -> None:
+    """A plate cut into a 300 mm, a 94 mm and a 6 mm wide strip (100 mm tall): the first two
+    get a label (the second "piece 2 of 3", clear of its fibre marks), the sliver none, and
+    the pattern says so."""
+    pattern = cut_pattern(
+        net(PLATE, (400, 100), 90.0),
+        ply_name="E-BX-318, ply 2",
+        cuts_mm=[((-100.0, -80.0), (-100.0, 80.0)), ((-194.0, -80.0), (-194.0, 80.0))],
+    )
+    pieces = pattern.pieces_by_area
+    widths = [round(p.bounds[2] - p.bounds[0]) for p in pieces]
+    assert widths == [300, 94, 6]
+    labelled = {label.piece: label for label in pattern.drawn_labels}
+    assert sorted(labelled) == [1, 2] and pattern.unlabelled_pieces == 1
+    assert labelled[2].lines == ("E-BX-318, ply 2", "piece 2 of 3")
+    assert labelled[1].lines[:2] == ("E-BX-318, ply 2", "piece 1 of 3")
+    assert pattern.summary()["unlabelled_pieces"] == 1
+    assert pattern.summary()["labelled_pieces"] == 2
+    assert any(pieces[1].contains(Point(m.start)) for m in pattern.marks)  # marks kept
+    for k, label in labelled.items():
+        assert pieces[k - 1].contains(Point(label.at))
 
 
 def test_the_label_is_as_large_as_fits_up_to_the_cap(written) -> None:

@@ -46,25 +46,12 @@ def pole(output_dat: str) -> np.ndarray:
     return np.array([float(v) for v in numbers[-1]])
 
 
-def test_the_pipelines_stack_deck_runs_in_calculix(tmp_path: Path, ccx) -> None:
-    scene = {
-        "name": "cap-stack",
-        "tool": {"surface": "hemisphere", "radius_mm": 100},
-        "ply": {"node_spacing_mm": 10, "size_mm": [160, 160]},
-        "start": {"point_mm": [0, 0]},
-        "layup": {
-            "plies": [
-                {"fabric": FABRICS[0], "orientation_deg": 0, "thickness_mm": 0.5},
-                {"fabric": FABRICS[1], "orientation_deg": 45, "thickness_mm": 0.5},
-            ],
-            "ply_outputs": ["drape"],
-        },
-        "export": {
-            "mesh": str(EXAMPLES / "calculix_cap_mesh.inp"),
-            "reference_direction": [1, 0, 0],
-        },
-        "outputs": ["layup", "stack_sections", "stack_calculix"],
-    }
+def test_the_pipelines_stack_deck_runs_in_calculix(tmp_path: Path, ccx, cap_layup) -> None:
+    scene = cap_layup(
+        [(FABRICS[0], 0), (FABRICS[1], 45)],
+        str(EXAMPLES / "calculix_cap_mesh.inp"),
+        ["layup", "stack_sections", "stack_calculix"],
+    )
     stack = preform.layup(scene, out_dir=tmp_path / "run")
     assert stack.status == "ok", stack.error or stack.reasons
     counts = stack.summary["stack_sections_summary"]
