@@ -65,7 +65,9 @@ def default_case(fabric: str) -> tuple[Any, Any, Any, int]:
     draped = run.products["drape"]
     surface = run.products.get("surface")
     part = scene_part(run.scene, surface) if surface is not None else None
-    every = max(1, round(5e-3 / draped.result.node_spacing))  # as write_fibre_pattern_png
+    every = max(
+        1, round(5e-3 / draped.result.node_spacing)
+    )  # as drape_outputs.write_fibre_pattern_png
     return draped.result, draped.energy, part, every
 
 

@@ -118,7 +118,7 @@ def test_a_runs_figures_share_the_scale_and_say_the_coverage(tmp_path, monkeypat
     """Through the pipeline's step, for two fabrics whose optimum drapes differ: one scale, and
     a complete drape says 100 %."""
     import preform.export.fig_drape as fig_drape
-    from preform.drape.steps import write_fibre_pattern_png
+    from preform.export.drape_outputs import write_fibre_pattern_png
     from preform.step import CaseContext
 
     drawn = []

@@ -79,7 +79,7 @@ def test_one_fabric_energy_axis_is_linear_and_ends_above_the_optimum():
 
 def test_the_fibre_pattern_title_says_the_angle_once(tmp_path, monkeypatch):
     import preform.export.fig_drape as fig_drape
-    from preform.drape.steps import write_fibre_pattern_png
+    from preform.export.drape_outputs import write_fibre_pattern_png
     from preform.step import CaseContext
 
     drawn = []
