@@ -118,6 +118,36 @@ class WalkingPlacement(Protocol):
         ...
 
 
+#: Where a net's fronts lie in its flat node arrays: (nodes per row nj, the start node's flat
+#: index, and per quadrant its signs along i and j and its extents along them, (q,) each; the
+#: last front), as ``preform.drape.net_kernels`` sweeps them.
+NetLayout = tuple[int, int, IntArray, IntArray, IntArray, IntArray, int]
+
+
+@runtime_checkable
+class WalkingFill(Protocol):
+    """Optional method of a :class:`WalkingPlacement` tool: the whole fill in one compiled
+    loop, each node placed as ``place_nodes_from_faces`` would and checked as
+    ``net_kernels.finish_front`` checks it, so the net is the front-by-front loop's."""
+
+    def fill_fronts(
+        self,
+        pos: FloatArray,
+        status: StatusArray,
+        residual: FloatArray,
+        face: IntArray,
+        layout: NetLayout,
+        spacing: float,
+        lo: FloatArray,
+        hi: FloatArray,
+    ) -> int:
+        """Every front of the net, in place on the flat node positions ``pos`` (n, 3) [m],
+        statuses, residuals [m] and facets ``face`` (the generators' already there), at node
+        spacing ``spacing`` [m], nodes past the bounds ``lo``/``hi`` (3,) [m] OFF_TOOL;
+        returns the number of fronts placed."""
+        ...
+
+
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     out = np.empty_like(a)
     out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
@@ -290,7 +320,7 @@ def _fill_fronts_python(
     pos: FloatArray,
     status: StatusArray,
     residual: FloatArray,
-    layout: tuple[int, int, IntArray, IntArray, IntArray, IntArray, int],
+    layout: NetLayout,
     d: float,
     tol_m: float,
     max_iterations: int,
@@ -398,7 +428,10 @@ def drape(
     tolerance: relative tolerance; every solve stops at ``tolerance``·d [m].
     max_iterations: cap on Newton steps per front on surfaces without a closed form.
     substeps: sub-steps per node spacing when marching generators.
-    use_closed_form: use the surface's closed forms when it has them.
+    use_closed_form: use the surface's closed forms when it has them (False: Newton on the
+        constraint circle and marched geodesics). A tool that places by walking its facets (a
+        mesh, :class:`WalkingPlacement`) has no closed form to leave: its exact placement and
+        straightest geodesics serve either way.
 
     Raises :class:`DrapeError` for a set-up that cannot give a net at all (start off the tool,
     start outside the ply, α outside (0, π), d ≤ 0). Everything else, including a net that
@@ -503,7 +536,7 @@ def drape(
         counts,
         substeps,
         tolerance,
-        use_closed_form,
+        use_closed_form or isinstance(surface, WalkingPlacement),
         polyline_halves,
     )
     steps = ((nj, 0), (-nj, 0), (1, 1), (-1, 1))
@@ -537,7 +570,7 @@ def drape(
         isinstance(surface, ClosedFormPlacement) or (compiled and _compiled_closed_form(surface))
     )
     # a faceted tool that places nodes exactly by walking from the parents' facets (meshes)
-    walking = use_closed_form and isinstance(surface, WalkingPlacement)
+    walking = isinstance(surface, WalkingPlacement)
     # each node's facet, for a walking placement only (8 B a node the others do not need)
     face = np.full(n_nodes if walking else 0, -1, dtype=np.int64)
     if walking:
@@ -573,6 +606,12 @@ def drape(
             max_iterations, lo_bound, hi_bound, checked_kind(kind), kernel_parameters(kind, params),
             closed_form,
         )  # fmt: skip
+    elif walking and isinstance(surface, WalkingFill):
+        # The whole fill in one compiled loop of the tool's own (a mesh's walk).
+        fronts, newton_iterations = surface.fill_fronts(
+            pos, status, residual, face, (nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front),
+            d, lo_bound, hi_bound,
+        ), 0  # fmt: skip
     else:
         fronts, newton_iterations = _fill_fronts_python(
             surface, pos, status, residual, (nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front),
