@@ -215,7 +215,7 @@ def _place_node(
             visited[f] = True
             queue[tail] = f
             tail += 1
-    best_phi = np.inf
+    best_rank = np.inf
     best_face = -1
     best_over_feature = False
     ba0, ba1, ba2, bb0, bb1, bb2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -272,15 +272,18 @@ def _place_node(
             )
             over = ua or ub or uc
         if not over:
-            # Most triangles in the ball lie far from the chord circle, which is all a
-            # triangle not over a feature can meet: those whose bounding ball misses it, by
-            # more than the slack of the inside test below (``reach``), have no root.
+            # A triangle not over a feature can only meet the chord circle's far half
+            # (0 < φ < π, where (p − M)·a2 > 0): most triangles in the ball are far from it,
+            # and those whose bounding ball misses it by more than the slack of the inside
+            # test below (``reach``) have no root to find.
             g0 = centroids[t, 0] - m0
             g1 = centroids[t, 1] - m1
             g2 = centroids[t, 2] - m2
+            limit = radii[t] + (reach[t] + 1.0) * inside_tol
+            if _dot3(g0, g1, g2, y0, y1, y2) < -limit:
+                continue
             h = _dot3(g0, g1, g2, e0, e1, e2)
             rho = math.sqrt(max(g0 * g0 + g1 * g1 + g2 * g2 - h * h, 0.0))
-            limit = radii[t] + (reach[t] + 1.0) * inside_tol
             if h * h + (rho - r) * (rho - r) > limit * limit:
                 continue
         cm0, cm1, cm2, cr = m0, m1, m2, r
@@ -318,30 +321,33 @@ def _place_node(
         rho = math.sqrt(al * al + be * be)
         if rho * cr < abs(ga) or rho == 0.0:
             continue
-        base = math.atan2(be, al)
-        half = math.acos(min(max(-ga / (cr * rho), -1.0), 1.0))
+        # cos φ and sin φ of the two roots of al cos φ + be sin φ = −ga / cr, without a
+        # trigonometric call: (cos, sin) = q (al, be)/ρ ± √(1 − q²) (−be, al)/ρ.
+        q = min(max(-ga / (cr * rho), -1.0), 1.0)
+        s = math.sqrt(1.0 - q * q)
+        ua, ub = al / rho, be / rho
         for sign in (1.0, -1.0):
-            phi = base + sign * half
-            cp, sp = cr * math.cos(phi), cr * math.sin(phi)
-            p0 = cm0 + cp * cx0 + sp * cy0
-            p1 = cm1 + cp * cx1 + sp * cy1
-            p2 = cm2 + cp * cx2 + sp * cy2
-            if phi > math.pi:
-                phi -= 2.0 * math.pi
-            elif phi <= -math.pi:
-                phi += 2.0 * math.pi
-            if not (0.0 < phi < math.pi):
-                continue
+            cs = q * ua - sign * s * ub
+            sn = q * ub + sign * s * ua
+            if not sn > 0.0:
+                continue  # not on the far half, 0 < φ < π
+            p0 = cm0 + cr * cs * cx0 + cr * sn * cy0
+            p1 = cm1 + cr * cs * cx1 + cr * sn * cy1
+            p2 = cm2 + cr * cs * cx2 + cr * sn * cy2
+            # Roots are ranked by φ through a pseudo-angle, monotone in φ over (0, 2π]:
+            # 1 − cos φ on (0, π], 3 + cos φ on (π, 2π].
+            rank = 1.0 - cs
             if over:
                 # Ranked with the chord-circle roots by its angle about the parents' chord,
-                # taken in (0, 2π): all triangles compared on one scale.
-                phi = math.atan2(
-                    _dot3(p0 - m0, p1 - m1, p2 - m2, y0, y1, y2),
-                    _dot3(p0 - m0, p1 - m1, p2 - m2, x0, x1, x2),
-                )
-                if phi <= 0.0:
-                    phi += 2.0 * math.pi
-            if phi >= best_phi:
+                # taken in (0, 2π]: all triangles compared on one scale.
+                px = _dot3(p0 - m0, p1 - m1, p2 - m2, x0, x1, x2)
+                py = _dot3(p0 - m0, p1 - m1, p2 - m2, y0, y1, y2)
+                pl = math.sqrt(px * px + py * py)
+                if pl == 0.0:
+                    rank = 4.0  # (on the chord: φ = 2π, last)
+                else:
+                    rank = 1.0 - px / pl if py > 0.0 else 3.0 + px / pl
+            if rank >= best_rank:
                 continue
             inside = True
             for k in range(3):
@@ -357,7 +363,7 @@ def _place_node(
                     inside = False
                     break
             if inside:
-                best_phi, best_face = phi, t
+                best_rank, best_face = rank, t
                 best_over_feature = over
                 ba0, ba1, ba2, bb0, bb1, bb2 = ta0, ta1, ta2, tb0, tb1, tb2
                 bp0, bp1, bp2 = p0, p1, p2
