@@ -18,8 +18,10 @@ a front (all four quadrants stacked) is placed in one vectorised step:
 The arithmetic is compiled (:mod:`preform.drape.net_kernels`, imported when a net is draped):
 on a tool with compiled queries (:class:`~preform.drape.compiled_surface.CompiledQueries`) one
 compiled loop fills the whole net, sweeping each quadrant row by row (a node needs only its
-three parents, so the net is the same); on any other tool the fronts above are filled in turn,
-the tool's own vectorised queries between the same compiled per-node steps.
+three parents, so the net is the same); a walking tool with a compiled fill of its own
+(:class:`WalkingFill`, triangle meshes) does the same with its walk; on any other tool the
+fronts above are filled in turn, the tool's own vectorised queries between the same compiled
+per-node steps.
 
 Every node ends with a :class:`~preform.drape.result.NodeStatus` and a residual; a node whose
 parent failed is NOT_REACHED, never a silent NaN.

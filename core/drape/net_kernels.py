@@ -20,10 +20,11 @@ The per-node steps are plain scalar functions:
 
 Two drivers use them. For a surface with compiled queries
 (:class:`~preform.drape.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
-net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a
-plugin's tool) the front loop stays in Python and calls the vectorised wrappers below once per
-front, with the surface's own vectorised ``closest_point``/``normal`` in between; the per-node
-arithmetic is the same code.
+net in one compiled loop (row by row within each quadrant); a mesh has its own
+(``preform.plugins.surfaces.mesh_kernels``). For any other surface (a plugin's tool) the
+front loop stays in Python and calls the vectorised wrappers below once per front, with the
+surface's own vectorised ``closest_point``/``normal`` in between; the per-node arithmetic is
+the same code.
 
 The per-node steps are inlined into the loops (``_per_node``) and take points, frames and the
 tool's parameters as tuples, not arrays: numba reference-counts an array handed to a function

@@ -20,6 +20,16 @@ boundary, else NO_INTERSECTION. Parents that coincide (a cell closed up complete
 sharp convex vertex when the fibre angle falls to 0) or lie on facets facing opposite ways
 (the net folded flat over a knife edge): FOLDED.
 
+What a node costs (issue 30): the walk visits 4-12 triangles a node on the benchmark's
+hemispheres (``benchmarks/bench_mesh.py``). Only a triangle whose bounding ball meets the
+circle's far half can hold a root: the others are walked through, not solved (the slack is
+how far the inside test's tolerance reaches past the triangle's sharpest corner,
+``MeshTopology.corner_reach``, so no root the full solve would accept is skipped). The roots
+come as (cos φ, sin φ) by algebra, not trigonometric calls, and are ranked by a pseudo-angle
+monotone in φ. :func:`fill_fronts_kernel` fills a whole net in one compiled loop, as
+``preform.drape.net_kernels.fill_fronts`` does for the analytic tools, with the same node
+checks.
+
 Geodesics. The straightest path on a piecewise-flat surface is straight inside each triangle
 and crosses an edge by unfolding: the component of the direction along the edge is kept and the
 component across it turns into the next triangle's plane (Polthier & Schmies' straightest
@@ -81,9 +91,13 @@ def _segment_distance(p0, p1, p2, corners, t, k):
 def _turns(f, t, normals, feature_cos):
     """Whether the surface turns by more than the feature angle from triangle f to t: the
     only case in which :func:`_unfolded` moves a point."""
-    return f != t and _dot3(
-        normals[f, 0], normals[f, 1], normals[f, 2], normals[t, 0], normals[t, 1], normals[t, 2]
-    ) < feature_cos
+    return (
+        f != t
+        and _dot3(
+            normals[f, 0], normals[f, 1], normals[f, 2], normals[t, 0], normals[t, 1], normals[t, 2]
+        )
+        < feature_cos
+    )
 
 
 @_per_node

@@ -106,14 +106,13 @@ class MeshWalker:
 
         topo = self.topology
         nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front = layout
-        return int(
-            fill_fronts_kernel(
-                topo.corners, topo.normals, topo.neighbours, topo.edge_normals, topo.centroids,
-                topo.radii, topo.corner_reach, self.feature_cos, self._visited, self._queue,
-                pos, status, residual, face, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front,
-                float(spacing), lo, hi,
-            )  # fmt: skip
-        )
+        fronts = fill_fronts_kernel(
+            topo.corners, topo.normals, topo.neighbours, topo.edge_normals, topo.centroids,
+            topo.radii, topo.corner_reach, self.feature_cos, self._visited, self._queue,
+            pos, status, residual, face, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front,
+            float(spacing), lo, hi,
+        )  # fmt: skip
+        return int(fronts)
 
     def spacings(
         self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float

@@ -120,9 +120,7 @@ def sliver_strip(steps: int, width: float, depth: float) -> TriangleMesh:
     top = np.column_stack((x, np.full_like(x, depth), np.zeros_like(x)))
     i = np.arange(steps)
     b, t = i, i + steps + 1
-    faces = np.concatenate(
-        (np.column_stack((b, b + 1, t)), np.column_stack((b + 1, t + 1, t)))
-    )
+    faces = np.concatenate((np.column_stack((b, b + 1, t)), np.column_stack((b + 1, t + 1, t))))
     return TriangleMesh(np.vstack((bottom, top)), faces)
 
 
