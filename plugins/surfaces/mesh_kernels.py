@@ -45,7 +45,7 @@ import numba
 import numpy as np
 
 from preform.drape.kernel_cache import cache_by_content
-from preform.drape.net_kernels import _check_node
+from preform.drape.net_kernels import _check_node, _fronts_placed, _ready
 from preform.drape.result import NodeStatus
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
@@ -58,7 +58,6 @@ _PLACED = int(NodeStatus.PLACED)
 _OFF_TOOL = int(NodeStatus.OFF_TOOL)
 _NO_INTERSECTION = int(NodeStatus.NO_INTERSECTION)
 _FOLDED = int(NodeStatus.FOLDED)
-_NOT_REACHED = int(NodeStatus.NOT_REACHED)
 
 
 #: The per-node steps are inlined into the loops that call them, as in
@@ -504,12 +503,7 @@ def fill_fronts_kernel(
                 node = row + b_off * db
                 ia, ib = node - da, node - db
                 ic = ia - db
-                if not (
-                    status[node] == _NOT_REACHED
-                    and status[ia] == _PLACED
-                    and status[ib] == _PLACED
-                    and status[ic] == _PLACED
-                ):
+                if not _ready(status, node, ia, ib, ic):
                     continue
                 ready_on_front[a_off + b_off] = True
                 a = (pos[ia, 0], pos[ia, 1], pos[ia, 2])
@@ -531,14 +525,7 @@ def fill_fronts_kernel(
                     residual[node] = res
                 status[node] = st
                 face[node] = f
-    fronts = 0
-    for k in range(2, last_front + 1):
-        if not ready_on_front[k]:
-            if k > 2:
-                break
-            continue
-        fronts += 1
-    return fronts
+    return _fronts_placed(ready_on_front, last_front)
 
 
 @numba.njit(cache=True)
