@@ -124,9 +124,9 @@ def sliver_strip(steps: int, width: float, depth: float) -> TriangleMesh:
     return TriangleMesh(np.vstack((bottom, top)), faces)
 
 
-@pytest.mark.parametrize("steps", [200, 5000])
+@pytest.mark.parametrize("steps", [200, 2000])
 def test_a_net_on_a_plane_of_slivers_is_the_flat_lattice(steps: int) -> None:
-    """Triangles 1 m tall and 5 mm or 0.2 mm wide (corner angles of 5e-3 and 2e-4 rad, where
+    """Triangles 1 m tall and 5 mm or 0.5 mm wide (corner angles of 5e-3 and 5e-4 rad, where
     the inside test's tolerance reaches farthest past a corner): every node of the ply is
     placed, at start + i·d·u + j·d·v, the flat net's closed form."""
     mesh = sliver_strip(steps, 1.0, 1.0)
