@@ -2,8 +2,9 @@
 
 A square ply of side 2R centred on the pole of a unit hemisphere, α = 90°, n × n nodes; the
 closed-form (sphere) placement, for the smaller nets the general Newton placement that any
-surface gets, and the same Newton placement on a triangle mesh of the hemisphere (the bundled
-STL's tessellation, 5184 triangles) — the cost of a tool read from a CAD file. Time is the best of ``--repeat`` runs (the machine may be shared); peak memory is
+surface gets, and a triangle mesh of the hemisphere (the bundled STL's tessellation, 5184
+triangles: the cost of a tool read from a CAD file), which places by its exact walk whatever
+``use_closed_form`` says (issue 30; before, that flag sent it to Newton on k-d-tree queries). Time is the best of ``--repeat`` runs (the machine may be shared); peak memory is
 traced by tracemalloc on a separate run, since tracing slows numpy down.
 
     python benchmarks/bench_drape.py [--sizes 25 50 100 200 500 1000] [--repeat 3]

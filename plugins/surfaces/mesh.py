@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, HygieneReport, check_surface
 
 if TYPE_CHECKING:
-    from preform.drape.engine.net import FacePlacement
+    from preform.drape.engine.net import FacePlacement, NetLayout
     from preform.plugins.surfaces.mesh_walk import MeshWalker
     from preform.plugins.surfaces.tool_mesh import ToolMesh
 
@@ -416,6 +416,22 @@ class TriangleMesh:
         triangles ``face_a``/``face_b`` (``preform.plugins.surfaces.mesh_kernels``); the
         opposite node's triangle ``face_opposite`` places it across a crease."""
         return self.walker.place_nodes(a, b, opposite, spacing, face_a, face_b, face_opposite)
+
+    def fill_fronts(
+        self,
+        pos: FloatArray,
+        status: NDArray[np.int8],
+        residual: FloatArray,
+        face: IntArray,
+        layout: NetLayout,
+        spacing: float,
+        lo: FloatArray,
+        hi: FloatArray,
+    ) -> int:
+        """Every front of a net at node spacing ``spacing`` [m], in one compiled loop, in place
+        on the flat node arrays (``preform.drape.engine.net.WalkingFill``): each node placed as
+        :meth:`place_nodes_from_faces` places it, then checked as every tool's nodes are."""
+        return self.walker.fill_fronts(pos, status, residual, face, layout, spacing, lo, hi)
 
     def spacings(
         self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float

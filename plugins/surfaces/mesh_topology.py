@@ -38,6 +38,10 @@ class MeshTopology:
     #: triangle (m,) [m]: a cheap, conservative test of whether a triangle meets a ball.
     centroids: FloatArray
     radii: FloatArray
+    #: How far past its corners (m,) a triangle's inside test, which lets a point lie a
+    #: tolerance τ outside each edge, reaches, per unit of τ: 1 / sin(θ/2) at its sharpest
+    #: corner θ (the offset triangle's corner moves that far); infinite for a zero angle.
+    corner_reach: FloatArray
 
     @property
     def n_triangles(self) -> int:
@@ -71,6 +75,12 @@ def build_topology(vertices: FloatArray, faces: IntArray, normals: FloatArray) -
     out /= np.linalg.norm(out, axis=2, keepdims=True)
     centroids = corners.mean(axis=1)
     radii = np.linalg.norm(corners - centroids[:, None, :], axis=2).max(axis=1)
+    # The angle at corner k between its edges to k + 1 and to k − 1: sin²(θ/2) = (1 − cos θ)/2.
+    to_next = edge / lengths[..., None]
+    to_last = -np.roll(to_next, 1, axis=1)
+    half_sin = np.sqrt(np.maximum(0.5 * (1.0 - np.einsum("tki,tki->tk", to_next, to_last)), 0.0))
+    with np.errstate(divide="ignore"):
+        corner_reach = 1.0 / half_sin.min(axis=1)
     return MeshTopology(
         corners=np.ascontiguousarray(corners),
         normals=np.ascontiguousarray(normals),
@@ -79,4 +89,5 @@ def build_topology(vertices: FloatArray, faces: IntArray, normals: FloatArray) -
         edge_lengths=lengths,
         centroids=centroids,
         radii=radii,
+        corner_reach=corner_reach,
     )

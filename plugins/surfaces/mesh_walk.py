@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.engine.net import FacePlacement
+from preform.drape.engine.net import FacePlacement, NetLayout
 from preform.plugins.surfaces.mesh_topology import MeshTopology
 
 if TYPE_CHECKING:
@@ -70,6 +70,7 @@ class MeshWalker:
             topo.edge_normals,
             topo.centroids,
             topo.radii,
+            topo.corner_reach,
             np.ascontiguousarray(a, dtype=np.float64),
             np.ascontiguousarray(b, dtype=np.float64),
             np.ascontiguousarray(opposite, dtype=np.float64),
@@ -87,6 +88,31 @@ class MeshWalker:
             residual,
         )
         return FacePlacement(points, status, faces, normals, residual)
+
+    def fill_fronts(
+        self,
+        pos: FloatArray,
+        status: StatusArray,
+        residual: FloatArray,
+        face: IntArray,
+        layout: NetLayout,
+        spacing: float,
+        lo: FloatArray,
+        hi: FloatArray,
+    ) -> int:
+        """Every front of a net, in place (``preform.drape.engine.net.WalkingFill``); the number of
+        fronts placed."""
+        from preform.plugins.surfaces.mesh_kernels import fill_fronts_kernel
+
+        topo = self.topology
+        nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front = layout
+        fronts = fill_fronts_kernel(
+            topo.corners, topo.normals, topo.neighbours, topo.edge_normals, topo.centroids,
+            topo.radii, topo.corner_reach, self.feature_cos, self._visited, self._queue,
+            pos, status, residual, face, nj, start_flat, q_sa, q_sb, q_na, q_nb, last_front,
+            float(spacing), lo, hi,
+        )  # fmt: skip
+        return int(fronts)
 
     def spacings(
         self, a: FloatArray, b: FloatArray, face_a: IntArray, face_b: IntArray, spacing: float

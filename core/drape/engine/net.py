@@ -19,8 +19,9 @@ The arithmetic is compiled (:mod:`preform.drape.kernels.net_kernels`, imported w
 is draped): on a tool with compiled queries
 (:class:`~preform.drape.engine.compiled_surface.CompiledQueries`) one compiled loop fills the
 whole net, sweeping each quadrant row by row (a node needs only its three parents, so the net
-is the same); on any other tool the fronts above are filled in turn, the tool's own
-vectorised queries between the same compiled per-node steps.
+is the same); a walking tool with a compiled fill of its own (:class:`WalkingFill`, triangle
+meshes) does the same with its walk; on any other tool the fronts above are filled in turn,
+the tool's own vectorised queries between the same compiled per-node steps.
 
 :func:`drape` is four stages, each reading the :class:`DrapeSettings`: :func:`place_start`,
 :func:`place_generators`, :func:`place_fronts`, :func:`net_fields`. Every node ends with a
@@ -114,6 +115,36 @@ class WalkingPlacement(Protocol):
     ) -> FacePlacement:
         """As :meth:`ClosedFormPlacement.place_nodes`, starting from the facets of a and b
         (the opposite node's facet says on which side of a crease it lies)."""
+        ...
+
+
+#: Where a net's fronts lie in its flat node arrays: (nodes per row nj, the start node's flat
+#: index, and per quadrant its signs along i and j and its extents along them, (q,) each; the
+#: last front), as ``preform.drape.kernels.net_kernels`` sweeps them.
+NetLayout = tuple[int, int, IntArray, IntArray, IntArray, IntArray, int]
+
+
+@runtime_checkable
+class WalkingFill(Protocol):
+    """Optional method of a :class:`WalkingPlacement` tool: the whole fill in one compiled
+    loop, each node placed as ``place_nodes_from_faces`` would and checked as
+    ``net_kernels.finish_front`` checks it, so the net is the front-by-front loop's."""
+
+    def fill_fronts(
+        self,
+        pos: FloatArray,
+        status: StatusArray,
+        residual: FloatArray,
+        face: IntArray,
+        layout: NetLayout,
+        spacing: float,
+        lo: FloatArray,
+        hi: FloatArray,
+    ) -> int:
+        """Every front of the net, in place on the flat node positions ``pos`` (n, 3) [m],
+        statuses, residuals [m] and facets ``face`` (the generators' already there), at node
+        spacing ``spacing`` [m], nodes past the bounds ``lo``/``hi`` (3,) [m] OFF_TOOL;
+        returns the number of fronts placed."""
         ...
 
 
@@ -385,7 +416,7 @@ def _march_generators(
         directions = np.stack([t_u, -t_u, t_v, -t_v])
         return geodesic_generators(
             surface, start.point, directions, d, count, **marching,
-            use_closed_form=settings.use_closed_form,
+            use_closed_form=settings.use_closed_form or isinstance(surface, WalkingPlacement),
         )  # fmt: skip
     if kind == "plan":
         lines = []
@@ -419,7 +450,7 @@ def _fill_fronts_python(
     surface: Surface,
     settings: DrapeSettings,
     net: Net,
-    layout: tuple[int, int, IntArray, IntArray, IntArray, IntArray, int],
+    layout: NetLayout,
     bounds: tuple[FloatArray, FloatArray],
     closed_form: bool,
     face: IntArray | None,
@@ -511,8 +542,9 @@ def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
     closed_form = settings.use_closed_form and (
         isinstance(surface, ClosedFormPlacement) or (compiled and _compiled_closed_form(surface))
     )
-    # a faceted tool that places nodes exactly by walking from the parents' facets (meshes)
-    walking = settings.use_closed_form and isinstance(surface, WalkingPlacement)
+    # a faceted tool that places nodes exactly by walking from the parents' facets (meshes);
+    # it has no closed form to leave, so it walks whatever use_closed_form says
+    walking = isinstance(surface, WalkingPlacement)
     (ni, nj), (i0, j0) = net.shape, net.start_index
     (bx0, by0, bz0), (bx1, by1, bz1) = surface.bounds
     lo_bound = np.array([bx0, by0, bz0]) - tol_m
@@ -527,7 +559,7 @@ def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
     q_sa, q_sb, q_na, q_nb = (
         np.array([q[col] for q in quadrants], dtype=np.int64) for col in range(4)
     )
-    layout = (nj, net.start_flat, q_sa, q_sb, q_na, q_nb, last_front)
+    layout: NetLayout = (nj, net.start_flat, q_sa, q_sb, q_na, q_nb, last_front)
     if compiled and not walking and (not closed_form or _compiled_closed_form(surface)):
         # The whole fill in one compiled loop (preform.drape.kernels.net_kernels).
         kind, params = cast(CompiledQueries, surface).compiled_queries()
@@ -535,6 +567,13 @@ def place_fronts(surface: Surface, settings: DrapeSettings, net: Net) -> Fronts:
             net.pos, net.status, net.residual, *layout, d, tol_m, settings.max_iterations,
             lo_bound, hi_bound, checked_kind(kind), kernel_parameters(kind, params), closed_form,
         )  # fmt: skip
+    elif walking and isinstance(surface, WalkingFill):
+        # The whole fill in one compiled loop of the tool's own (a mesh's walk).
+        fronts = surface.fill_fronts(
+            net.pos, net.status, net.residual, _walking_faces(surface, net, d), layout, d,
+            lo_bound, hi_bound,
+        )  # fmt: skip
+        newton_iterations = 0
     else:
         fronts, newton_iterations = _fill_fronts_python(
             surface, settings, net, layout, (lo_bound, hi_bound), closed_form,

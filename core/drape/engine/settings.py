@@ -44,7 +44,9 @@ class DrapeSettings:
     trim: Callable[[Any], Any] | None = None
     #: Relative tolerance [-] (every solve stops at ``tolerance``·d [m]), the cap on Newton
     #: steps per front, sub-steps per spacing marching generators, and whether to use the
-    #: surface's closed forms (node placement, geodesics) when it has them.
+    #: surface's closed forms (node placement, geodesics) when it has them (False: Newton on
+    #: the constraint circle, marched geodesics; a tool that places by walking its facets, a
+    #: mesh, has no closed form to leave and walks either way).
     tolerance: float = 1e-9
     max_iterations: int = 30
     substeps: int = 16

@@ -20,10 +20,11 @@ The per-node steps are plain scalar functions:
 
 Two drivers use them. For a surface with compiled queries
 (:class:`~preform.drape.engine.compiled_surface.CompiledQueries`), :func:`fill_fronts` fills the whole
-net in one compiled loop (row by row within each quadrant). For any other surface (a mesh, a
-plugin's tool) the front loop stays in Python and calls the vectorised wrappers below once per
-front, with the surface's own vectorised ``closest_point``/``normal`` in between; the per-node
-arithmetic is the same code.
+net in one compiled loop (row by row within each quadrant); a mesh has its own
+(``preform.plugins.surfaces.mesh_kernels``). For any other surface (a plugin's tool) the
+front loop stays in Python and calls the vectorised wrappers below once per front, with the
+surface's own vectorised ``closest_point``/``normal`` in between; the per-node arithmetic is
+the same code.
 
 The per-node steps are inlined into the loops (``_per_node``) and take points, frames and the
 tool's parameters as tuples, not arrays: numba reference-counts an array handed to a function
@@ -483,6 +484,17 @@ def _newton_node(
 
 
 @_per_node
+def _ready(status: StatusArray, node: int, ia: int, ib: int, ic: int) -> bool:
+    """Whether a node is ready to place: not reached yet, its three parents placed."""
+    return (
+        status[node] == _NOT_REACHED
+        and status[ia] == _PLACED
+        and status[ib] == _PLACED
+        and status[ic] == _PLACED
+    )
+
+
+@_per_node
 def _front_members(
     k: int,
     nj: int,
@@ -509,12 +521,7 @@ def _front_members(
             node = start_flat + q_sb[q] * k + a_off * (da - db)
             ia, ib = node - da, node - db
             ic = ia - db
-            if (
-                status[node] == _NOT_REACHED
-                and status[ia] == _PLACED
-                and status[ib] == _PLACED
-                and status[ic] == _PLACED
-            ):
+            if _ready(status, node, ia, ib, ic):
                 members[count, 0], members[count, 1] = node, ia
                 members[count, 2], members[count, 3] = ib, ic
                 # the cell this node completes is oriented +u × +v whatever the quadrant
@@ -626,6 +633,21 @@ def finish_front(
         _write_node(pos, status, residual, node, p, st, res)
 
 
+@_per_node
+def _fronts_placed(ready_on_front: NDArray[np.bool_], last_front: int) -> int:
+    """Fronts placed by a row-by-row sweep that marked each front holding a ready node, as the
+    front-by-front loop counts them: it stops at the first front past the second with no ready
+    node (no later front can have one)."""
+    fronts = 0
+    for k in range(2, last_front + 1):
+        if not ready_on_front[k]:
+            if k > 2:
+                break
+            continue
+        fronts += 1
+    return fronts
+
+
 @_jit
 def fill_fronts(
     pos: FloatArray,
@@ -669,12 +691,7 @@ def fill_fronts(
                 node = row + b_off * db
                 ia, ib = node - da, node - db
                 ic = ia - db
-                if not (
-                    status[node] == _NOT_REACHED
-                    and status[ia] == _PLACED
-                    and status[ib] == _PLACED
-                    and status[ic] == _PLACED
-                ):
+                if not _ready(status, node, ia, ib, ic):
                     continue
                 ready_on_front[a_off + b_off] = True
                 a, b, c = _row(pos, ia), _row(pos, ib), _row(pos, ic)
@@ -696,15 +713,7 @@ def fill_fronts(
                     pos[node, 0], pos[node, 1], pos[node, 2] = px, py, pz
                     residual[node] = res
                 status[node] = st
-    # Fronts as the front-by-front loop counts them: it stops at the first front past the
-    # second with no ready node (no later front can have one).
-    fronts = 0
-    for k in range(2, last_front + 1):
-        if not ready_on_front[k]:
-            if k > 2:
-                break
-            continue
-        fronts += 1
+    fronts = _fronts_placed(ready_on_front, last_front)
     # the vectorised loop makes one more pass over a front to find no node left, unless capped
     newton_max = 0 if closed_form or fronts == 0 else min(most_used + 1, max_iterations)
     return fronts, newton_max
