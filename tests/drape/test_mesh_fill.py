@@ -16,8 +16,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from preform.drape import PlyOutline, drape
-from preform.drape.net import WalkingFill, WalkingPlacement
-from preform.drape.result import NodeStatus
+from preform.drape.engine.net import WalkingFill, WalkingPlacement
+from preform.drape.engine.result import NodeStatus
 from preform.plugins.surfaces.mesh import TriangleMesh, read_obj, tessellate_hemisphere
 from preform.plugins.surfaces.mesh_topology import build_topology
 
