@@ -64,8 +64,8 @@ LAZY_COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "export": (
         "preform.pipeline.export_command:export_command",
-        "Drape fabric NAME as the scene says and write TARGETS (abaqus, calculix, lsdyna, "
-        "ansys, table, vtu, cut-pattern).",
+        "Drape fabric NAME as the scene says, or a layup scene's stack, and write TARGETS "
+        "(abaqus, calculix, lsdyna, ansys, table, vtu, cut-pattern).",
     ),
     "shear": (
         "preform.shear.commands:shear_command",
