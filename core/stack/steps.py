@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from preform.base.status import CaseFailure, CaseStatus
-from preform.stack.maps import PlyLayer, StackMaps, stack_at, stations
+from preform.stack.maps import PlyLayer, StackMaps, reference_ply, stack_at, stations
 from preform.stack.plies import layup_of, ply_scene
 from preform.stack.validate import layup_problems
 from preform.step import CaseContext, Step
@@ -239,7 +239,7 @@ def run_layup(ctx: CaseContext) -> dict[str, Any]:
         for reason in ply_ctx.partial_reasons:
             ctx.partial(f"ply {name}: {reason}", ply_ctx.summary.get("covered_fraction"))
     points, area = stations(layers)
-    maps = stack_at(layers, points, area)
+    maps = stack_at(layers, points, area, own=reference_ply(layers))
     ctx.summary["plies"] = records
     ctx.summary["stack_offset_method"] = method
     ctx.summary.update(maps.summary())
