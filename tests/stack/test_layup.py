@@ -284,6 +284,22 @@ def test_reading_a_ply_at_points_agrees_with_the_exact_closest_point_rule(
         assert exact.sum() > 500
 
 
+def test_the_stations_read_on_their_own_ply_without_a_search_give_the_searched_maps(
+    small: preform.Layup,
+) -> None:
+    """stack_at(..., own=reference) skips the nearest-cell search on the ply whose cell
+    centres the stations are; the maps are those of the search, every field, bit for bit."""
+    from preform.stack.maps import reference_ply, stack_at, stations
+
+    layers = small.stack.layers
+    points, area = stations(layers)
+    searched = stack_at(layers, points, area)
+    shortcut = stack_at(layers, points, area, own=reference_ply(layers))
+    for field in ("present", "thickness_mm", "fibre_volume_fraction", "wrinkles"):
+        assert np.array_equal(getattr(searched, field), getattr(shortcut, field), equal_nan=True)
+    assert shortcut.present[:, reference_ply(layers)].all()
+
+
 def test_pipeline_run_runs_a_layup_scene_as_one_case_and_reuses_it(tmp_path: Path) -> None:
     import csv
     import json
