@@ -140,5 +140,6 @@ __all__ = [
 ]
 
 #: Names served by ``preform.api`` (every public name not served otherwise), imported when
-#: first asked for. ``preform.drape`` is the subpackage of that name, callable as ``preform.api.drape`` (see ``preform/drape/__init__``).
+#: first asked for. ``preform.drape`` is the subpackage of that name, callable as
+#: ``preform.api.drape`` (see ``preform/drape/__init__``).
 _API = frozenset(__all__) - _CONTRACT.keys() - {"__version__", "drape"}
