@@ -48,29 +48,6 @@ if TYPE_CHECKING:
     from preform.shear.law import ShearLaw, force_per_length_N_per_mm
     from preform.step import CaseContext, Step
 
-#: Names served by ``preform.api``, imported when first asked for. ``preform.drape`` is the
-#: subpackage of that name, callable as ``preform.api.drape`` (see ``preform/drape/__init__``).
-_API = frozenset(
-    {
-        "CaseRun",
-        "Compared",
-        "Drape",
-        "Layup",
-        "LeastEnergy",
-        "RunResult",
-        "calibrate",
-        "compare_drape",
-        "fabric",
-        "layup",
-        "least_energy",
-        "load_library",
-        "read_measurement",
-        "run",
-        "scene",
-    }
-)
-
-
 #: The plugin contract's names, by the module serving each, also imported when first asked for:
 #: ``preform --version`` needs neither numpy (``preform.shear.law``) nor pydantic
 #: (``preform.material``), and ``import preform`` alone pays for neither.
@@ -161,3 +138,8 @@ __all__ = [
     "run",
     "scene",
 ]
+
+#: Names served by ``preform.api`` (every public name not served otherwise), imported when
+#: first asked for. ``preform.drape`` is the subpackage of that name, callable as
+#: ``preform.api.drape`` (see ``preform/drape/__init__``).
+_API = frozenset(__all__) - _CONTRACT.keys() - {"__version__", "drape"}

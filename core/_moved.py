@@ -59,9 +59,6 @@ class MovedModuleFinder(importlib.abc.Loader):
         module.__spec__ = module.__spec__.loader_state  # type: ignore[union-attr]
 
 
-#: Every moved module, old path -> new path (issue 16: the optimisation out of the drape, the
-#: trade study into ``bench``; issue 31: the drape's modules into its rooms).
-
 #: Scene outputs (and ``preform export`` targets) that were replaced: old name -> the message
 #: that refuses it, naming what replaced it. Refused rather than aliased: the old output wrote
 #: other files under other names, so running the new one silently would surprise a script.

@@ -17,7 +17,6 @@ from preform.base import __version__
 from preform.collector import end_startup, startup_phase
 from preform.command_line import (
     EXIT_INTERNAL,
-    LIBRARY_HELP,
     echo_json,
     fabric_or_exit,
     fail,
@@ -26,10 +25,6 @@ from preform.command_line import (
     library_options,
     load_library_or_exit,
 )
-
-LIBRARY_OPTION_HELP = LIBRARY_HELP
-_echo_json = echo_json
-_fail = fail
 
 QUIET_HELP = "pipeline run: print only the summary line and the cases that failed (errors)."
 VERBOSE_HELP = (
@@ -244,7 +239,7 @@ def plugins_list(as_json: bool, check: bool) -> None:
         host.registry.load_all()
     records = [r.as_json() for r in host.records.values()]
     if as_json:
-        _echo_json(records)
+        echo_json(records)
         return
     from rich.console import Console
     from rich.markup import escape
@@ -288,7 +283,7 @@ def materials_list(libraries: tuple[str, ...], no_bundled: bool, as_json: bool) 
     for warning in lib.warnings:
         click.echo(f"warning: {warning}", err=True)
     if as_json:
-        _echo_json(rows)
+        echo_json(rows)
         return
     shown = [(r["name"], r["architecture"], shown_origin(lib.origins[r["name"]])) for r in rows]
     widths = [max([len(h), *(len(row[i]) for row in shown)]) for i, h in enumerate(LIST_HEADER)]
@@ -356,7 +351,7 @@ def materials_show(name: str, libraries: tuple[str, ...], no_bundled: bool, as_j
     fabric = fabric_or_exit(lib, name)
     doc = fabric_document(fabric)
     if as_json:
-        _echo_json(doc)
+        echo_json(doc)
         return
     import yaml
 
@@ -379,7 +374,7 @@ def materials_validate(paths: tuple[str, ...], as_json: bool) -> None:
 
     fabrics, errors, warnings = validate_files([Path(p) for p in paths], _host().registry)
     if as_json:
-        _echo_json(
+        echo_json(
             {
                 "valid": not errors,
                 "fabrics": [fabric.name for fabric, _ in fabrics],
@@ -393,7 +388,7 @@ def materials_validate(paths: tuple[str, ...], as_json: bool) -> None:
     for w in warnings:
         click.echo(f"warning: {w}", err=True)
     if errors:
-        _fail([*errors, f"{len(errors)} error(s) in {len(paths)} path(s)."], code=1)
+        fail([*errors, f"{len(errors)} error(s) in {len(paths)} path(s)."], code=1)
     click.echo(f"ok: {len(fabrics)} fabric(s) valid")
 
 
@@ -469,13 +464,13 @@ def view(
         try:
             sheared = fabric.sheared_cell(math.radians(shear_deg))
         except ValueError as error:
-            _fail([f"{name}: {error}"])
+            fail([f"{name}: {error}"])
         if sheared is None:
-            _fail([f"architecture {fabric.architecture!r} has no sheared-cell model"])
+            fail([f"architecture {fabric.architecture!r} has no sheared-cell model"])
         cell = sheared.unit_cell()
         properties = sheared.summary()
     if cell is None:
-        _fail([f"architecture {fabric.architecture!r} has no unit-cell model to view"])
+        fail([f"architecture {fabric.architecture!r} has no unit-cell model to view"])
     out = Path(png or f"{name}.png")
     title = name if shear_deg is None else f"{name}, sheared {shear_deg:g}°"
     unit_cell_figure(cell, out, colour_by=colour_by, repeats=repeats, title=title)
@@ -487,7 +482,7 @@ def view(
         doc: dict[str, Any] = {"material": name, "repeats": list(repeats), "files": written}
         if properties is not None:
             doc["sheared_cell"] = properties
-        _echo_json(doc)
+        echo_json(doc)
         return
     if properties is not None:
         click.echo(_sheared_cell_lines(properties))
@@ -523,7 +518,7 @@ def schema(for_scene: bool) -> None:
     # anything they print must not end up inside the JSON.
     with contextlib.redirect_stdout(sys.stderr):
         document = scene_schema(registry) if for_scene else library_schema(registry)
-    _echo_json(document)
+    echo_json(document)
 
 
 # -- pipeline -------------------------------------------------------------------------------
@@ -679,7 +674,7 @@ def pipeline_run(
         scene_paths = [resolve_scene_path(s) for s in scenes] or [default_scene_path()]
         missing = [s for s, path in zip(scenes, scene_paths, strict=False) if not path.exists()]
         if missing:
-            _fail([f"error: {missing_scene_message(s)}" for s in missing] + ["nothing was run."])
+            fail([f"error: {missing_scene_message(s)}" for s in missing] + ["nothing was run."])
         loaded = []
         problems: list[Any] = []
         for path in scene_paths:
@@ -688,7 +683,7 @@ def pipeline_run(
             except SceneError as exc:
                 problems += exc.errors
         if problems:
-            _fail([*problems, f"{len(problems)} error(s) in scene(s); nothing was run."])
+            fail([*problems, f"{len(problems)} error(s) in scene(s); nothing was run."])
         if explain:
             plans = [
                 {
@@ -699,7 +694,7 @@ def pipeline_run(
                 for scene, _ in loaded
             ]
             if as_json:
-                _echo_json(plans)
+                echo_json(plans)
                 return
             for entry in plans:
                 click.echo(f"scene {entry['scene']}: outputs {', '.join(entry['outputs'])}")
@@ -717,9 +712,9 @@ def pipeline_run(
                 timeout_s=case_timeout_s or DEFAULT_CASE_TIMEOUT_S,
             )
         except CaseSetError as exc:
-            _fail([f"error: {exc}; nothing was run."])
+            fail([f"error: {exc}; nothing was run."])
         if not cases:
-            _fail(
+            fail(
                 [
                     "no (material, scene) case matches; check --materials and the scenes' "
                     "materials globs"
@@ -758,9 +753,9 @@ def pipeline_run(
                 report_page=None if no_report else write_report,
             )
     except RunDirectoryError as exc:
-        _fail([f"error: {exc}; nothing was run."])
+        fail([f"error: {exc}; nothing was run."])
     except OSError as exc:  # the results directory became unwritable (disk full, ...)
-        _fail([f"error: could not write the results into {out}/: {exc}"], code=1)
+        fail([f"error: could not write the results into {out}/: {exc}"], code=1)
     from preform.pipeline.console import PROBLEM_PREFIXES, run_report_lines
 
     for line in run_report_lines(report, verbosity):
@@ -771,7 +766,7 @@ def pipeline_run(
         click.echo(f"warning: report.html was not written: {report.report_error}", err=True)
     summary = run_summary(report)
     if as_json:
-        _echo_json(summary)
+        echo_json(summary)
     if summary["exit_code"]:
         sys.exit(summary["exit_code"])
 

@@ -141,3 +141,29 @@ class Step:
     #: ``material`` and the case's scalar and list results); returns the files it wrote,
     #: relative to the folder. E.g. one energy curve per fabric on one figure.
     aggregate: Callable[[Path, list[Mapping[str, Any]]], list[str]] | None = None
+
+    @classmethod
+    def exporter(
+        cls,
+        name: str,
+        requires: tuple[str, ...],
+        run: StepFunction,
+        description: str,
+        *,
+        version: str = "1",
+        extra_requires: Callable[[Scene], tuple[str, ...]] | None = None,
+        aggregate: Callable[[Path, list[Mapping[str, Any]]], list[str]] | None = None,
+    ) -> Step:
+        """A file-writing step (an exporter) providing the one product ``name``: the files it
+        wrote, relative to the case folder. Every field as in :class:`Step`."""
+        return cls(
+            name,
+            (name,),
+            requires,
+            version,
+            run,
+            description,
+            writes_files=True,
+            extra_requires=extra_requires,
+            aggregate=aggregate,
+        )

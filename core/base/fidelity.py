@@ -55,12 +55,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from preform.pipeline.scene import Scene
-
-Preset = Literal["draft", "standard", "fine"]
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ The outline is one of:
 The seam allowance is the outline offset outwards by ``seam_allowance_mm`` with round joins
 (area grows by a·perimeter + O(a²)). Fibre marks are short u (along x) and v (along y) lines
 on a grid inside the outline; the label names the ply and how it is laid on the tool, in a few
-lines centred inside a piece, its text height fitted to the piece (``label_place``). Every
+lines centred inside a piece, its text height fitted to the piece (``_place_in``). Every
 piece is labelled that holds its label at ``LABEL_MIN_HEIGHT_MM`` or more (a piece cut loose
 must still say which ply it is): when a cut splits the pattern, the largest piece's label says
 all with a second line ``piece 1 of n``, the others the ply's name and ``piece k of n`` only
@@ -573,14 +573,6 @@ def _piece_labels(
         else:
             unlabelled += 1
     return tuple(labels), unlabelled
-
-
-def label_place(outline: MultiPolygon, lines: Sequence[str]) -> tuple[Point2, float]:
-    """Where the label block goes in the largest piece and its text height [mm]
-    (:func:`_place_in`)."""
-    if outline.is_empty:
-        return (0.0, 0.0), 1.0
-    return _place_in(max(outline.geoms, key=lambda g: g.area), lines)
 
 
 def _place_in(piece: Any, lines: Sequence[str], avoid: Sequence[Any] = ()) -> tuple[Point2, float]:

@@ -52,34 +52,25 @@ def write_fibre_pattern_png(ctx: CaseContext) -> dict[str, Any]:
 
 
 EXPORTERS = [
-    Step(
+    Step.exporter(
         "cells_csv",
-        ("cells_csv",),
         ("drape", "thickness"),
-        "1",
         write_cells_csv,
         "cells.csv: one row per cell (shear, energy, status, thickness; Vf, permeability "
         "when the scene asks for permeability)",
-        writes_files=True,
         extra_requires=preform_if_asked,
     ),
-    Step(
+    Step.exporter(
         "vtu",
-        ("vtu",),
         ("drape", "thickness"),
-        "1",
         write_vtu,
         "drape.vtu for ParaView",
-        writes_files=True,
         extra_requires=preform_if_asked,
     ),
-    Step(
+    Step.exporter(
         "fibre_pattern_png",
-        ("fibre_pattern_png",),
         ("drape",),
-        "1",
         write_fibre_pattern_png,
         "fibre_pattern.png: top view with tows, 3D view by shear",
-        writes_files=True,
     ),
 ]

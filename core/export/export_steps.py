@@ -288,70 +288,49 @@ STEPS = [
 ]
 
 EXPORTERS = [
-    Step(
+    Step.exporter(
         "element_table",
-        ("element_table",),
         ("mesh_mapping",),
-        "1",
         write_element_table_step,
         "elements.csv: one row per FE element (mm, deg), uncovered ones included",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "element_vtu",
-        ("element_vtu",),
         ("mesh_mapping",),
-        "1",
         write_element_vtu_step,
         "elements.vtu: the FE mesh with the mapped fields, for ParaView (mm)",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "abaqus_include",
-        ("abaqus_include",),
         ("mesh_mapping",),
-        "1",
         write_abaqus_step,
         "drape_abaqus.inc: *DISTRIBUTION/*ORIENTATION per element, thickness, element sets",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "lsdyna_include",
-        ("lsdyna_include",),
         ("mesh_mapping",),
-        "1",
         write_lsdyna_step,
         "drape_lsdyna.k: *ELEMENT_SHELL_BETA (or _COMPOSITE, both families) per covered "
         "element, uncovered set",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "ansys_macro",
-        ("ansys_macro",),
         ("mesh_mapping",),
-        "1",
         write_ansys_step,
         "drape_ansys.mac: APDL element systems (u fibres), two-layer sections (thickness, "
         "v fibres), components",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "calculix_include",
-        ("calculix_include",),
         ("mesh_mapping",),
-        "1",
         write_calculix_step,
         "drape_calculix.inp: explicit *ORIENTATION and *SHELL SECTION per covered element "
         "(what CalculiX applies), element sets",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "cut_pattern",
-        ("cut_pattern",),
         ("drape",),
-        "1",
         write_cut_pattern_step,
         "cut_pattern.dxf/.svg/.csv: smooth outline, seam allowance, fibre marks, label (mm)",
-        writes_files=True,
     ),
 ]

@@ -784,34 +784,25 @@ STEPS = [
 ]
 
 EXPORTERS = [
-    Step(
+    Step.exporter(
         "energy_plot_png",
-        ("energy_plot_png",),
         ("energy_vs_angle", "optimum"),
-        "1",
         write_energy_plot_png,
         "energy_vs_angle.png per case (one fabric's E(α), its optimum marked)",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "energy_vs_angle_csv",
-        ("energy_vs_angle_csv",),
         ("energy_vs_angle",),
-        "1",
         write_energy_vs_angle_csv,
         "energy_vs_angle.csv per case: the energy/wrinkle trade table (energy, coverage, wrinkle "
         "area and energy shares, makeable) at every searched angle",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "library_energy_png",
-        ("library_energy_png",),
         ("energy_vs_angle", "optimum"),
-        "1",
         run_library_energy_png,
         "energy_vs_angle.png in the scene folder: every fabric's E(α) on one figure (paper "
         "Fig. 10), drawn once after the cases",
-        writes_files=True,
         aggregate=energy_vs_angle_library,
     ),
 ]

@@ -168,40 +168,23 @@ STEPS = [
 ]
 
 EXPORTERS = [
-    Step(
-        "shear_curve_json",
-        ("shear_curve_json",),
-        ("shear_curve",),
-        "1",
-        write_shear_curve_json,
-        "shear_curve.json",
-        writes_files=True,
-    ),
-    Step(
+    Step.exporter("shear_curve_json", ("shear_curve",), write_shear_curve_json, "shear_curve.json"),
+    Step.exporter(
         "shear_curve_png",
-        ("shear_curve_png",),
         ("shear_curve",),
-        "1",
         write_shear_curve_png,
         "shear_curve.png (paper Fig. 8/9 style)",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "unit_cell_png",
-        ("unit_cell_png",),
         ("unit_cell",),
-        "1",
         write_unit_cell_png,
         "unit_cell.png: 3D view of the repeating cell",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "unit_cell_vtu",
-        ("unit_cell_vtu",),
         ("unit_cell",),
-        "1",
         write_unit_cell_vtu,
         "unit_cell.vtu: tow paths for ParaView",
-        writes_files=True,
     ),
 ]

@@ -144,14 +144,6 @@ def _strings(value: Any) -> list[str]:
     return [str(v) for v in value] if isinstance(value, list) else []
 
 
-def _float(text: Any) -> float | None:
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        return None
-    return value if math.isfinite(value) else None
-
-
 def csv_columns(
     path: Path, numbers: set[str], texts: set[str]
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:

@@ -416,35 +416,26 @@ STEPS = [
 ]
 
 EXPORTERS = [
-    Step(
+    Step.exporter(
         "stack_csv",
-        ("stack_csv",),
         ("layup",),
-        "1",
         write_stack_csv,
         "stack.csv: the stack at its stations (total thickness, Vf, plies present and "
         "wrinkling, each ply's thickness)",
-        writes_files=True,
     ),
-    Step(
+    Step.exporter(
         "stack_thickness_png",
-        ("stack_thickness_png",),
         ("layup",),
-        "1",
         write_stack_thickness_png,
         "stack_thickness.png: the stack's total thickness and plies present, top view",
-        writes_files=True,
     ),
     *(
-        Step(
+        Step.exporter(
             f"stack_{target}",
-            (f"stack_{target}",),
             ("stack_sections",),
-            "1",
             stack_deck_writer(target),
             f"{file}: the stack's composite sections per element for {solver} (a layer per "
             "ply present, its own fibre direction and thickness; drop-offs left out)",
-            writes_files=True,
         )
         for target, file, solver in (
             ("abaqus", "stack_abaqus.inp", "Abaqus"),
