@@ -17,6 +17,13 @@ compiled. The cache root is ``$PREFORM_KERNEL_CACHE`` if set, else the platform'
 folder (``~/.cache/preform/kernels`` on Linux); where that cannot be written, a folder in the
 system's temporary directory. Old keys' folders are left for the user to remove (~2 MB each).
 
+An installed copy ships its kernels compiled: building the wheel (``pip install .``) compiles
+them into ``compiled/`` beside this module (:func:`shipped_root`, ``preform.drape.kernel_compile``
+``--ship``), and :func:`cache_by_content` copies a key's shipped folder into the user's cache
+the first time that key is used there, so the first run after an install loads them. numba
+records the processor each entry was compiled for and loads only entries of this one: a wheel
+built on another machine costs the compile at first use, as without it.
+
 The key is computed from files alone (no numba import, no kernel module imported), so a
 command can ask whether the kernels are compiled before it loads numba
 (``preform.drape.kernel_compile``).
@@ -29,6 +36,7 @@ import hashlib
 import importlib.util
 import os
 import re
+import shutil
 import sys
 import tempfile
 from functools import lru_cache
@@ -147,10 +155,36 @@ def cache_folder(module: str) -> Path:
     return cache_root() / f"{module}-{source_key(module)}"
 
 
+def shipped_root() -> Path:
+    """Where an installed copy keeps the kernels compiled when its wheel was built (absent
+    in a source checkout: ``pip install -e`` compiles at first use)."""
+    return Path(__file__).with_name("compiled")
+
+
+def seed_from_shipped(folder: Path) -> bool:
+    """Copy the shipped kernels of ``folder``'s key into ``folder`` when it holds none yet;
+    whether it did. Data files before index files, each written under a temporary name and
+    renamed, so a process loading meanwhile sees an index only with its data (two processes
+    copying at once write the same bytes). A failure leaves the compile to first use."""
+    shipped = shipped_root() / folder.name
+    if folder == shipped or not shipped.is_dir() or any(folder.glob("*.nbi")):
+        return False
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for source in sorted(shipped.iterdir(), key=lambda f: f.suffix == ".nbi"):
+            partial = folder / f".{source.name}.{os.getpid()}"
+            shutil.copyfile(source, partial)
+            os.replace(partial, folder / source.name)
+    except OSError:
+        return False
+    return True
+
+
 def cache_by_content(module: str) -> Path:
     """Cache the kernels of ``module`` (its ``__name__``; called by the module before it
-    defines them) in :func:`cache_folder`, numba's own place for them bypassed; returns that
-    folder. The key is taken now, from the sources as this process imported them."""
+    defines them) in :func:`cache_folder`, numba's own place for them bypassed, seeded from
+    the shipped kernels (:func:`seed_from_shipped`); returns that folder. The key is taken
+    now, from the sources as this process imported them."""
     from numba.core import caching
 
     # CacheImpl since numba 0.61, _CacheImpl before
@@ -159,6 +193,7 @@ def cache_by_content(module: str) -> Path:
     if locator not in impl._locator_classes:
         impl._locator_classes.insert(0, locator)
     folder = cache_folder(module)
+    seed_from_shipped(folder)
     _BY_CONTENT[module] = folder
     return folder
 
