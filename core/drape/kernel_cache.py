@@ -237,3 +237,45 @@ def _locator_class() -> type:
             return locator
 
     return ContentKeyedLocator
+
+
+def load_compiled(modules: tuple[str, ...] | list[str]) -> int:
+    """Load into this process every kernel of ``modules`` (imported here) that their cache
+    holds compiled for this processor and these sources, as its first call would; returns
+    how many signatures were loaded. A run calls it before its cases, so that the first case
+    does not pay numba's loading, and the fork server before it forks workers, so that no
+    worker pays it. Nothing is compiled: a signature the cache lacks compiles at its call."""
+    import importlib
+
+    from numba.core.registry import CPUDispatcher
+
+    loaded = 0
+    for name in modules:
+        for kernel in list(vars(importlib.import_module(name)).values()):
+            cache = getattr(kernel, "_cache", None)
+            if not isinstance(kernel, CPUDispatcher) or cache is None:
+                continue
+            if kernel.targetoptions.get("inline") == "always":  # part of its callers' code
+                continue
+            index_file = getattr(cache, "_cache_file", None)
+            if index_file is None:  # not cached (NullCache)
+                continue
+            loaded += _load_cached_signatures(kernel, cache, index_file)
+    return loaded
+
+
+def _load_cached_signatures(kernel: Any, cache: Any, index_file: Any) -> int:
+    # numba's private cache interface (the index's keys: signature, processor, bytecode
+    # hashes): loading ahead only saves time, so where that interface changed, or a file
+    # cannot be read, the kernel is loaded at its first call as before
+    codegen = kernel.targetctx.codegen()
+    loaded = 0
+    try:
+        for key in index_file._load_index():
+            signature = key[0]
+            if key == cache._index_key(signature, codegen) and signature not in kernel.overloads:
+                kernel.compile(signature)
+                loaded += 1
+    except Exception:  # see above
+        pass
+    return loaded

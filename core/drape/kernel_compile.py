@@ -38,7 +38,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-from preform.drape.kernel_cache import CACHE_ENV, cache_root, shipped_root, source_key
+from preform.drape.kernel_cache import (
+    CACHE_ENV,
+    cache_root,
+    load_compiled,
+    shipped_root,
+    source_key,
+)
 
 #: The kernel modules the default study runs (not the generator marcher's: its geodesics on
 #: the hemisphere are closed forms): their keys together name the compiled state.
@@ -139,6 +145,14 @@ def ship(stream: IO[str] | None) -> None:
     marker.write_text(f"{marker.read_text().strip()}\n{host_processor()}\n")
     for scratch in [*root.glob("lock-*"), root / "last-compile-seconds"]:
         scratch.unlink(missing_ok=True)
+
+
+def load_for_serial_run(cases: Any) -> None:
+    """Load the default study's kernels into this process before a serial run's first case
+    when any case drapes (its scene names a tool): numba's loading (~0.5 s of one core, quiet)
+    is then the run's one-off cost, not its first case's."""
+    if any("tool" in (getattr(case, "scene_data", None) or {}) for case in cases):
+        load_compiled(WARMED)
 
 
 def _say(stream: IO[str] | None, line: str) -> None:

@@ -75,8 +75,9 @@ with event.install_listener("numba:compile", Count()):
 """
 
 
-def run_kernel(root: Path, cache: Path) -> tuple[str, int]:
-    """The kernel's value and how many functions numba compiled, in a fresh process."""
+def run_kernel(root: Path, cache: Path, prefix: str = "") -> tuple[str, int]:
+    """The kernel's value and how many functions numba compiled, in a fresh process (which
+    runs ``prefix`` first)."""
     env = {
         **os.environ,
         "PYTHONPATH": os.pathsep.join([str(root), *sys.path]),
@@ -84,7 +85,7 @@ def run_kernel(root: Path, cache: Path) -> tuple[str, int]:
     }
     env.pop("NUMBA_CACHE_DIR", None)
     done = subprocess.run(
-        [sys.executable, "-c", PROBE], capture_output=True, text=True, env=env, check=True
+        [sys.executable, "-c", prefix + PROBE], capture_output=True, text=True, env=env, check=True
     )
     value, compiles = done.stdout.split()
     return value, int(compiles)
@@ -240,3 +241,23 @@ def test_a_kernel_module_written_as_before_keeps_numbas_own_cache(tmp_path):
     subprocess.run([sys.executable, "-c", "import plain; print(plain.one())"], env=env, check=True)
     assert list((tmp_path / "__pycache__").glob("plain.one-*.nbi"))
     assert not list(cache.glob("plain*"))
+
+
+def test_kernels_shipped_with_the_package_are_taken_not_compiled(tmp_path):
+    """An installed copy ships its kernels (compiled when its wheel was built): a user's
+    empty cache takes that key's folder and numba compiles nothing; another key's shipped
+    folder (the sources edited since) is not taken, and the edited kernel compiles."""
+    root = tmp_path / "src"
+    package = write_package(root)
+    shipped = tmp_path / "shipped"
+    assert run_kernel(root, shipped) == ("1", 1)  # the build compiling into the package
+    take = (
+        "import pathlib\nfrom preform.drape import kernel_cache\n"
+        f"kernel_cache.shipped_root = lambda: pathlib.Path({str(shipped)!r})\n"
+    )
+    user = tmp_path / "user"
+    assert run_kernel(root, user, prefix=take) == ("1", 0)
+    assert [f.name for f in user.glob("kpkg.kern-*")] == [f.name for f in shipped.iterdir()]
+    assert not list(user.glob("*/.*"))  # no partial copy left
+    (package / "constants.py").write_text((package / "constants.py").read_text().replace("1", "3"))
+    assert run_kernel(root, tmp_path / "user-2", prefix=take) == ("3", 1)
