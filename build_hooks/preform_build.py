@@ -26,9 +26,16 @@ from setuptools.command.build_py import build_py
 SHIP = ("-m", "preform.drape.kernel_compile", "--ship")
 
 
+def shipping_kernels() -> bool:
+    return os.environ.get("PREFORM_SHIP_KERNELS") != "0"
+
+
 def get_requires_for_build_wheel(config_settings: Any = None) -> list[str]:
+    requires = _setuptools.get_requires_for_build_wheel(config_settings)
+    if not shipping_kernels():
+        return requires
     project = tomllib.loads(Path("pyproject.toml").read_text())["project"]
-    return [*_setuptools.get_requires_for_build_wheel(config_settings), *project["dependencies"]]
+    return [*requires, *project["dependencies"]]
 
 
 class BuildWithKernels(build_py):
@@ -36,7 +43,7 @@ class BuildWithKernels(build_py):
 
     def run(self) -> None:
         super().run()
-        if self.editable_mode or os.environ.get("PREFORM_SHIP_KERNELS") == "0":
+        if self.editable_mode or not shipping_kernels():
             return
         with tempfile.TemporaryDirectory(prefix="preform-build-") as tmp:
             # the built tree is not installed yet: its plugins' entry points, which the small
