@@ -240,8 +240,8 @@ def _locator_class() -> type:
 
 
 def load_compiled(modules: tuple[str, ...] | list[str]) -> int:
-    """Load into this process every kernel of ``modules`` (imported here) that their cache
-    holds compiled for this processor and these sources, as its first call would; returns
+    """Load into this process every public kernel of ``modules`` (imported here) that their
+    cache holds compiled for this processor and these sources, as its first call would; returns
     how many signatures were loaded. A run calls it before its cases, so that the first case
     does not pay numba's loading, and the fork server before it forks workers, so that no
     worker pays it. Nothing is compiled: a signature the cache lacks compiles at its call."""
@@ -251,11 +251,11 @@ def load_compiled(modules: tuple[str, ...] | list[str]) -> int:
 
     loaded = 0
     for name in modules:
-        for kernel in list(vars(importlib.import_module(name)).values()):
+        for attribute, kernel in list(vars(importlib.import_module(name)).items()):
             cache = getattr(kernel, "_cache", None)
             if not isinstance(kernel, CPUDispatcher) or cache is None:
                 continue
-            if kernel.targetoptions.get("inline") == "always":  # part of its callers' code
+            if attribute.startswith("_"):  # a kernels' helper: its code is linked into theirs
                 continue
             index_file = getattr(cache, "_cache_file", None)
             if index_file is None:  # not cached (NullCache)

@@ -261,3 +261,45 @@ def test_kernels_shipped_with_the_package_are_taken_not_compiled(tmp_path):
     assert not list(user.glob("*/.*"))  # no partial copy left
     (package / "constants.py").write_text((package / "constants.py").read_text().replace("1", "3"))
     assert run_kernel(root, tmp_path / "user-2", prefix=take) == ("3", 1)
+
+
+LOAD_AHEAD = """
+from numba.core import event
+from preform.drape.kernel_cache import load_compiled
+compiles = []
+
+class Count(event.Listener):
+    def on_start(self, ev):
+        compiles.append(ev.data["dispatcher"].py_func.__name__)
+
+    def on_end(self, ev):
+        pass
+
+with event.install_listener("numba:compile", Count()):
+    loaded = load_compiled(["kpkg.kern"])
+    import kpkg.kern as k
+    ready = len(k.value.overloads)  # loaded before any call
+    print(loaded, ready, k.value(), len(compiles))
+"""
+
+
+def test_load_compiled_loads_what_the_cache_holds_before_any_call_and_compiles_nothing(tmp_path):
+    """The truth is numba's: the kernel's overloads before its first call (none unless
+    loaded) and its count of compiles. An empty cache loads nothing, and compiles nothing
+    ahead: the call compiles as before."""
+    write_package(tmp_path)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}
+    env.pop("NUMBA_CACHE_DIR", None)
+
+    def run(cache: Path) -> list[str]:
+        done = subprocess.run(
+            [sys.executable, "-c", LOAD_AHEAD],
+            capture_output=True,
+            text=True,
+            env={**env, CACHE_ENV: str(cache)},
+            check=True,
+        )
+        return done.stdout.split()
+
+    assert run(tmp_path / "empty") == ["0", "0", "1", "1"]
+    assert run(tmp_path / "empty") == ["1", "1", "1", "0"]  # compiled by the call before
