@@ -147,11 +147,20 @@ def ship(stream: IO[str] | None) -> None:
         scratch.unlink(missing_ok=True)
 
 
+#: What a drape imports at its first call besides the kernels: the labelling of fold and
+#: wrinkle patches (``preform.drape.wrinkling``; 0.2-0.8 s to import).
+DRAPE_LIBRARIES = ("scipy.ndimage",)
+
+
 def load_for_serial_run(cases: Any) -> None:
-    """Load the default study's kernels into this process before a serial run's first case
-    when any case drapes (its scene names a tool): numba's loading (~0.5 s of one core, quiet)
-    is then the run's one-off cost, not its first case's."""
+    """Load the default study's kernels (and ``DRAPE_LIBRARIES``) into this process before a
+    serial run's first case when any case drapes (its scene names a tool): numba's loading
+    (~0.5 s of one core, quiet) is then the run's one-off cost, not its first case's."""
     if any("tool" in (getattr(case, "scene_data", None) or {}) for case in cases):
+        import importlib
+
+        for module in DRAPE_LIBRARIES:
+            importlib.import_module(module)
         load_compiled(WARMED)
 
 
