@@ -58,7 +58,8 @@ def value():
     return VALUE
 """
 
-PROBE = """
+#: numba's compiles in a probe process, counted in ``compiles``.
+COUNT = """
 from numba.core import event
 compiles = []
 
@@ -68,11 +69,16 @@ class Count(event.Listener):
 
     def on_end(self, ev):
         pass  # numba's Listener asks for both; a compile is counted at its start
+"""
 
+PROBE = (
+    COUNT
+    + """
 with event.install_listener("numba:compile", Count()):
     import kpkg.kern as k
     print(k.value(), len(compiles))
 """
+)
 
 
 def run_kernel(root: Path, cache: Path, prefix: str = "") -> tuple[str, int]:
@@ -263,17 +269,10 @@ def test_kernels_shipped_with_the_package_are_taken_not_compiled(tmp_path):
     assert run_kernel(root, tmp_path / "user-2", prefix=take) == ("3", 1)
 
 
-LOAD_AHEAD = """
-from numba.core import event
+LOAD_AHEAD = (
+    COUNT
+    + """
 from preform.drape.kernel_cache import load_compiled
-compiles = []
-
-class Count(event.Listener):
-    def on_start(self, ev):
-        compiles.append(ev.data["dispatcher"].py_func.__name__)
-
-    def on_end(self, ev):
-        pass
 
 with event.install_listener("numba:compile", Count()):
     loaded = load_compiled(["kpkg.kern"])
@@ -281,6 +280,7 @@ with event.install_listener("numba:compile", Count()):
     ready = len(k.value.overloads)  # loaded before any call
     print(loaded, ready, k.value(), len(compiles))
 """
+)
 
 
 def test_load_compiled_loads_what_the_cache_holds_before_any_call_and_compiles_nothing(tmp_path):
