@@ -33,6 +33,11 @@ three bundled min-energy scenes make 30 cases); ``before`` is not run then (its 
     python benchmarks/bench_study.py [--repeat 2] [--workers 2] [--engines before,serial,process,dask]
     python benchmarks/bench_study.py --engines serial,process,dask --scene hemisphere-min-energy \
         --scene paraboloid-min-energy --scene hat-stiffener-min-energy
+
+``--copies N`` runs N renamed copies of the default scene over the library instead (10 copies:
+the 100-case sweep of issue 30's engine goals, process ≥ 1.8× and Dask ≥ 1.6× serial):
+
+    python benchmarks/bench_study.py --engines serial,process,dask --copies 10 --repeat 1
 """
 
 from __future__ import annotations
@@ -45,6 +50,8 @@ import sysconfig
 import tempfile
 import time
 from pathlib import Path
+
+import yaml
 
 from preform.pipeline.scene import default_scene_path
 
@@ -103,6 +110,15 @@ def install_before(commit: str, root: Path) -> str:
     return python
 
 
+def copy_default_scene(folder: Path, i: int) -> str:
+    """A copy of the default scene under another name, written into ``folder``; its path."""
+    scene = yaml.safe_load(default_scene_path().read_text())
+    scene["name"] = f"{scene['name']}-copy-{i}"
+    path = folder / f"copy-{i}.yaml"
+    path.write_text(yaml.safe_dump(scene, sort_keys=False))
+    return str(path)
+
+
 def run_once(argv: list[str], env: dict[str, str]) -> float:
     start = time.perf_counter()
     done = subprocess.run(
@@ -121,13 +137,16 @@ def main() -> None:
     parser.add_argument("--engines", default="before,serial,process,dask")
     parser.add_argument("--before", default=BEFORE_COMMIT, help="commit of the 'before' code")
     parser.add_argument("--scene", action="append", default=[], help="a bundled scene (repeatable)")
+    parser.add_argument("--copies", type=int, default=0, help="copies of the default scene")
     args = parser.parse_args()
     wanted = [e.strip() for e in args.engines.split(",") if e.strip()]
     scenes = tuple(args.scene)
-    if scenes and "before" in wanted:
+    if (scenes or args.copies) and "before" in wanted:
         raise SystemExit("--scene runs today's code only: leave 'before' out of --engines")
     with tempfile.TemporaryDirectory(prefix="preform-bench-study-") as tmp:
         root = Path(tmp)
+        if args.copies:
+            scenes += tuple(copy_default_scene(root, i) for i in range(args.copies))
         runs = {
             name: command(sys.executable, name, root / name, args.workers, scenes)
             for name in ("serial", "process", "dask")
@@ -143,6 +162,8 @@ def main() -> None:
             for name in wanted:
                 times[name] = min(times.get(name, float("inf")), run_once(runs[name], env))
         load_after = os.getloadavg()
+    if args.copies:
+        scenes = (f"{args.copies} copies of the default scene",)
     study = ", ".join(scenes) if scenes else f"default study ({default_scene_path().stem})"
     print(f"{study}, {os.cpu_count()} cores, best of {args.repeat}")
     print(f"{'engine':<10}{'wall s':>9}{'x before':>10}{'x serial':>10}")

@@ -730,12 +730,14 @@ def pipeline_run(
             inputs["fidelity_override"] = fidelity
     from rich.progress import Progress
 
-    from preform.drape.kernels.kernel_compile import ensure_compiled
+    from preform.drape.kernels.kernel_compile import ensure_compiled, load_for_serial_run
     from preform.report import write_report
 
     # the first run after an install compiles the drape kernels here, once and saying so,
     # before any worker needs them (they then load them from the cache)
     ensure_compiled(sys.stderr)
+    if engine == "serial":
+        load_for_serial_run(cases)
     try:
         with Progress(transient=False, disable=not sys.stderr.isatty()) as progress:
             task = progress.add_task("cases", total=len(cases))

@@ -19,9 +19,11 @@ from preform.pipeline.engines import (
 #: Libraries the default study's steps import when they first run (its figures and cells.csv):
 #: a process pool's fork server imports them once, so no worker pays them in its first case.
 #: A name that is not installed is skipped. The compiled net kernels (numba, 0.3 s to import)
-#: are there because every drape runs them; not scipy, which the default study does not use
-#: (2.0 s to import on a Dask worker), nor ``mpl_toolkits.mplot3d``, which only the unit-cell
-#: figure uses now that the fibre-pattern figure projects its 3D view itself (issue 15g).
+#: are there because every drape runs them (and loaded, ``preload_end``), and so is
+#: ``scipy.ndimage``, which labels a drape's fold and wrinkle patches
+#: (``kernel_compile.DRAPE_LIBRARIES``; not the rest of scipy: 2.0 s on a Dask worker); not
+#: ``mpl_toolkits.mplot3d``, which only the unit-cell figure uses now that the fibre-pattern
+#: figure projects its 3D view itself (issue 15g).
 #: Since built-in steps, laws and architectures are registered by import path, the plugin host
 #: no longer imports their modules, so the default study's are named here too (the default
 #: study 7.3-8.8 s -> 6.4-8.6 s on 2 workers, quiet, alternated runs of ``preform pipeline run
@@ -32,6 +34,7 @@ WORKER_PRELOAD = (
     "matplotlib.figure",
     "matplotlib.backends.backend_agg",
     "numba",
+    "scipy.ndimage",
     "preform.drape.kernels.net_kernels",
     "preform.drape.kernels.generator_kernels",
     "preform.drape.kernels.field_kernels",

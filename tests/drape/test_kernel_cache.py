@@ -58,7 +58,8 @@ def value():
     return VALUE
 """
 
-PROBE = """
+#: numba's compiles in a probe process, counted in ``compiles``.
+COUNT = """
 from numba.core import event
 compiles = []
 
@@ -68,15 +69,21 @@ class Count(event.Listener):
 
     def on_end(self, ev):
         pass  # numba's Listener asks for both; a compile is counted at its start
+"""
 
+PROBE = (
+    COUNT
+    + """
 with event.install_listener("numba:compile", Count()):
     import kpkg.kern as k
     print(k.value(), len(compiles))
 """
+)
 
 
-def run_kernel(root: Path, cache: Path) -> tuple[str, int]:
-    """The kernel's value and how many functions numba compiled, in a fresh process."""
+def run_kernel(root: Path, cache: Path, prefix: str = "") -> tuple[str, int]:
+    """The kernel's value and how many functions numba compiled, in a fresh process (which
+    runs ``prefix`` first)."""
     env = {
         **os.environ,
         "PYTHONPATH": os.pathsep.join([str(root), *sys.path]),
@@ -84,7 +91,7 @@ def run_kernel(root: Path, cache: Path) -> tuple[str, int]:
     }
     env.pop("NUMBA_CACHE_DIR", None)
     done = subprocess.run(
-        [sys.executable, "-c", PROBE], capture_output=True, text=True, env=env, check=True
+        [sys.executable, "-c", prefix + PROBE], capture_output=True, text=True, env=env, check=True
     )
     value, compiles = done.stdout.split()
     return value, int(compiles)
@@ -240,3 +247,59 @@ def test_a_kernel_module_written_as_before_keeps_numbas_own_cache(tmp_path):
     subprocess.run([sys.executable, "-c", "import plain; print(plain.one())"], env=env, check=True)
     assert list((tmp_path / "__pycache__").glob("plain.one-*.nbi"))
     assert not list(cache.glob("plain*"))
+
+
+def test_kernels_shipped_with_the_package_are_taken_not_compiled(tmp_path):
+    """An installed copy ships its kernels (compiled when its wheel was built): a user's
+    empty cache takes that key's folder and numba compiles nothing; another key's shipped
+    folder (the sources edited since) is not taken, and the edited kernel compiles."""
+    root = tmp_path / "src"
+    package = write_package(root)
+    shipped = tmp_path / "shipped"
+    assert run_kernel(root, shipped) == ("1", 1)  # the build compiling into the package
+    take = (
+        "import pathlib\nfrom preform.drape import kernel_cache\n"
+        f"kernel_cache.shipped_root = lambda: pathlib.Path({str(shipped)!r})\n"
+    )
+    user = tmp_path / "user"
+    assert run_kernel(root, user, prefix=take) == ("1", 0)
+    assert [f.name for f in user.glob("kpkg.kern-*")] == [f.name for f in shipped.iterdir()]
+    assert not list(user.glob("*/.*"))  # no partial copy left
+    (package / "constants.py").write_text((package / "constants.py").read_text().replace("1", "3"))
+    assert run_kernel(root, tmp_path / "user-2", prefix=take) == ("3", 1)
+
+
+LOAD_AHEAD = (
+    COUNT
+    + """
+from preform.drape.kernels.kernel_cache import load_compiled
+
+with event.install_listener("numba:compile", Count()):
+    loaded = load_compiled(["kpkg.kern"])
+    import kpkg.kern as k
+    ready = len(k.value.overloads)  # loaded before any call
+    print(loaded, ready, k.value(), len(compiles))
+"""
+)
+
+
+def test_load_compiled_loads_what_the_cache_holds_before_any_call_and_compiles_nothing(tmp_path):
+    """The truth is numba's: the kernel's overloads before its first call (none unless
+    loaded) and its count of compiles. An empty cache loads nothing, and compiles nothing
+    ahead: the call compiles as before."""
+    write_package(tmp_path)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}
+    env.pop("NUMBA_CACHE_DIR", None)
+
+    def run(cache: Path) -> list[str]:
+        done = subprocess.run(
+            [sys.executable, "-c", LOAD_AHEAD],
+            capture_output=True,
+            text=True,
+            env={**env, CACHE_ENV: str(cache)},
+            check=True,
+        )
+        return done.stdout.split()
+
+    assert run(tmp_path / "empty") == ["0", "0", "1", "1"]
+    assert run(tmp_path / "empty") == ["1", "1", "1", "0"]  # compiled by the call before

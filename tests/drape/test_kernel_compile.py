@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from preform.drape.kernels import kernel_compile
-from preform.drape.kernels.kernel_cache import CACHE_ENV
+from preform.drape.kernels.kernel_cache import CACHE_ENV, shipped_root
 
 #: ``ensure_compiled`` in a fresh process whose small case compiles a tiny kernel (after
 #: ``sleep`` seconds, to hold the lock) or fails; prints what it returned on stdout.
@@ -156,7 +156,8 @@ def test_the_helper_compiles_what_comes_after_the_drape_and_not_the_fill(tmp_pat
 def test_the_first_run_after_an_install_compiles_once_visibly_the_second_not(tmp_path):
     """The real command on an empty cache, output to pipes: the compile lines, then a run
     with nothing more to compile (numba's cache folders hold the kernels); a second run
-    prints neither line."""
+    prints neither line. An installed copy (``pip install .``) compiled them when its wheel
+    was built: its first run compiles nothing and says nothing of it."""
     env = {**os.environ, CACHE_ENV: str(tmp_path / "cache")}
     command = [
         sys.executable,
@@ -171,8 +172,43 @@ def test_the_first_run_after_an_install_compiles_once_visibly_the_second_not(tmp
         "--force",
     ]
     first = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
-    assert "preform: compiling drape kernels, once per install" in first.stderr
-    assert "preform: drape kernels compiled in" in first.stderr
+    if shipped_root().is_dir():
+        assert "compil" not in first.stderr
+    else:
+        assert "preform: compiling drape kernels, once per install" in first.stderr
+        assert "preform: drape kernels compiled in" in first.stderr
     assert list((tmp_path / "cache").glob("preform.drape.kernels.net_kernels-*/*.nbi"))
     second = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
     assert "compil" not in second.stderr
+
+
+@pytest.mark.parametrize("same_processor", [True, False])
+def test_a_shipped_marker_counts_only_for_this_processor(tmp_path, monkeypatch, same_processor):
+    """The package's marker (written when its wheel was built) makes a user's first run
+    compile nothing when it names this processor; kernels compiled for another are not
+    numba's to load, so the run compiles them, saying so, as without any."""
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "user"))
+    shipped = tmp_path / "shipped"
+    shipped.mkdir()
+    monkeypatch.setattr(kernel_compile, "shipped_root", lambda: shipped)
+    processor = kernel_compile.host_processor() if same_processor else "x86_64-other generic"
+    marker = kernel_compile.ready_marker()
+    (shipped / marker.name).write_text(f"21.5\n{processor}\n")
+    ran: list[int] = []
+    monkeypatch.setattr(kernel_compile, "_small_case", lambda: ran.append(1))
+    monkeypatch.setattr(kernel_compile, "_start_helper", lambda: None)
+    assert kernel_compile.ensure_compiled(io.StringIO()) is None
+    assert ran == ([] if same_processor else [1])
+    assert marker.read_text() == ("21.5\n" if same_processor else "0.0\n")
+
+
+def test_ship_compiles_into_the_package_and_names_the_processor(tmp_path, monkeypatch):
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "user"))  # ship() moves it; restored after
+    shipped = tmp_path / "package" / "compiled"
+    monkeypatch.setattr(kernel_compile, "shipped_root", lambda: shipped)
+    monkeypatch.setattr(kernel_compile, "_small_case", lambda: None)
+    monkeypatch.setattr(kernel_compile, "_start_helper", lambda: None)
+    kernel_compile.ship(None)
+    assert sorted(f.name for f in shipped.iterdir()) == [kernel_compile.ready_marker().name]
+    lines = kernel_compile.ready_marker().read_text().splitlines()
+    assert lines == ["0.0", kernel_compile.host_processor()]

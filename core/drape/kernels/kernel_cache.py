@@ -17,6 +17,13 @@ compiled. The cache root is ``$PREFORM_KERNEL_CACHE`` if set, else the platform'
 folder (``~/.cache/preform/kernels`` on Linux); where that cannot be written, a folder in the
 system's temporary directory. Old keys' folders are left for the user to remove (~2 MB each).
 
+An installed copy ships its kernels compiled: building the wheel (``pip install .``) compiles
+them into ``compiled/`` beside this module (:func:`shipped_root`, ``preform.drape.kernels.kernel_compile``
+``--ship``), and :func:`cache_by_content` copies a key's shipped folder into the user's cache
+the first time that key is used there, so the first run after an install loads them. numba
+records the processor each entry was compiled for and loads only entries of this one: a wheel
+built on another machine costs the compile at first use, as without it.
+
 The key is computed from files alone (no numba import, no kernel module imported), so a
 command can ask whether the kernels are compiled before it loads numba
 (``preform.drape.kernels.kernel_compile``).
@@ -29,6 +36,7 @@ import hashlib
 import importlib.util
 import os
 import re
+import shutil
 import sys
 import tempfile
 from functools import lru_cache
@@ -147,10 +155,36 @@ def cache_folder(module: str) -> Path:
     return cache_root() / f"{module}-{source_key(module)}"
 
 
+def shipped_root() -> Path:
+    """Where an installed copy keeps the kernels compiled when its wheel was built (absent
+    in a source checkout: ``pip install -e`` compiles at first use)."""
+    return Path(__file__).with_name("compiled")
+
+
+def seed_from_shipped(folder: Path) -> bool:
+    """Copy the shipped kernels of ``folder``'s key into ``folder`` when it holds none yet;
+    whether it did. Data files before index files, each written under a temporary name and
+    renamed, so a process loading meanwhile sees an index only with its data (two processes
+    copying at once write the same bytes). A failure leaves the compile to first use."""
+    shipped = shipped_root() / folder.name
+    if folder == shipped or not shipped.is_dir() or any(folder.glob("*.nbi")):
+        return False
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for source in sorted(shipped.iterdir(), key=lambda f: f.suffix == ".nbi"):
+            partial = folder / f".{source.name}.{os.getpid()}"
+            shutil.copyfile(source, partial)
+            os.replace(partial, folder / source.name)
+    except OSError:
+        return False
+    return True
+
+
 def cache_by_content(module: str) -> Path:
     """Cache the kernels of ``module`` (its ``__name__``; called by the module before it
-    defines them) in :func:`cache_folder`, numba's own place for them bypassed; returns that
-    folder. The key is taken now, from the sources as this process imported them."""
+    defines them) in :func:`cache_folder`, numba's own place for them bypassed, seeded from
+    the shipped kernels (:func:`seed_from_shipped`); returns that folder. The key is taken
+    now, from the sources as this process imported them."""
     from numba.core import caching
 
     # CacheImpl since numba 0.61, _CacheImpl before
@@ -159,6 +193,7 @@ def cache_by_content(module: str) -> Path:
     if locator not in impl._locator_classes:
         impl._locator_classes.insert(0, locator)
     folder = cache_folder(module)
+    seed_from_shipped(folder)
     _BY_CONTENT[module] = folder
     return folder
 
@@ -202,3 +237,45 @@ def _locator_class() -> type:
             return locator
 
     return ContentKeyedLocator
+
+
+def load_compiled(modules: tuple[str, ...] | list[str]) -> int:
+    """Load into this process every public kernel of ``modules`` (imported here) that their
+    cache holds compiled for this processor and these sources, as its first call would; returns
+    how many signatures were loaded. A run calls it before its cases, so that the first case
+    does not pay numba's loading, and the fork server before it forks workers, so that no
+    worker pays it. Nothing is compiled: a signature the cache lacks compiles at its call."""
+    import importlib
+
+    from numba.core.registry import CPUDispatcher
+
+    loaded = 0
+    for name in modules:
+        for attribute, kernel in list(vars(importlib.import_module(name)).items()):
+            cache = getattr(kernel, "_cache", None)
+            if not isinstance(kernel, CPUDispatcher) or cache is None:
+                continue
+            if attribute.startswith("_"):  # a kernels' helper: its code is linked into theirs
+                continue
+            index_file = getattr(cache, "_cache_file", None)
+            if index_file is None:  # not cached (NullCache)
+                continue
+            loaded += _load_cached_signatures(kernel, cache, index_file)
+    return loaded
+
+
+def _load_cached_signatures(kernel: Any, cache: Any, index_file: Any) -> int:
+    # numba's private cache interface (the index's keys: signature, processor, bytecode
+    # hashes): loading ahead only saves time, so where that interface changed, or a file
+    # cannot be read, the kernel is loaded at its first call as before
+    codegen = kernel.targetctx.codegen()
+    loaded = 0
+    try:
+        for key in index_file._load_index():
+            signature = key[0]
+            if key == cache._index_key(signature, codegen) and signature not in kernel.overloads:
+                kernel.compile(signature)
+                loaded += 1
+    except Exception:  # see above
+        pass
+    return loaded
