@@ -38,7 +38,7 @@ from pathlib import Path
 
 from bench_study import install_before
 
-from preform.drape.kernels.kernel_cache import CACHE_ENV
+from preform.base.kernel_cache import CACHE_ENV
 
 MAIN = (
     "import sys; from preform.__main__ import main; sys.argv = ['preform', *sys.argv[1:]]; main()"

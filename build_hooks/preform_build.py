@@ -1,8 +1,8 @@
 """preform's build backend: setuptools', with the drape kernels compiled into the wheel.
 
-Building a wheel (what ``pip install .`` does) runs ``python -m preform.drape.kernels.kernel_compile
+Building a wheel (what ``pip install .`` does) runs ``python -m preform.commands.kernel_compile
 --ship`` on the built tree, so the install compiles the kernels once and the package ships them
-(``preform.drape.kernels.kernel_cache.shipped_root``); the first run then loads them. The build needs
+(``preform.base.kernel_cache.shipped_root``); the first run then loads them. The build needs
 preform's own dependencies for that (the compile drapes a small case), so they are the wheel's
 build requirements too. An editable install (``pip install -e .``) compiles at its first run
 instead, as does a build with ``PREFORM_SHIP_KERNELS=0`` (a quicker throwaway build).
@@ -23,7 +23,7 @@ from setuptools.build_meta import *  # noqa: F403 (the PEP 517 hooks not overrid
 from setuptools.command.build_py import build_py
 
 #: The command that compiles into the built tree (by module path: run on that tree).
-SHIP = ("-m", "preform.drape.kernels.kernel_compile", "--ship")
+SHIP = ("-m", "preform.commands.kernel_compile", "--ship")
 
 
 def shipping_kernels() -> bool:

@@ -19,8 +19,8 @@ MOVED_MODULES: dict[str, str] = {
         for room, modules in {
             "engine": "chebyshev compiled_surface fields generators net offset part ply polygon "
             "result surface",
-            "kernels": "field_kernels generator_kernels kernel_cache kernel_compile net_kernels "
-            "surface_kernels verdict_kernels",
+            "kernels": "field_kernels generator_kernels net_kernels surface_kernels "
+            "verdict_kernels",
             "judging": "verdict wrinkling",
             "properties": "preform_fields thickness",
         }.items()
@@ -39,6 +39,10 @@ MOVED_MODULES: dict[str, str] = {
     "preform.stack.cases": "preform.pipeline.layup_case",
     "preform.export.compare_vtu": "preform.compare.vtu",
     "preform.export.fig_compare": "preform.compare.figure",
+    # issue 31: numba's cache by content serves every package's kernels; compiling ahead runs
+    # a case through the API
+    "preform.drape.kernel_cache": "preform.base.kernel_cache",
+    "preform.drape.kernel_compile": "preform.commands.kernel_compile",
 }
 
 

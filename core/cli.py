@@ -730,7 +730,7 @@ def pipeline_run(
             inputs["fidelity_override"] = fidelity
     from rich.progress import Progress
 
-    from preform.drape.kernels.kernel_compile import ensure_compiled, load_for_serial_run
+    from preform.commands.kernel_compile import ensure_compiled, load_for_serial_run
     from preform.report import write_report
 
     # the first run after an install compiles the drape kernels here, once and saying so,

@@ -44,13 +44,13 @@ import math
 import numba
 import numpy as np
 
+from preform.base.kernel_cache import cache_by_content
 from preform.drape.engine.result import NodeStatus
-from preform.drape.kernels.kernel_cache import cache_by_content
 from preform.drape.kernels.net_kernels import _check_node, _fronts_placed, _ready
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernels.kernel_cache``).
+#: (``preform.base.kernel_cache``).
 COMPILED_IN = ("preform.drape.engine.result", "preform.drape.kernels.net_kernels")
 cache_by_content(__name__)
 

@@ -1,5 +1,5 @@
 """Compiled kernels are cached under a key of every source compiled into them
-(``preform.drape.kernels.kernel_cache``): an edit anywhere is a new key (numba alone checks only a
+(``preform.base.kernel_cache``): an edit anywhere is a new key (numba alone checks only a
 kernel's own file, so a changed constant of another module kept its old value in the machine
 code), the same sources elsewhere (a reinstall) are the same key and compile nothing."""
 
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from preform.drape.kernels import kernel_cache
-from preform.drape.kernels.kernel_cache import (
+from preform.base import kernel_cache
+from preform.base.kernel_cache import (
     CACHE_ENV,
     compiled_in,
     declared_compiled_in,
@@ -48,7 +48,7 @@ def write_package(root: Path, value: int = 1, kernel_extra: str = "") -> Path:
 KERNEL = """
 import numba
 from kpkg.constants import VALUE
-from preform.drape.kernels.kernel_cache import cache_by_content
+from preform.base.kernel_cache import cache_by_content
 
 COMPILED_IN = ("kpkg.constants",)
 cache_by_content(__name__)
@@ -203,7 +203,7 @@ def preform_imports(path: Path) -> set[str]:
                 sub = f"{module}.{alias.name}"
                 is_module = package and importlib.util.find_spec(sub) is not None
                 found.add(sub if is_module else module)
-    return found - {"preform.drape.kernels.kernel_cache"}
+    return found - {"preform.base.kernel_cache"}
 
 
 @pytest.mark.parametrize("path", KERNEL_FILES, ids=lambda p: p.name)
@@ -272,7 +272,7 @@ def test_kernels_shipped_with_the_package_are_taken_not_compiled(tmp_path):
 LOAD_AHEAD = (
     COUNT
     + """
-from preform.drape.kernels.kernel_cache import load_compiled
+from preform.base.kernel_cache import load_compiled
 
 with event.install_listener("numba:compile", Count()):
     loaded = load_compiled(["kpkg.kern"])

@@ -1,5 +1,5 @@
 """The drape kernels are compiled once per install, by one process, saying so
-(``preform.drape.kernels.kernel_compile``). The fast tests swap the small case for a one-line kernel
+(``preform.commands.kernel_compile``). The fast tests swap the small case for a one-line kernel
 (the compile is numba's either way); the slow one runs the real command on an empty cache."""
 
 from __future__ import annotations
@@ -12,15 +12,15 @@ from pathlib import Path
 
 import pytest
 
-from preform.drape.kernels import kernel_compile
-from preform.drape.kernels.kernel_cache import CACHE_ENV, shipped_root
+from preform.base.kernel_cache import CACHE_ENV, shipped_root
+from preform.commands import kernel_compile
 
 #: ``ensure_compiled`` in a fresh process whose small case compiles a tiny kernel (after
 #: ``sleep`` seconds, to hold the lock) or fails; prints what it returned on stdout.
 PROCESS = """
 import sys, time
 import numba
-from preform.drape.kernels import kernel_compile
+from preform.commands import kernel_compile
 def small_case():
     if {fail}:
         raise RuntimeError("no library")

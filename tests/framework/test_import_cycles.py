@@ -59,21 +59,6 @@ PACKAGE_ORDER = [
     *("api", "commands", "schema", "bench", "cli", "__main__", "preform"),
 ]
 
-#: TEMPORARY (issue 31): imports that break the order today, (file, module imported) -> where
-#: the fix goes. The lead removes each entry as the branch that fixes it is merged.
-ALLOWED_UPWARD = {
-    **dict.fromkeys(
-        [
-            ("drape/kernels/kernel_compile.py", m)
-            for m in ("preform.api", "preform.pipeline.engines")
-        ],
-        "compiling runs a case through the API: it belongs with the commands (above api)",
-    ),
-    ("shear/surrogate_kernels.py", "preform.drape.kernels.kernel_cache"): (
-        "numba's cache by content serves the kernels of every package: it belongs in base"
-    ),
-}
-
 #: Modules moved, old path -> new path; the old path is a deprecated alias served by
 #: ``preform._moved``, so no file of it is part of the layer it names.
 MOVED = MOVED_MODULES
@@ -283,23 +268,13 @@ def test_a_lower_layer_does_not_import_the_one_above(lower, upper):
 
 
 def test_every_import_points_down_the_package_order():
-    wrong = order_violations(CORE, PACKAGE_ORDER, ALLOWED_UPWARD)
+    wrong = order_violations(CORE, PACKAGE_ORDER, {})
     assert not wrong, "imports against the package order (docs/design.md):\n" + "\n".join(wrong)
 
 
 def test_every_package_and_top_level_module_has_its_place_in_the_order():
     names = {package_of(m, CORE) for m in core_modules(CORE) if m != "preform"} | {"preform"}
     assert sorted(names) == sorted(PACKAGE_ORDER)
-
-
-def test_the_temporary_allowlist_names_imports_that_exist():
-    """An entry whose import is gone (fixed, moved) is removed, not kept as a silent licence."""
-    everything = order_violations(CORE, PACKAGE_ORDER, {})
-    for file, module in ALLOWED_UPWARD:
-        assert any(v.startswith(f"{file}:") and f" imports {module} " in v for v in everything), (
-            file,
-            module,
-        )
 
 
 def test_the_order_check_counts_imports_in_functions_and_names_the_line(tmp_path):

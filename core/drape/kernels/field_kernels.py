@@ -15,12 +15,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.kernel_cache import cache_by_content
 from preform.drape.engine.result import CellStatus, NodeStatus
-from preform.drape.kernels.kernel_cache import cache_by_content
 
 #: The preform modules compiled into these kernels (inlined functions, frozen constants):
 #: their sources are part of the key these kernels are cached under
-#: (``preform.drape.kernels.kernel_cache``).
+#: (``preform.base.kernel_cache``).
 COMPILED_IN = ("preform.drape.engine.result",)
 cache_by_content(__name__)
 

@@ -17,10 +17,10 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.kernels.kernel_cache import cache_by_content
+from preform.base.kernel_cache import cache_by_content
 
 #: No other preform module is compiled into these kernels; the key they are cached under
-#: is this file's (``preform.drape.kernels.kernel_cache``).
+#: is this file's (``preform.base.kernel_cache``).
 COMPILED_IN: tuple[str, ...] = ()
 cache_by_content(__name__)
 

@@ -18,7 +18,7 @@ folder (``~/.cache/preform/kernels`` on Linux); where that cannot be written, a 
 system's temporary directory. Old keys' folders are left for the user to remove (~2 MB each).
 
 An installed copy ships its kernels compiled: building the wheel (``pip install .``) compiles
-them into ``compiled/`` beside this module (:func:`shipped_root`, ``preform.drape.kernels.kernel_compile``
+them into ``compiled/`` beside this module (:func:`shipped_root`, ``preform.commands.kernel_compile``
 ``--ship``), and :func:`cache_by_content` copies a key's shipped folder into the user's cache
 the first time that key is used there, so the first run after an install loads them. numba
 records the processor each entry was compiled for and loads only entries of this one: a wheel
@@ -26,7 +26,7 @@ built on another machine costs the compile at first use, as without it.
 
 The key is computed from files alone (no numba import, no kernel module imported), so a
 command can ask whether the kernels are compiled before it loads numba
-(``preform.drape.kernels.kernel_compile``).
+(``preform.commands.kernel_compile``).
 """
 
 from __future__ import annotations
@@ -53,6 +53,17 @@ _KEY_VERSION = b"preform-kernel-cache-1"
 
 #: Kernel modules whose kernels are cached by content (``__name__``) and their folders.
 _BY_CONTENT: dict[str, Path] = {}
+
+
+#: The kernel modules the default study runs (not the generator marcher's: its geodesics on
+#: the hemisphere are closed forms): their keys together name the compiled state.
+WARMED = (
+    "preform.drape.kernels.net_kernels",
+    "preform.drape.kernels.surface_kernels",
+    "preform.drape.kernels.field_kernels",
+    "preform.drape.kernels.verdict_kernels",
+    "preform.shear.surrogate_kernels",
+)
 
 
 def user_cache_root() -> Path:

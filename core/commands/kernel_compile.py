@@ -1,7 +1,7 @@
 """Compile the drape kernels once per install, in one process, saying so.
 
 The kernels (``*_kernels.py``) are compiled by numba at their first call and cached by content
-(``preform.drape.kernels.kernel_cache``). Left to themselves, the first run after an install compiled
+(``preform.base.kernel_cache``). Left to themselves, the first run after an install compiled
 them silently in every worker at once: both workers of a two-core run spent the same ~20 s of
 processor time compiling the same kernels. :func:`ensure_compiled`, which ``preform pipeline
 run`` calls before its cases start, does it once instead: when the kernels of these sources are
@@ -18,7 +18,7 @@ mesh tool's queries, a run that marches generators on another tool) compiles tho
 first call, once per install as before, through the same cache.
 
 An installed copy has done this when its wheel was built (``pip install .`` runs
-``python -m preform.drape.kernels.kernel_compile --ship`` on the built tree: the compile is part of the
+``python -m preform.commands.kernel_compile --ship`` on the built tree: the compile is part of the
 install, with pip's other build output): the kernels and their marker are shipped in the package
 (``kernel_cache.shipped_root``), and a user's first run finds the marker there, checks that it
 was compiled for this processor (:func:`host_processor`) and takes the kernels into its cache
@@ -38,22 +38,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-from preform.drape.kernels.kernel_cache import (
+from preform.base.kernel_cache import (
     CACHE_ENV,
+    WARMED,
     cache_root,
     load_compiled,
     shipped_root,
     source_key,
-)
-
-#: The kernel modules the default study runs (not the generator marcher's: its geodesics on
-#: the hemisphere are closed forms): their keys together name the compiled state.
-WARMED = (
-    "preform.drape.kernels.net_kernels",
-    "preform.drape.kernels.surface_kernels",
-    "preform.drape.kernels.field_kernels",
-    "preform.drape.kernels.verdict_kernels",
-    "preform.shear.surrogate_kernels",
 )
 
 #: The estimate [s] printed before the first compile on a machine that has not compiled
@@ -69,7 +60,7 @@ _WARM_OUTPUTS = ["energy_vs_angle", "optimum", "drape", "cells_csv"]
 
 #: The helper process (:func:`_start_helper`): this module (by name: as ``python -m`` it is
 #: ``__main__``) with this flag and the pid of the process it helps.
-HELPER_MODULE = "preform.drape.kernels.kernel_compile"
+HELPER_MODULE = "preform.commands.kernel_compile"
 HELPER_FLAG = "--helper"
 #: Compile into the package's own folder (``kernel_cache.shipped_root``): the wheel build's step.
 SHIP_FLAG = "--ship"
@@ -287,7 +278,7 @@ def _small_case() -> None:
 
 
 def main() -> None:
-    """``python -m preform.drape.kernels.kernel_compile``: compile now (e.g. after installing)."""
+    """``python -m preform.commands.kernel_compile``: compile now (e.g. after installing)."""
     if sys.argv[1:2] == [HELPER_FLAG]:
         from preform.pipeline.engines import watch_parent
 
