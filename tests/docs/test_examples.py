@@ -91,6 +91,8 @@ def run_bash(block: Block, folder: Path) -> int:
     for line in text.splitlines():
         for part in line.split("&&"):
             command = shlex.split(part, comments=True)
+            while command and "=" in command[0]:  # VAR=value before the program: its environment
+                command = command[1:]
             if not command:
                 continue
             if command[0] == "preform":
