@@ -124,10 +124,15 @@ def ply_at(
     d_mm = MM_PER_M * float(result.node_spacing)
     ci_all, cj_all = np.nonzero(region)
     centres = MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all]
+    far = np.zeros(k, bool)
     if own_cells:  # the same answer as the search below, without it
         nearest = np.arange(k)
     else:
-        _, nearest = cKDTree(centres).query(points)
+        # a cell centre farther than this is not "near" (below): the search may stop there
+        bound = 2.0 * d_mm + float(gap_limit.max())
+        distance, nearest = cKDTree(centres).query(points, distance_upper_bound=bound)
+        far = ~np.isfinite(distance)
+        nearest[far] = 0  # any cell: a far point is neither present nor in doubt
     ci, cj = ci_all[nearest], cj_all[nearest]
     nodes = MM_PER_M * np.asarray(result.nodes, dtype=float)
     x00, x10 = nodes[ci, cj], nodes[ci + 1, cj]
@@ -154,7 +159,7 @@ def ply_at(
     local[ok] = triple[ok] / det[ok, None]
     present = (np.abs(local[:, 0]) <= 0.5) & (np.abs(local[:, 1]) <= 0.5)
     present &= np.abs(local[:, 2]) <= gap_limit
-    near = np.linalg.norm(points - centres[nearest], axis=1) <= 2.0 * d_mm + gap_limit
+    near = ~far & (np.linalg.norm(points - centres[nearest], axis=1) <= 2.0 * d_mm + gap_limit)
     doubt = ~present & near
     if doubt.any():
         hit = closest_on_net(result, points[doubt], region)
