@@ -44,6 +44,11 @@ PICTURE_MAX_BYTES = 3_000_000
 NET_MAX_CELLS = 4000
 #: Marked cells (wrinkle, fold, past a limit) of one net at most.
 MARKS_MAX = 2000
+#: From this many cases on, the cells tables are parsed by pandas' C reader: a default-study
+#: cells.csv (20 736 rows) takes ~17 ms there against ~120 ms by the csv module, for pandas'
+#: import, ~0.4 s once (measured 2026-12-03 on the two-core machine; benchmarks/README.md,
+#: section (r)). Below it the csv module, so a one-case run does not pay the import.
+PANDAS_FROM_CASES = 4
 
 
 def status_rank(status: str) -> int:
@@ -145,12 +150,32 @@ def _strings(value: Any) -> list[str]:
 
 
 def csv_columns(
-    path: Path, numbers: set[str], texts: set[str]
+    path: Path, numbers: set[str], texts: set[str], by_pandas: bool = False
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Of a CSV file's columns, those named in ``numbers`` as floats (an empty field NaN) and
-    those in ``texts`` as text; only the ones the file has. The csv module, not pandas (a
-    run's process never imports it) nor pyarrow (its arrays with gaps go through pandas).
-    Raises OSError, ValueError (a field that is not a number) or UnicodeDecodeError."""
+    those in ``texts`` as text; only the ones the file has. Parsed by the csv module, or with
+    ``by_pandas`` by pandas' C reader (``PANDAS_FROM_CASES``), to the same arrays. Raises
+    OSError, ValueError (a field that is not a number) or UnicodeDecodeError."""
+    if by_pandas:
+        import pandas as pd
+
+        if path.stat().st_size == 0:  # no header: no column, as the csv module reads it
+            return {}, {}
+        frame = pd.read_csv(
+            path,
+            usecols=lambda name: name in numbers or name in texts,
+            dtype=dict.fromkeys(texts, str),
+            keep_default_na=False,  # only an empty number is missing; a text stays as written
+            na_values={name: [""] for name in numbers},
+            encoding="utf-8",
+        )
+        for name in numbers.intersection(frame.columns):
+            if frame[name].dtype.kind == "b":  # pandas reads True/False as numbers; we do not
+                raise ValueError(f"{path.name}: column {name} holds True/False, not numbers")
+        return (
+            {n: frame[n].to_numpy(dtype=float) for n in frame.columns if n in numbers},
+            {n: frame[n].to_numpy(dtype=str) for n in frame.columns if n in texts},
+        )
     with open(path, newline="", encoding="utf-8") as f:
         reader = csv.reader(f)
         header = next(reader, [])
@@ -169,14 +194,14 @@ def csv_columns(
     return found_numbers, found_texts
 
 
-def read_net(path: Path) -> tuple[Net | None, str]:
+def read_net(path: Path, by_pandas: bool = False) -> tuple[Net | None, str]:
     """The draped net of a case's cells.csv, thinned to at most ``NET_MAX_CELLS`` cells; or
-    None and why."""
+    None and why (``by_pandas``: ``csv_columns``)."""
     needed = ("i", "j", "x_mm", "y_mm", "z_mm", "shear_deg")
     flags = {"wrinkling": "wrinkling", "past_jamming": "past jamming"}
     flags["past_failure"] = "past stitch failure"
     try:
-        numbers, table = csv_columns(path, set(needed), {*flags, "status"})
+        numbers, table = csv_columns(path, set(needed), {*flags, "status"}, by_pandas)
     except (OSError, ValueError, UnicodeDecodeError) as exc:
         return None, f"{path.name} could not be read ({type(exc).__name__})"
     missing = [k for k in needed if k not in numbers]
@@ -254,7 +279,9 @@ def _inside(root: Path, relative: str) -> Path | None:
     return path
 
 
-def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -> CaseData:
+def read_case(
+    root: Path, row: dict[str, str], manifest_cases: dict[str, Any], by_pandas: bool = False
+) -> CaseData:
     case_id = f"{row.get('scene', '')}/{row.get('material', '')}"
     folder = _case_folder(row, manifest_cases, case_id)
     case_dir = _inside(root, folder) if folder else None
@@ -300,7 +327,7 @@ def read_case(root: Path, row: dict[str, str], manifest_cases: dict[str, Any]) -
             else:
                 case.problems.append(f"{name} is missing or unreadable")
     if "cells.csv" in case.files:
-        case.net, case.net_note = read_net(case_dir / "cells.csv")
+        case.net, case.net_note = read_net(case_dir / "cells.csv", by_pandas)
     else:
         case.net_note = (
             "no 3-D view: the scene did not ask for cells.csv (output cells_csv)"
@@ -352,7 +379,8 @@ def read_run(root: Path) -> Run:
         problems.append("results.csv is missing or unreadable: no case can be shown")
         table = ([], [])
     columns, rows = table
-    cases = [read_case(root, row, manifest_cases) for row in rows]
+    by_pandas = len(rows) >= PANDAS_FROM_CASES
+    cases = [read_case(root, row, manifest_cases, by_pandas) for row in rows]
     cases += _pending_cases(manifest_cases, {c.case_id for c in cases})
     cases.sort(key=lambda c: (status_rank(c.status), c.case_id))
     tradeoff = read_table(root / "tradeoff.csv")

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
-from hypothesis import given
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from preform.cli import cli
 from preform.report import REPORT_NAME, build_report, write_report
-from preform.report.gather import NET_MAX_CELLS, cause_of, read_net, read_run
+from preform.report.gather import NET_MAX_CELLS, cause_of, csv_columns, read_net, read_run
 from preform.report.render import display_number, render_page
 
 
@@ -227,6 +227,49 @@ def test_the_net_is_thinned_to_fit_and_stays_a_surface(tmp_path, cells_maker):
             assert d <= step * math.sqrt(2) + 0.02
     assert len(net.triangles) >= 1.8 * len(net.x_mm)
     assert net.marks_total == sum(1 for i, j in _grid(n, 1.25) if (i - n / 2) * 1.25 > 60)
+
+
+def test_pandas_reads_a_cells_table_as_the_csv_module_does(tmp_path, cells_maker):
+    """A run of many cases parses its tables with pandas (PANDAS_FROM_CASES): the same net."""
+    from preform.export.csv_columns import rows_to_columns, write_csv_columns
+
+    path = tmp_path / "cells.csv"
+    write_csv_columns(rows_to_columns(cells_maker(60, spacing_mm=3.5)), path)
+    assert read_net(path, by_pandas=True) == read_net(path)
+
+
+_FIELD = st.one_of(
+    st.just(""),
+    st.floats(allow_nan=False).map(repr),
+    st.integers(-(10**6), 10**6).map(str),
+    st.sampled_from(["NA", "None", "nan", "N/A", "null", "True", "OK", "A, B", 'say "x"']),
+)
+
+
+@settings(deadline=None)  # the first example imports pandas
+@given(rows=st.lists(st.tuples(_FIELD, _FIELD, _FIELD), max_size=12))
+@example(rows=[("True", "1", "x")])  # pandas alone would read True as 1.0
+@example(rows=[("", "NA", "NA"), ("1.5", "", "")])
+def test_both_parsers_give_the_same_columns_or_both_refuse(tmp_path_factory, rows):
+    """Numbers (an empty field NaN, a word refused) and texts (kept as written: "NA" is a
+    word, not a gap), quoted fields with commas and quotes: the csv module and pandas agree."""
+    path = tmp_path_factory.mktemp("table") / "t.csv"
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        csv.writer(f, lineterminator="\n").writerows([("a", "b", "t"), *rows])
+    results = []
+    for by_pandas in (False, True):
+        try:
+            numbers, texts = csv_columns(path, {"a", "b"}, {"t"}, by_pandas)
+        except ValueError:
+            results.append(None)
+        else:
+            results.append(
+                (
+                    {k: v.tobytes() for k, v in numbers.items()},
+                    {k: v.tolist() for k, v in texts.items()},
+                )
+            )
+    assert results[0] == results[1]
 
 
 def _grid(n: int, spacing: float) -> list[tuple[int, int]]:
