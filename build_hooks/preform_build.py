@@ -57,7 +57,10 @@ class BuildWithKernels(build_py):
             (info / "entry_points.txt").write_text(
                 "".join(f"[{g}]\n" + "".join(f"{e}\n" for e in eps) for g, eps in groups.items())
             )
-            path = os.pathsep.join([str(Path(self.build_lib).resolve()), tmp])
+            # ahead of the build environment's own path (pip's isolated build finds its
+            # packages, preform's dependencies among them, through PYTHONPATH)
+            ours = [str(Path(self.build_lib).resolve()), tmp]
+            path = os.pathsep.join([*ours, *filter(None, [os.environ.get("PYTHONPATH")])])
             env = {**os.environ, "PYTHONPATH": path}
             env.pop("PREFORM_KERNEL_CACHE", None)
             subprocess.run([sys.executable, *SHIP], env=env, check=True, cwd=tmp)
