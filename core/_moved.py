@@ -2,7 +2,6 @@
 (0.2.0); retired outputs and their writers are refused with a message naming what replaced it."""
 
 import importlib
-import importlib.abc
 import importlib.util
 import warnings
 from types import ModuleType
@@ -46,8 +45,10 @@ MOVED_MODULES: dict[str, str] = {
 }
 
 
-class MovedModuleFinder(importlib.abc.Loader):
-    """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` adds it)."""
+class MovedModuleFinder:
+    """The ``sys.meta_path`` finder and loader of ``MOVED_MODULES`` (``import preform`` adds it).
+    A plain class, the protocols by their methods: ``importlib.abc`` is not imported at start-up
+    otherwise, and importing it starts collections before the command pauses the collector."""
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
         return importlib.util.spec_from_loader(name, self) if name in MOVED_MODULES else None

@@ -32,6 +32,7 @@ def small_case():
 
 kernel_compile._small_case = small_case
 kernel_compile._start_helper = lambda: None  # the real small case's helper: its own test
+kernel_compile._take_shipped = lambda marker: False  # an installed copy ships the real ones
 print(kernel_compile.ensure_compiled(sys.stderr))
 """
 
@@ -100,6 +101,7 @@ def test_kernels_compiled_at_first_use_are_marked_without_a_word(tmp_path, monke
     ran: list[int] = []
     monkeypatch.setattr(kernel_compile, "_small_case", lambda: ran.append(1))
     monkeypatch.setattr(kernel_compile, "_start_helper", lambda: None)
+    monkeypatch.setattr(kernel_compile, "_take_shipped", lambda marker: False)  # installed copy
     said = io.StringIO()
     assert kernel_compile.ensure_compiled(said) is None
     assert said.getvalue() == "" and ran == [1]
@@ -141,8 +143,17 @@ def test_the_helper_compiles_what_comes_after_the_drape_and_not_the_fill(tmp_pat
     """The helper runs the net kernels as Python: its cache holds the field, coverage and
     surrogate kernels the small case calls, and no fill."""
     env = {**os.environ, CACHE_ENV: str(tmp_path)}
-    command = [sys.executable, "-m", kernel_compile.HELPER_MODULE, kernel_compile.HELPER_FLAG]
-    subprocess.run(command, env=env, check=True, capture_output=True, timeout=600)
+    # the helper as ``python -m``, with no shipped kernels to seed the cache from (an
+    # installed copy has them: every kernel, the fill too, would be there uncompiled)
+    helper = (
+        "import runpy, sys; from pathlib import Path; from preform.base import kernel_cache; "
+        "kernel_cache.shipped_root = lambda: Path('/nonexistent-preform-shipped'); "
+        f"sys.argv = ['x', {kernel_compile.HELPER_FLAG!r}]; "
+        f"runpy.run_module({kernel_compile.HELPER_MODULE!r}, run_name='__main__')"
+    )
+    subprocess.run(
+        [sys.executable, "-c", helper], env=env, check=True, capture_output=True, timeout=600
+    )
     assert list(
         tmp_path.glob("preform.drape.kernels.field_kernels-*/field_kernels.node_shear-*.nbi")
     )
