@@ -51,7 +51,8 @@ class MovedModuleFinder:
     otherwise, and importing it starts collections before the command pauses the collector."""
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
-        return importlib.util.spec_from_loader(name, self) if name in MOVED_MODULES else None
+        loader: Any = self  # a loader by its methods (typeshed's protocol wants load_module too)
+        return importlib.util.spec_from_loader(name, loader) if name in MOVED_MODULES else None
 
     def create_module(self, spec: Any) -> ModuleType:
         module = importlib.import_module(MOVED_MODULES[spec.name])
