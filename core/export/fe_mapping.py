@@ -238,10 +238,12 @@ class NetHit:
 
 
 def closest_on_net(
-    result: DrapeResult, points_mm: FloatArray, region: BoolArray | None = None
+    result: DrapeResult, points_mm: FloatArray, region: BoolArray | None = None, tree: Any = None
 ) -> NetHit:
     """Closest point on the draped net [m] to each of ``points_mm`` (k, 3) [mm], over the
     cells of ``region`` (default: valid and in the part; it must hold at least one cell).
+    ``tree``: the caller's ``cKDTree`` of the region cells' centroids [mm] in
+    ``np.nonzero(region)`` order, when it has one (built here otherwise).
 
     Each cell is two triangles split along its (i, j)–(i+1, j+1) diagonal, so (s, t) is
     linear on each half; the nearest cells by centroid are searched exactly."""
@@ -255,9 +257,10 @@ def closest_on_net(
     points = np.asarray(points_mm, dtype=float).reshape(-1, 3)
     m = len(points)
     nodes = MM_PER_M * np.asarray(result.nodes, dtype=float)
-    centres = MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all]
+    if tree is None:
+        tree = cKDTree(MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all])
     k = min(CANDIDATES, ci_all.size)
-    _, nearest = cKDTree(centres).query(points, k=k)
+    _, nearest = tree.query(points, k=k)
     nearest = np.asarray(nearest).reshape(m, k)
     pi = np.repeat(np.arange(m), k)
     ci, cj = ci_all[nearest.ravel()], cj_all[nearest.ravel()]

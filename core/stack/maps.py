@@ -106,12 +106,14 @@ def ply_at(
     the points are this ply's part cell centres, in ``np.nonzero(layer.region)`` order (the
     stations on the reference ply), so each is its own nearest cell, at its centre.
 
-    A point whose nearest cell (by centroid) holds it is read there: its coordinates in the
-    cell's parallelogram (the mean edges a, b and the normal n, solved once per point) lie
-    within half a cell of the centre and its gap within the limit. The others, near the net's
-    edge or where the nearest centroid is a neighbour's, are found exactly
-    (``closest_on_net``: sixteen triangle tests a point)."""
+    A point is read in the cell that holds it: its coordinates in the cell's parallelogram
+    (the mean edges a, b and the normal n) lie within half a cell of the centre and its gap
+    within the limit; the point's nearest cell (by centroid) is tried first, then its eight
+    neighbours (``preform.stack.maps_kernels``). The points none holds but near the net (its
+    edge) are found exactly (``closest_on_net``: sixteen triangle tests a point)."""
     from scipy.spatial import cKDTree
+
+    from preform.stack.maps_kernels import holding_cells
 
     points = np.asarray(points_mm, dtype=float).reshape(-1, 3)
     k = len(points)
@@ -123,46 +125,32 @@ def ply_at(
     result = layer.result
     d_mm = MM_PER_M * float(result.node_spacing)
     ci_all, cj_all = np.nonzero(region)
-    centres = MM_PER_M * np.asarray(result.centroid, dtype=float)[ci_all, cj_all]
+    centroid = MM_PER_M * np.asarray(result.centroid, dtype=float)
+    centres = centroid[ci_all, cj_all]
     far = np.zeros(k, bool)
+    tree = None
     if own_cells:  # the same answer as the search below, without it
         nearest = np.arange(k)
     else:
         # a cell centre farther than this is not "near" (below): the search may stop there
         bound = 2.0 * d_mm + float(gap_limit.max())
-        distance, nearest = cKDTree(centres).query(points, distance_upper_bound=bound)
+        tree = cKDTree(centres)
+        distance, nearest = tree.query(points, distance_upper_bound=bound)
         far = ~np.isfinite(distance)
         nearest[far] = 0  # any cell: a far point is neither present nor in doubt
-    ci, cj = ci_all[nearest], cj_all[nearest]
-    nodes = MM_PER_M * np.asarray(result.nodes, dtype=float)
-    x00, x10 = nodes[ci, cj], nodes[ci + 1, cj]
-    x01, x11 = nodes[ci, cj + 1], nodes[ci + 1, cj + 1]
-    a = 0.5 * ((x10 - x00) + (x11 - x01))
-    b = 0.5 * ((x01 - x00) + (x11 - x10))
-    n = np.cross(a, b)
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    # The point's coordinates along a, b, n (columns of a 3×3 frame) by Cramer's rule: the
-    # triple products, a tenth of a batched LAPACK solve's time for 3×3 systems.
-    p = points - centres[nearest]
-    b_n = np.cross(b, n)
-    det = np.einsum("ij,ij->i", a, b_n)
-    ok = np.abs(det) > 1e-12 * d_mm**2
-    local = np.full((k, 3), np.inf)
-    triple = np.stack(
-        [
-            np.einsum("ij,ij->i", p, b_n),
-            np.einsum("ij,ij->i", a, np.cross(p, n)),
-            np.einsum("ij,ij->i", a, np.cross(b, p)),
-        ],
-        axis=1,
+    present, ci, cj, doubt = holding_cells(
+        points,
+        ci_all[nearest],
+        cj_all[nearest],
+        far,
+        MM_PER_M * np.asarray(result.nodes, dtype=float),
+        centroid,
+        region,
+        np.ascontiguousarray(gap_limit),
+        d_mm,
     )
-    local[ok] = triple[ok] / det[ok, None]
-    present = (np.abs(local[:, 0]) <= 0.5) & (np.abs(local[:, 1]) <= 0.5)
-    present &= np.abs(local[:, 2]) <= gap_limit
-    near = ~far & (np.linalg.norm(points - centres[nearest], axis=1) <= 2.0 * d_mm + gap_limit)
-    doubt = ~present & near
     if doubt.any():
-        hit = closest_on_net(result, points[doubt], region)
+        hit = closest_on_net(result, points[doubt], region, tree)
         inside = (hit.tangential_mm <= EDGE_TOLERANCE * d_mm) & (hit.gap_mm <= gap_limit[doubt])
         present[doubt] = inside
         ci[doubt], cj[doubt] = hit.cell_i, hit.cell_j
