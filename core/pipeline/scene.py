@@ -311,6 +311,14 @@ class Scene(BaseModel):
         """The validated section ``key`` (a field of the scene or a plugin step's), or None."""
         return getattr(self, key) if key in type(self).model_fields else self._sections.get(key)
 
+    def plugin_sections_data(self) -> dict[str, Any]:
+        """The plugin steps' sections as scene data (JSON types), as a scene file holds them:
+        what a scene derived from this one (a layup's ply) carries over."""
+        return {
+            key: value.model_dump(mode="json") if isinstance(value, BaseModel) else value
+            for key, value in self._sections.items()
+        }
+
     @property
     def base_dir(self) -> str:
         """Directory of the scene file, against which relative paths in it resolve."""

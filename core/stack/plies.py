@@ -25,7 +25,9 @@ def ply_scene_data(scene: Scene, index: int) -> dict[str, Any]:
     """The drape scene data of ply ``index`` (0 on the tool side) of ``scene``'s layup."""
     layup = layup_of(scene)
     ply = layup.plies[index]
-    data = copy.deepcopy(scene.model_dump(mode="json", exclude_none=True))
+    # the plugin steps' sections too: a plugin step among the ply outputs reads its own
+    data = scene.model_dump(mode="json", exclude_none=True) | scene.plugin_sections_data()
+    data = copy.deepcopy(data)
     data.pop("layup", None)
     data["name"] = f"{scene.name}/{layup.ply_names()[index]}"
     start = data.get("start") or {}

@@ -211,3 +211,31 @@ def test_a_section_has_one_owner_and_a_lazy_step_owns_what_it_declared(sandbox):
     sandbox.register(Liar(), "liar")
     with pytest.raises(LazyLoadError, match=r"owning the scene sections \['x'\]"):
         sandbox.registry.step("liar")
+
+
+def test_a_layups_plies_carry_the_plugin_sections(sandbox, tmp_path):
+    """Each ply of a layup is a drape scene of its own (preform.stack.plies): a plugin step
+    among the ply outputs reads its section there as in the layup's scene."""
+    from preform.stack.plies import ply_scene
+
+    path = tmp_path / "stack.yaml"
+    path.write_text(
+        textwrap.dedent(
+            """\
+            name: stamped-stack
+            tool: {surface: hemisphere, radius_mm: 100}
+            stamp: {min_coverage: 1, ink_ml: 2.5, repeats: 3}
+            layup:
+              plies:
+                - {fabric: felt, orientation_deg: 0}
+                - {fabric: felt, orientation_deg: 90}
+              ply_outputs: [stamp]
+            outputs: [layup]
+            """
+        )
+    )
+    scene, _ = load_scene(path, sandbox.registry)
+    for k in range(2):
+        ply = ply_scene(scene, k, sandbox.registry)
+        assert ply.section("stamp") == scene.section("stamp")
+        assert ply.section("stamp").repeats == 3
