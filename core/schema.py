@@ -7,7 +7,7 @@ from typing import Annotated, Any, Union
 from pydantic import Field, TypeAdapter, create_model
 
 from preform.pipeline.scene import Scene
-from preform.registry import Registry
+from preform.registry import LazyLoadError, Registry
 
 
 def _union(models: list[Any], tag: str) -> Any:
@@ -38,8 +38,19 @@ def library_schema(registry: Registry) -> dict[str, Any]:
 
 
 def scene_schema(registry: Registry) -> dict[str, Any]:
+    """Schema of a scene file: the scene's fields, its tool by the registered surfaces, and
+    the sections plugins' steps own (``Step.sections``) by their models."""
     tools = _union([registry.surface_type(n).params for n in registry.names("surfaces")], "surface")
-    model = create_model("Scene", __base__=Scene, tool=(tools | None, None))
+    sections: dict[str, Any] = {}
+    for key, owner in registry.providers("sections").items():
+        if key in Scene.model_fields:
+            continue
+        try:
+            section = registry.step(owner).sections[key]
+        except LazyLoadError:  # a plugin that cannot load: its section is any mapping
+            section = None
+        sections[key] = ((section or dict[str, Any]) | None, None)
+    model = create_model("Scene", __base__=Scene, tool=(tools | None, None), **sections)
     schema = model.model_json_schema()
     schema["title"] = "preform scene file"
     return schema

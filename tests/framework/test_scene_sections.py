@@ -239,3 +239,17 @@ def test_a_layups_plies_carry_the_plugin_sections(sandbox, tmp_path):
         ply = ply_scene(scene, k, sandbox.registry)
         assert ply.section("stamp") == scene.section("stamp")
         assert ply.section("stamp").repeats == 3
+
+
+def test_the_scene_schema_holds_the_plugin_sections(sandbox):
+    """`preform schema --scene` lists a plugin step's section with its model's fields; the scene
+    schema forbids unknown keys, so without it an editor would flag the section as wrong."""
+    from preform.schema import scene_schema
+
+    schema = scene_schema(sandbox.registry)
+    assert schema.get("additionalProperties") is False
+    stamp = schema["properties"]["stamp"]
+    (ref,) = [s["$ref"] for s in stamp["anyOf"] if "$ref" in s]
+    model = schema["$defs"][ref.rsplit("/", 1)[-1]]
+    assert set(model["properties"]) == {"min_coverage", "ink_ml", "repeats"}
+    assert model["properties"]["repeats"]["minimum"] == 1
