@@ -356,7 +356,8 @@ def summed_law(ctx: CaseContext, knobs: fidelity.Knobs) -> Any:
 
 def run_drape(ctx: CaseContext) -> dict[str, Any]:
     surface = ctx.products["surface"]
-    settings = drape_settings(ctx.scene, surface)
+    study = ctx.products.get("energy_vs_angle")  # a search's, resolved for its drapes
+    settings = study.settings if study is not None else drape_settings(ctx.scene, surface)
     law = summed_law(ctx, record_knobs(ctx, settings))
     optimum = ctx.products.get("optimum")
     if optimum is not None:

@@ -86,12 +86,16 @@ class AngleStudy:
     settings: DrapeSettings
 
 
-def search_knobs(scene: Scene, tool_size_m: float | None = None) -> dict[str, Any]:
-    """The search section's settings with the fidelity knobs resolved (degrees, mm²)."""
+def search_knobs(
+    scene: Scene, tool_size_m: float | None = None, knobs: fidelity.Knobs | None = None
+) -> dict[str, Any]:
+    """The search section's settings with the fidelity knobs resolved (degrees, mm²).
+    ``knobs``: those a case already resolved (its ``DrapeSettings.fidelity``), else resolved
+    here from the scene and the tool's size [m]."""
     section = scene.search
     if section is None:
         raise ValueError("the angle search needs the scene section 'search'")
-    knobs = fidelity.resolve(scene, tool_size_m)
+    knobs = knobs or fidelity.resolve(scene, tool_size_m)
     span = section.generator_angle_deg
     return {
         "range_deg": [span.min, span.max] if span is not None else [30.0, 150.0],
@@ -117,7 +121,7 @@ def build_objective(ctx: CaseContext, settings: DrapeSettings) -> DrapeObjective
             "the generator-angle search needs geodesic or plan generators, not "
             "polylines (polylines fix the angle themselves)"
         )
-    knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
+    knobs = search_knobs(ctx.scene, knobs=settings.fidelity)
     shear = knobs["uncovered_shear_deg"]
     table = knobs["energy_table_step_deg"]
     return DrapeObjective(
@@ -130,9 +134,8 @@ def build_objective(ctx: CaseContext, settings: DrapeSettings) -> DrapeObjective
 
 
 def run_energy_vs_angle(ctx: CaseContext) -> dict[str, Any]:
-    knobs = search_knobs(ctx.scene, float(ctx.products["surface"].size))
     settings = drape_settings(ctx.scene, ctx.products["surface"])
-    record_knobs(ctx, settings)
+    knobs = search_knobs(ctx.scene, knobs=record_knobs(ctx, settings))
     with np.errstate(invalid="ignore", over="ignore"):
         objective = build_objective(ctx, settings)
     where = objective.drape_kwargs.get("start_xy_m")
@@ -364,7 +367,7 @@ def _judge_optimum_drape(
 def run_optimum(ctx: CaseContext) -> dict[str, Any]:
     study: AngleStudy = ctx.products["energy_vs_angle"]
     search = study.search
-    knobs = search_knobs(ctx.scene, float(study.objective.surface.size))
+    knobs = search_knobs(ctx.scene, knobs=study.settings.fidelity)
     optimum: dict[str, Any] = {
         "generator_angle_rad": search.optimum_angle_rad,
         "energy_J": search.optimum_energy_J,

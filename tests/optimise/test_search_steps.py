@@ -397,3 +397,31 @@ def test_a_curved_saving_resting_on_no_data_is_not_claimed(sandbox, tmp_path):
     (said,) = [w for w in ctx.warnings if "no saving is claimed for curved generators" in w]
     assert f"{100 * share:.2g} % of the part's fabric" in said
     assert f"{100 * summary['curved_relative_saving']:.3g} %" in said
+
+
+def test_a_search_case_resolves_the_knobs_once_for_its_search_and_its_drape(tmp_path, monkeypatch):
+    """The knobs are resolved once into the search's DrapeSettings, which its drapes, its
+    optimum and the optimum's drape all use; the case records those."""
+    import preform
+    from preform.base import fidelity
+    from preform.drape.steps import run_drape
+
+    done = preform.least_energy("plain-weave-150", node_spacing_mm=20)
+    ctx = CaseContext(done.fabric, done.scene, preform.default_host().registry, tmp_path)
+    ctx.products.update({k: done.products[k] for k in ("surface", "shear_law")})
+    resolved = []
+    real = fidelity.resolve
+
+    def counting(*args: Any, **kwargs: Any) -> Any:
+        resolved.append(real(*args, **kwargs))
+        return resolved[-1]
+
+    monkeypatch.setattr(fidelity, "resolve", counting)
+    for run in (search_steps.run_energy_vs_angle, search_steps.run_optimum, run_drape):
+        ctx.products.update(run(ctx))
+    assert len(resolved) == 1
+    for key, value in resolved[0].as_dict().items():
+        assert ctx.summary[key if key == "fidelity" else f"knob_{key}"] == value
+    assert ctx.summary["optimum_generator_angle_deg"] == pytest.approx(
+        done.summary["optimum_generator_angle_deg"]
+    )
