@@ -193,12 +193,6 @@ class Comparison(PointAngles):
     def compared(self) -> BoolArray:
         return np.asarray(~self.off_tool & ~self.off_net)
 
-    @property
-    def angle_errors_deg(self) -> FloatArray:
-        """Every fibre-angle error of both families, pooled (compared points only) [deg]."""
-        both = np.concatenate([self.error_u_deg, self.error_v_deg])
-        return np.asarray(both[np.isfinite(both)])
-
     def groups(self) -> dict[str, BoolArray]:
         """The points of each region: ``all``, the measurement's labels, and the flags."""
         out: dict[str, BoolArray] = {"all": np.ones(len(self.point_mm), dtype=bool)}

@@ -120,12 +120,6 @@ class Measurement:
             np.isfinite(self.uncertainty_deg), self.uncertainty_deg, DEFAULT_UNCERTAINTY_DEG
         )
 
-    def scaled(self, factor: float) -> Measurement:
-        """The same measurement with its points multiplied by ``factor`` (a unit slip)."""
-        from dataclasses import replace
-
-        return replace(self, points=self.points * float(factor))
-
     def subset(self, keep: ArrayLike) -> Measurement:
         """The points where ``keep`` (bool, n) holds."""
         from dataclasses import replace

@@ -585,15 +585,6 @@ def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
     return f"{int(np.count_nonzero(mask))} cells ({shown} % of the part's draped area)"
 
 
-def shear_limit_warnings(
-    result: DrapeResult, energy: EnergyField, limits: LawRange
-) -> tuple[list[str], dict[str, Any]]:
-    """Sentences about the counted cells past the law's limits, and their counts for the
-    summary (``shear_limit_notes`` without what each is about)."""
-    notes, counts = shear_limit_notes(result, energy, limits)
-    return [message for message, _ in notes], counts
-
-
 def shear_limit_notes(
     result: DrapeResult, energy: EnergyField, limits: LawRange
 ) -> tuple[list[tuple[str, dict[str, Any]]], dict[str, Any]]:
