@@ -207,13 +207,6 @@ class StitchPath(NamedTuple):
     points: FloatArray
 
     @property
-    def overlap_vectors(self) -> FloatArray:
-        """In-plane vectors from each loop's down-leg to its up-leg (courses, 2) [m]."""
-        import numpy as np
-
-        return np.array([o[-1, :2] - o[0, :2] for o in self.overlaps])
-
-    @property
     def underlap_vectors(self) -> FloatArray:
         """In-plane underlap vectors (courses, 2) [m]."""
         import numpy as np
