@@ -506,6 +506,15 @@ def _deg_or_none(value: Any) -> float | None:
     return math.radians(out) if math.isfinite(out) else None
 
 
+def fabric_law_range(law: ShearLaw, fabric: Any) -> LawRange:
+    """:func:`law_range` of ``law`` with ``fabric``'s shear-law block, or its architecture's
+    default block when the entry gives none."""
+    block = getattr(fabric, "shear_law", None)
+    if block is None and hasattr(fabric, "default_shear_law"):
+        block = fabric.default_shear_law()
+    return law_range(law, block)
+
+
 def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
     """The limits of ``law``. Read from the law when it offers them (``packing_angle`` [rad],
     ``data_range`` = (negative end, positive end) [rad], ``wrinkle_limits``); else the data range is read from the
