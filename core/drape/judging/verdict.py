@@ -229,35 +229,21 @@ class Coverage:
         if self.complete:
             return ""
         d_mm = self.node_spacing_m * 1e3
-        causes = []
+        why = {
+            "stopped_on_tool": "stopped on the tool (the net could not be continued across a "
+            "crease or corner there, although the tool goes on)",
+            "folded": "folded (the net would turn over there: behind a sharp convex vertex of "
+            "the tool, or at an edge or corner sharper than a net of this spacing can follow)",
+            "no_intersection": "had no intersection (no point of the tool at distance "
+            f"d = {d_mm:.3g} mm from both parent nodes: the curvature is too high for the node "
+            "spacing)",
+            "not_reached_behind_failure": "over the tool were not reached because a node "
+            "between them and the start failed",
+            "not_reached_behind_outline": "over the tool were not reached because the ply "
+            "outline cuts a generator before them",
+        }
         m = self.missing_nodes
-        if m.get("stopped_on_tool"):
-            causes.append(
-                f"{m['stopped_on_tool']} node(s) stopped on the tool (the net could not be "
-                "continued across a crease or corner there, although the tool goes on)"
-            )
-        if m.get("folded"):
-            causes.append(
-                f"{m['folded']} node(s) folded (the net would turn over there: behind a sharp "
-                "convex vertex of the tool, or at an edge or corner sharper than a net of this "
-                "spacing can follow)"
-            )
-        if m.get("no_intersection"):
-            causes.append(
-                f"{m['no_intersection']} node(s) had no intersection (no point of the tool at "
-                f"distance d = {d_mm:.3g} mm from both parent nodes: the curvature is too "
-                "high for the node spacing)"
-            )
-        if m.get("not_reached_behind_failure"):
-            causes.append(
-                f"{m['not_reached_behind_failure']} node(s) over the tool were not reached "
-                "because a node between them and the start failed"
-            )
-        if m.get("not_reached_behind_outline"):
-            causes.append(
-                f"{m['not_reached_behind_outline']} node(s) over the tool were not reached "
-                "because the ply outline cuts a generator before them"
-            )
+        causes = [f"{m[key]} node(s) {words}" for key, words in why.items() if m.get(key)]
         if self.fold_zones:
             causes.append(self.fold_words())
         where = ""
