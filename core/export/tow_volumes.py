@@ -15,12 +15,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray, IntArray
 from preform.geometry.unit_cell import TowPath, UnitCell
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: Corners of the section polygon: 12 keeps an ellipse round on screen at modest file size.
 SIDES = 12

@@ -35,14 +35,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.generators import GeneratorNodes, _dot, _unit
 from preform.drape.engine.result import NodeStatus
 from preform.drape.engine.surface import Surface
 from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE
 from preform.optimise.search import COVERAGE_SLACK, DrapeObjective, SearchError, with_generators
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 
 def _turn(t: FloatArray, n: FloatArray, angle: FloatArray) -> FloatArray:

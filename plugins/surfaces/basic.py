@@ -13,8 +13,9 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from preform.base.arrays import BoolArray, FloatArray, StatusArray
 from preform.drape.engine.compiled_surface import (
     CYLINDER,
     PLANE,
@@ -26,10 +27,6 @@ from preform.drape.engine.compiled_surface import (
 )
 from preform.drape.engine.part import HeightCut
 from preform.drape.engine.result import NodeStatus
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-StatusArray = NDArray[np.int8]
 
 #: Points this fraction of the node spacing outside a trimmed surface still count as on it, so
 #: rounding never turns a node lying exactly on an edge (a hemisphere's rim) into OFF_TOOL.

@@ -24,8 +24,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.compiled_surface import (
     CONE,
     ELLIPSOID_DOME,
@@ -34,8 +34,6 @@ from preform.drape.engine.compiled_surface import (
     CompiledTool,
 )
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 __all__ = ["Cone", "EllipsoidDome", "FlangedHemisphere", "ParaboloidDome"]

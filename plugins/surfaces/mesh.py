@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.base.arrays import BoolArray, FloatArray, IntArray
 from preform.plugins.surfaces.domes import _as_points
 from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, HygieneReport, check_surface
 
@@ -27,9 +28,6 @@ if TYPE_CHECKING:
     from preform.plugins.surfaces.mesh_walk import MeshWalker
     from preform.plugins.surfaces.tool_mesh import ToolMesh
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 __all__ = [

@@ -17,9 +17,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
 
 #: A full sphere. Parameters: centre x, y, z [m], radius [m].
 SPHERE = 1

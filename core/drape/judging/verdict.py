@@ -59,6 +59,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.result import DrapeResult, EnergyField, NodeStatus
 from preform.drape.judging.wrinkling import (
     PAST_JAMMING,
@@ -69,9 +70,6 @@ from preform.drape.judging.wrinkling import (
     wrinkling,
 )
 from preform.shear.law import ShearLaw
-
-BoolArray = NDArray[np.bool_]
-FloatArray = NDArray[np.float64]
 
 
 def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
