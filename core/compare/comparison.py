@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.compare.measurement import MM, Measurement, MeasurementError
 from preform.drape.engine.result import DrapeResult, EnergyField, NodeStatus
 from preform.export.fe_mapping import (
@@ -52,8 +53,6 @@ from preform.export.fe_mapping import (
 if TYPE_CHECKING:
     import pandas as pd
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: Unit factors a file's points are tried with when most of them miss the tool: the factor
 #: that turns the numbers into mm, and what the file then held.
@@ -192,12 +191,6 @@ class Comparison(PointAngles):
     @property
     def compared(self) -> BoolArray:
         return np.asarray(~self.off_tool & ~self.off_net)
-
-    @property
-    def angle_errors_deg(self) -> FloatArray:
-        """Every fibre-angle error of both families, pooled (compared points only) [deg]."""
-        both = np.concatenate([self.error_u_deg, self.error_v_deg])
-        return np.asarray(both[np.isfinite(both)])
 
     def groups(self) -> dict[str, BoolArray]:
         """The points of each region: ``all``, the measurement's labels, and the flags."""

@@ -33,14 +33,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray
 from preform.compare.comparison import Comparison, OnTool, compare, evaluate, on_tool
 from preform.compare.measurement import MM, Measurement
 from preform.drape.engine.net import DrapeError, drape
 from preform.drape.engine.result import DrapeResult
-
-FloatArray = NDArray[np.float64]
 
 #: What the search may vary, and the parameters each stands for.
 VARIABLES = {

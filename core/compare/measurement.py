@@ -32,10 +32,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+from preform.base.arrays import BoolArray, FloatArray
 
 MM = 1e-3
 #: Length units the point columns may carry, and their size in metres.
@@ -119,12 +118,6 @@ class Measurement:
         return np.where(
             np.isfinite(self.uncertainty_deg), self.uncertainty_deg, DEFAULT_UNCERTAINTY_DEG
         )
-
-    def scaled(self, factor: float) -> Measurement:
-        """The same measurement with its points multiplied by ``factor`` (a unit slip)."""
-        from dataclasses import replace
-
-        return replace(self, points=self.points * float(factor))
 
     def subset(self, keep: ArrayLike) -> Measurement:
         """The points where ``keep`` (bool, n) holds."""

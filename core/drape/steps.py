@@ -32,8 +32,8 @@ from preform.drape.engine.result import DrapeResult, EnergyField
 from preform.drape.engine.settings import DrapeSettings
 from preform.drape.judging.verdict import (
     coverage,
+    fabric_law_range,
     first_nonfinite_energy,
-    law_range,
     shear_limit_notes,
 )
 from preform.drape.judging.wrinkling import Wrinkling, wrinkle_limits, wrinkling
@@ -277,10 +277,7 @@ def judge_drape(
     elif cover.fold_zones:
         ctx.warn(cover.fold_warning(), cause="fold zones")
     law = ctx.products["shear_law"]
-    block = getattr(ctx.fabric, "shear_law", None)
-    if block is None and hasattr(ctx.fabric, "default_shear_law"):
-        block = ctx.fabric.default_shear_law()
-    limits = law_range(law, block)
+    limits = fabric_law_range(law, ctx.fabric)
     notes, counts = shear_limit_notes(result, energy, limits)
     ctx.summary.update(counts)
     for message, about in notes:

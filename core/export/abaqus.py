@@ -140,8 +140,12 @@ def write_abaqus_include(
     title: str | None = None,
 ) -> None:
     """Write :func:`abaqus_include_text` to ``path`` (atomically)."""
-    text = abaqus_include_text(mapping, prefix=prefix, title=title)
-    # Abaqus input is ASCII: spell the one Greek letter, replace anything else in a title
+    write_ascii(abaqus_include_text(mapping, prefix=prefix, title=title), path)
+
+
+def write_ascii(text: str, path: str | os.PathLike[str]) -> None:
+    """Write a deck's text to ``path`` atomically as ASCII (γ spelt, anything else replaced):
+    Abaqus, CalculiX and LS-DYNA input is ASCII."""
     text = text.replace("γ", "gamma").encode("ascii", "replace").decode("ascii")
     with atomic_open(path, "w", encoding="ascii") as handle:
         handle.write(text)

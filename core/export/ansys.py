@@ -29,12 +29,10 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray
 from preform.base.atomic import atomic_open
 from preform.export.fe_mapping import MeshMapping
-
-FloatArray = NDArray[np.float64]
 
 
 def local_angles_deg(frames: FloatArray) -> FloatArray:

@@ -34,8 +34,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from preform.base.atomic import atomic_open
-from preform.export.abaqus import _num, _set_lines
+from preform.export.abaqus import _num, _set_lines, write_ascii
 from preform.export.fe_mapping import MeshMapping
 from preform.export.shell_mesh import ShellMesh
 
@@ -174,13 +173,6 @@ def calculix_include_text(
                 f"{_num((1 - u_fraction) * t)}, , {mat_v}, {name}_V{label}",
             ]
     return "\n".join(out) + "\n"
-
-
-def write_ascii(text: str, path: str | os.PathLike[str]) -> None:
-    """Write a deck's text to ``path`` atomically as ASCII (γ spelt, anything else replaced)."""
-    text = text.replace("γ", "gamma").encode("ascii", "replace").decode("ascii")
-    with atomic_open(path, "w", encoding="ascii") as handle:
-        handle.write(text)
 
 
 def write_calculix_include(

@@ -70,6 +70,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray
 from preform.base.atomic import atomic_open, atomic_path
 from preform.drape.engine.result import DrapeResult
 from preform.export.flat_pattern import flat_pattern
@@ -79,7 +80,6 @@ if TYPE_CHECKING:
 
     from preform.drape.engine.part import Part
 
-FloatArray = NDArray[np.float64]
 MM_PER_M = 1e3
 #: DXF layers, in drawing order.
 LAYERS = ("OUTLINE", "ALLOWANCE", "FIBRE_MARKS", "LABELS", "DARTS", "CUTS", "PAST_LOCKING")

@@ -45,14 +45,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray, IntArray
 from preform.drape.engine.result import DrapeResult, EnergyField
 from preform.export.shell_mesh import ShellMesh
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-IntArray = NDArray[np.int64]
 
 MM_PER_M = 1e3
 #: Share of the node spacing a centroid may lie past the net's edge and still count as covered.

@@ -19,10 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.result import CellStatus, DrapeResult
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 # Corner offsets of each cell edge, walked counter-clockwise in the flat (u = x, v = y), and the
 # neighbour across the edge: the edge is on the outline when that neighbour is not in the part.

@@ -32,12 +32,12 @@ from __future__ import annotations
 
 import os
 import textwrap
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
 
-from preform.base.atomic import atomic_open
+from preform.export.abaqus import write_ascii
 from preform.export.fe_mapping import MeshMapping
 
 #: Largest id an 8-character field holds.
@@ -81,10 +81,6 @@ def _header(
     )
 
 
-def _angle_from_first_edge_deg(mapping: MeshMapping) -> np.ndarray:
-    return _angle_from_first_edge_to(mapping, mapping.fibre_u)
-
-
 def _f10(x: float) -> str:
     """A real in a 10-character field, as many digits as fit."""
     for digits in range(8, 0, -1):
@@ -126,6 +122,32 @@ def _uncovered_set(element_ids: Any, set_id: int) -> list[str]:
     return lines
 
 
+def shell_deck(
+    mapping: MeshMapping,
+    part_id: int,
+    opening: list[str],
+    written: Any,
+    cards: Callable[[int], list[str]],
+    set_id: int,
+) -> str:
+    """A keyword file: ``*KEYWORD``, the ``opening`` lines (comments, the element keyword and
+    its column comments), card 1 (EID, PID, N1–N8) then ``cards(k)`` of every element k where
+    ``written`` (bool per element), the ``*SET_SHELL_LIST`` ``set_id`` of the others, ``*END``."""
+    mesh = mapping.mesh
+    pids, node_labels = _element_cards(mapping, part_id)
+    lines = ["*KEYWORD", *opening]
+    for k in np.nonzero(written)[0].tolist():
+        n1, n2, n3, n4 = (int(v) for v in node_labels[k])
+        lines.append(
+            f"{int(mesh.element_ids[k]):8d}{int(pids[k]):8d}{n1:8d}{n2:8d}{n3:8d}{n4:8d}"
+            + f"{0:8d}" * 4
+        )
+        lines += cards(k)
+    lines += _uncovered_set(mesh.element_ids[~written], set_id)
+    lines.append("*END")
+    return "\n".join(lines) + "\n"
+
+
 def lsdyna_include_text(
     mapping: MeshMapping,
     *,
@@ -135,12 +157,14 @@ def lsdyna_include_text(
 ) -> str:
     """The include file's text (module docstring). ``part_id`` is the PID of elements whose
     mesh gave none (Nastran's PID is kept)."""
-    mesh = mapping.mesh
-    cov = mapping.covered
-    pids, node_labels = _element_cards(mapping, part_id)
-    beta = _angle_from_first_edge_deg(mapping)
-    lines = [
-        "*KEYWORD",
+    beta = _angle_from_first_edge_to(mapping, mapping.fibre_u)
+
+    def thickness_and_beta(k: int) -> list[str]:
+        t = mapping.thickness_mm[k]
+        t = 0.0 if not np.isfinite(t) else float(t)
+        return ["".join(_f16(v) for v in (t, t, t, t, float(beta[k])))]
+
+    opening = [
         *_header(
             mapping,
             title,
@@ -162,18 +186,9 @@ def lsdyna_include_text(
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
         "$#         thic1           thic2           thic3           thic4            beta",
     ]
-    for k in np.nonzero(cov)[0].tolist():
-        n1, n2, n3, n4 = (int(v) for v in node_labels[k])
-        lines.append(
-            f"{int(mesh.element_ids[k]):8d}{int(pids[k]):8d}{n1:8d}{n2:8d}{n3:8d}{n4:8d}"
-            + f"{0:8d}" * 4
-        )
-        t = mapping.thickness_mm[k]
-        t = 0.0 if not np.isfinite(t) else float(t)
-        lines.append("".join(_f16(v) for v in (t, t, t, t, float(beta[k]))))
-    lines += _uncovered_set(mesh.element_ids[~cov], uncovered_set_id)
-    lines.append("*END")
-    return "\n".join(lines) + "\n"
+    return shell_deck(
+        mapping, part_id, opening, mapping.covered, thickness_and_beta, uncovered_set_id
+    )
 
 
 def write_lsdyna_include(
@@ -188,9 +203,7 @@ def write_lsdyna_include(
     text = lsdyna_include_text(
         mapping, part_id=part_id, uncovered_set_id=uncovered_set_id, title=title
     )
-    text = text.replace("γ", "gamma").encode("ascii", "replace").decode("ascii")
-    with atomic_open(path, "w", encoding="ascii") as handle:
-        handle.write(text)
+    write_ascii(text, path)
 
 
 def _angle_from_first_edge_to(mapping: MeshMapping, fibre: np.ndarray) -> np.ndarray:
@@ -217,8 +230,6 @@ def lsdyna_composite_text(
 ) -> str:
     """The include in the ``*ELEMENT_SHELL_COMPOSITE`` form (module docstring): both fibre
     families as two integration points; thicknesses [mm], angles [deg]."""
-    mesh = mapping.mesh
-    cov = mapping.covered
     if mapping.nominal_thickness_mm is None:
         raise ValueError(
             "the composite form needs the ply thickness t0 (export.nominal_thickness_mm)"
@@ -227,11 +238,17 @@ def lsdyna_composite_text(
         raise ValueError(f"u_fraction must lie strictly between 0 and 1, got {u_fraction!r}")
     if min(materials) < 1:
         raise ValueError("LS-DYNA material ids start at 1")
-    pids, node_labels = _element_cards(mapping, part_id)
     beta_u = _angle_from_first_edge_to(mapping, mapping.fibre_u)
     beta_v = _angle_from_first_edge_to(mapping, mapping.fibre_v)
-    lines = [
-        "*KEYWORD",
+
+    def two_layers(k: int) -> list[str]:
+        t = float(mapping.thickness_mm[k])
+        return [
+            f"{int(materials[0]):10d}{_f10(u_fraction * t)}{_f10(float(beta_u[k]))}{'':10}"
+            f"{int(materials[1]):10d}{_f10((1 - u_fraction) * t)}{_f10(float(beta_v[k]))}"
+        ]
+
+    opening = [
         *_header(
             mapping,
             title,
@@ -251,20 +268,7 @@ def lsdyna_composite_text(
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
         "$#    mid1    thick1        b1              mid2    thick2        b2",
     ]
-    for k in np.nonzero(cov)[0].tolist():
-        n1, n2, n3, n4 = (int(v) for v in node_labels[k])
-        lines.append(
-            f"{int(mesh.element_ids[k]):8d}{int(pids[k]):8d}{n1:8d}{n2:8d}{n3:8d}{n4:8d}"
-            + f"{0:8d}" * 4
-        )
-        t = float(mapping.thickness_mm[k])
-        lines.append(
-            f"{int(materials[0]):10d}{_f10(u_fraction * t)}{_f10(float(beta_u[k]))}{'':10}"
-            f"{int(materials[1]):10d}{_f10((1 - u_fraction) * t)}{_f10(float(beta_v[k]))}"
-        )
-    lines += _uncovered_set(mesh.element_ids[~cov], uncovered_set_id)
-    lines.append("*END")
-    return "\n".join(lines) + "\n"
+    return shell_deck(mapping, part_id, opening, mapping.covered, two_layers, uncovered_set_id)
 
 
 def write_lsdyna_composite(
@@ -286,6 +290,4 @@ def write_lsdyna_composite(
         u_fraction=u_fraction,
         title=title,
     )
-    text = text.replace("γ", "gamma").encode("ascii", "replace").decode("ascii")
-    with atomic_open(path, "w", encoding="ascii") as handle:
-        handle.write(text)
+    write_ascii(text, path)

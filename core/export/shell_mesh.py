@@ -21,8 +21,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from preform.base.arrays import FloatArray, IntArray
 
 #: Bytes per MB in ``limits.max_mesh_mb`` (decimal, as for tool meshes).
 MB = 1_000_000

@@ -26,8 +26,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from preform.export.abaqus import _num, _set_lines
-from preform.export.calculix import mesh_name, orientation_lines, write_ascii
+from preform.export.abaqus import _num, _set_lines, write_ascii
+from preform.export.calculix import mesh_name, orientation_lines
 from preform.export.ply_stack import StackSections
 
 Flavour = Literal["abaqus", "calculix"]

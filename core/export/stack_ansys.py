@@ -23,8 +23,9 @@ from typing import Any
 
 import numpy as np
 
+from preform.export.abaqus import write_ascii
 from preform.export.ansys import local_angles_deg
-from preform.export.calculix import mesh_name, write_ascii
+from preform.export.calculix import mesh_name
 from preform.export.ply_stack import StackSections
 from preform.export.stack_lsdyna import stack_material_ids
 

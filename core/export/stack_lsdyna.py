@@ -22,8 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from preform.export.calculix import mesh_name, write_ascii
-from preform.export.lsdyna import _angle_from_first_edge_to, _element_cards, _f10, _uncovered_set
+from preform.export.abaqus import write_ascii
+from preform.export.calculix import mesh_name
+from preform.export.lsdyna import _angle_from_first_edge_to, _f10, shell_deck
 from preform.export.ply_stack import StackSections
 
 
@@ -52,19 +53,26 @@ def stack_lsdyna_text(
 ) -> str:
     """The keyword file's text (module docstring)."""
     mids = stack_material_ids(stack, material_ids)
-    first = stack.plies[0].mapping
-    mesh = stack.mesh
-    pids, node_labels = _element_cards(first, part_id)
     present = stack.present()
     thickness = stack.thickness_mm()
     beta = np.column_stack(
         [_angle_from_first_edge_to(p.mapping, p.mapping.fibre_u) for p in stack.plies]
     )
-    lines = [
-        "*KEYWORD",
+    order = stack.layer_order()
+
+    def integration_points(e: int) -> list[str]:
+        points = [
+            f"{mids[stack.plies[k].material]:10d}{_f10(float(thickness[e, k]))}"
+            f"{_f10(float(beta[e, k]))}{'':10}"
+            for k in order[e]
+        ]
+        return ["".join(points[i : i + 2]).rstrip() for i in range(0, len(points), 2)]
+
+    opening = [
         *stack.comment_lines(
             "$",
-            f"preform ply stack mapped onto {mesh_name(mesh)}" + (f": {title}" if title else ""),
+            f"preform ply stack mapped onto {mesh_name(stack.mesh)}"
+            + (f": {title}" if title else ""),
             f"*SET_SHELL_LIST {bare_set_id}",
         ),
         "$ B: from the N1->N2 edge to the ply's u fibres. Material ids:",
@@ -74,24 +82,11 @@ def stack_lsdyna_text(
         "$#   eid     pid      n1      n2      n3      n4      n5      n6      n7      n8",
         "$#    mid1    thick1        b1              mid2    thick2        b2",
     ]
-    order = stack.layer_order()
-    for e in np.nonzero(present.any(axis=1))[0].tolist():
-        n1, n2, n3, n4 = (int(v) for v in node_labels[e])
-        lines.append(
-            f"{int(mesh.element_ids[e]):8d}{int(pids[e]):8d}{n1:8d}{n2:8d}{n3:8d}{n4:8d}"
-            + f"{0:8d}" * 4
-        )
-        points = [
-            f"{mids[stack.plies[k].material]:10d}{_f10(float(thickness[e, k]))}"
-            f"{_f10(float(beta[e, k]))}{'':10}"
-            for k in order[e]
-        ]
-        lines += ["".join(points[i : i + 2]).rstrip() for i in range(0, len(points), 2)]
-    bare = mesh.element_ids[~present.any(axis=1)]
-    if bare.size:  # an empty list is no set: written only when an element has no ply
-        lines += _uncovered_set(bare, bare_set_id)
-    lines.append("*END")
-    return "\n".join(lines) + "\n"
+    # the elements with no ply are the set (none when every element has one)
+    written = present.any(axis=1)
+    return shell_deck(
+        stack.plies[0].mapping, part_id, opening, written, integration_points, bare_set_id
+    )
 
 
 def write_stack_lsdyna(stack: StackSections, path: str | os.PathLike[str], **options: Any) -> None:

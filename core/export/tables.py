@@ -47,18 +47,6 @@ CELL_COLUMNS: tuple[str, ...] = (
 )
 
 
-#: Columns added by the ``permeability`` output (``preform.drape.properties.preform_fields``).
-PREFORM_COLUMNS: tuple[str, ...] = (
-    "preform_thickness_mm",
-    "fibre_volume_fraction",
-    "permeability_k1_m2",
-    "permeability_k2_m2",
-    "permeability_k1_dir_x",
-    "permeability_k1_dir_y",
-    "permeability_k1_dir_z",
-)
-
-
 def cell_columns(
     result: DrapeResult, energy: EnergyField | None = None, preform: PreformField | None = None
 ) -> dict[str, Any]:
@@ -150,9 +138,11 @@ def cells_table(
     Σ energy_J_per_m2 · part_share · d²). Values of cells that are not VALID
     are NaN / <NA>; the energy columns are NaN / <NA> throughout when ``energy`` is None, and
     the thickness ratio then follows from the shear as 1/cos γ. With ``preform`` (the ``permeability``
-    output) the ``PREFORM_COLUMNS`` follow: the sheared cell's thickness [mm] and fabric fibre
-    volume fraction [-], the principal in-plane permeabilities k1 ≥ k2 [m²] and k1's unit
-    direction in the tool's axes. The same columns as arrays: ``cell_columns``.
+    output) follow the sheared cell's thickness [mm] and fabric fibre volume fraction [-]
+    (``preform_thickness_mm``, ``fibre_volume_fraction``), the principal in-plane
+    permeabilities k1 ≥ k2 [m²] and k1's unit direction in the tool's axes
+    (``permeability_k1_m2``, ``permeability_k2_m2``, ``permeability_k1_dir_x``/``_y``/``_z``).
+    The same columns as arrays: ``cell_columns``.
     """
     import pandas as pd
 

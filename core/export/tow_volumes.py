@@ -15,12 +15,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray, IntArray
 from preform.geometry.unit_cell import TowPath, UnitCell
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: Corners of the section polygon: 12 keeps an ellipse round on screen at modest file size.
 SIDES = 12
@@ -100,15 +97,3 @@ def tow_solids(cell: UnitCell, sides: int = SIDES) -> TowSolids:
     if not wedges:
         return TowSolids(np.empty((0, 3)), np.empty((0, 6), np.int64), np.empty(0, np.int64))
     return TowSolids(np.vstack(points), np.vstack(wedges), np.concatenate(owner))
-
-
-def wedge_volumes(points: FloatArray, wedges: IntArray) -> FloatArray:
-    """Volume [m³] of each wedge (triangular prism, possibly skewed): three tetrahedra."""
-    p = points[wedges]
-    tets = ((0, 1, 2, 3), (1, 2, 3, 4), (2, 3, 4, 5))
-    total = np.zeros(len(wedges))
-    for a, b, c, d in tets:
-        total += np.abs(
-            np.einsum("ij,ij->i", p[:, b] - p[:, a], np.cross(p[:, c] - p[:, a], p[:, d] - p[:, a]))
-        )
-    return total / 6.0

@@ -29,9 +29,10 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
+
 Arrangement = Literal["hexagonal", "quadratic"]
 
 

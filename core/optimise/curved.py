@@ -35,33 +35,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from preform.drape.engine.generators import GeneratorNodes
+from preform.base.arrays import BoolArray, FloatArray
+from preform.drape.engine.generators import GeneratorNodes, _dot, _unit
 from preform.drape.engine.result import NodeStatus
 from preform.drape.engine.surface import Surface
 from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE
 from preform.optimise.search import COVERAGE_SLACK, DrapeObjective, SearchError, with_generators
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-
-
-def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
-    return np.einsum("...i,...i->...", a, b)
-
-
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    return np.cross(a, b)
-
-
-def _unit(a: FloatArray) -> FloatArray:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return a / np.sqrt(_dot(a, a))[..., None]
-
 
 def _turn(t: FloatArray, n: FloatArray, angle: FloatArray) -> FloatArray:
     """Tangents ``t`` turned by ``angle`` [rad] about normals ``n``, kept in the tangent plane."""
     t = _unit(t - _dot(t, n)[:, None] * n)
-    return np.cos(angle)[:, None] * t + np.sin(angle)[:, None] * _cross(n, t)
+    return np.cos(angle)[:, None] * t + np.sin(angle)[:, None] * np.cross(n, t)
 
 
 @dataclass(frozen=True)

@@ -40,15 +40,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.result import DrapeResult, NodeStatus
 from preform.drape.engine.surface import Surface
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: Initial edge-strain penalty per counted cell, on energies normalised by the kinematic total.
 PENALTY_PER_CELL = 0.01

@@ -134,8 +134,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.net import DrapeError, drape
 from preform.drape.engine.result import DrapeResult
 from preform.drape.engine.surface import Surface
@@ -145,8 +145,6 @@ from preform.drape.judging.wrinkling import wrinkle_limits as limits_of
 from preform.shear.law import ShearLaw
 from preform.shear.surrogate import TabulatedSurrogate
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 CentroidPredicate = Callable[[FloatArray], BoolArray]
 
 #: A layout or curved-generator trial must cover at least this share of what its starting

@@ -49,7 +49,7 @@ from preform.base import fidelity
 from preform.base.status import CaseFailure
 from preform.drape.engine.fields import energy_field
 from preform.drape.engine.settings import DrapeSettings
-from preform.drape.judging.verdict import coverage, law_nonfinite_angle, law_range
+from preform.drape.judging.verdict import coverage, fabric_law_range, law_nonfinite_angle
 from preform.drape.judging.wrinkling import WRINKLE_AREA_TOLERANCE, wrinkling
 from preform.drape.steps import (
     drape_settings,
@@ -61,6 +61,7 @@ from preform.drape.steps import (
 )
 from preform.optimise.search import (
     AngleSearchResult,
+    DrapeEvaluation,
     DrapeObjective,
     SearchError,
     scan_size,
@@ -253,10 +254,7 @@ def _angles_text(angles_deg: list[float]) -> str:
 def _warn_law_range(ctx: CaseContext, result: AngleSearchResult) -> None:
     """Name the searched angles whose drape leaves the law's physical or measured range."""
     law = ctx.products["shear_law"]
-    block = getattr(ctx.fabric, "shear_law", None)
-    if block is None and hasattr(ctx.fabric, "default_shear_law"):
-        block = ctx.fabric.default_shear_law()
-    limits = law_range(law, block)
+    limits = fabric_law_range(law, ctx.fabric)
     points = [p for p in result.points if p.coverage > 0]
     if limits.packing is not None:
         past = [p for p in points if p.max_abs_shear_rad > limits.packing]
@@ -332,19 +330,24 @@ def _warn_resolution(ctx: CaseContext, search: AngleSearchResult) -> None:
         )
 
 
-def _judge_optimum_drape(
-    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any]
-) -> None:
-    """Drape once at the optimum and mark the case partial when it does not cover the ply
-    where it lies over the tool (the same words the drape step uses for the same net). Only
-    for scenes that do not drape anyway."""
-    evaluation = objective.evaluate(
+def _drape_at(objective: DrapeObjective, optimum: dict[str, Any]) -> DrapeEvaluation:
+    """The optimum's drape judged on the part, its net kept (``keep_result``)."""
+    return objective.evaluate(
         float(optimum["generator_angle_rad"]),
         orientation_rad=optimum.get("orientation_rad"),
         start_xy_m=optimum.get("start_xy_m"),
         generators=optimum.get("generators"),
         keep_result=True,
     )
+
+
+def _judge_optimum_drape(
+    ctx: CaseContext, objective: DrapeObjective, optimum: dict[str, Any]
+) -> None:
+    """Drape once at the optimum and mark the case partial when it does not cover the ply
+    where it lies over the tool (the same words the drape step uses for the same net). Only
+    for scenes that do not drape anyway."""
+    evaluation = _drape_at(objective, optimum)
     if evaluation.result is None:
         raise CaseFailure("the drape at the least-energy generator angle cannot start")
     start = optimum.get("start_xy_m") or objective.drape_kwargs.get("start_xy_m") or (0.0, 0.0)
@@ -550,10 +553,7 @@ def _judge_curved_saving(ctx: CaseContext, objective: DrapeObjective, curved: An
     counted = objective.counted(result)
     gamma = np.where(counted, result.shear, 0.0)
     ctx.summary["curved_max_abs_shear_deg"] = float(np.degrees(np.abs(gamma).max()))
-    block = getattr(ctx.fabric, "shear_law", None)
-    if block is None and hasattr(ctx.fabric, "default_shear_law"):
-        block = ctx.fabric.default_shear_law()
-    limits = law_range(objective.law, block)
+    limits = fabric_law_range(objective.law, ctx.fabric)
     beyond = np.zeros_like(counted)
     if limits.data_positive is not None:
         beyond |= counted & (gamma > limits.data_positive)
@@ -606,13 +606,7 @@ def _run_relax(
     from preform.optimise.relax import relax_net
 
     objective = study.objective
-    kinematic = objective.evaluate(
-        float(optimum["generator_angle_rad"]),
-        orientation_rad=optimum.get("orientation_rad"),
-        start_xy_m=optimum.get("start_xy_m"),
-        generators=optimum.get("generators"),
-        keep_result=True,
-    )
+    kinematic = _drape_at(objective, optimum)
     assert kinematic.result is not None
     relaxed = relax_net(
         kinematic.result,

@@ -442,21 +442,26 @@ def previous_result(case: Case) -> CaseResult | None:
     files = summary.get("files", [])
     if not all((Path(case.case_dir) / f).is_file() for f in files):
         return None
+    return _recorded_result(case, summary, reused=True)
+
+
+def _recorded_result(case: Case, summary: dict[str, Any], *, reused: bool = False) -> CaseResult:
+    """The result ``case``'s summary.json records (``reused``: from an earlier run)."""
     from preform.pipeline.rundir import RECORD_KEYS
 
     return CaseResult(
         case.case_id,
         case.material,
         case.scene,
-        str(summary["status"]),
+        str(summary.get("status")),
         summary.get("error"),
         float(summary.get("wall_time_s") or 0.0),
         dict(summary.get("step_times_s") or {}),
         {k: v for k, v in summary.items() if k not in RECORD_KEYS},
-        list(files),
+        list(summary.get("files") or []),
         list(summary.get("reasons") or []),
         list(summary.get("warnings") or []),
-        reused=True,
+        reused=reused,
     )
 
 
@@ -695,21 +700,7 @@ def finished_in_run(case: Case) -> CaseResult | None:
         return None
     if summary.get("run_id") != case.run_id or summary.get("case_id") != case.case_id:
         return None
-    from preform.pipeline.rundir import RECORD_KEYS
-
-    return CaseResult(
-        case.case_id,
-        case.material,
-        case.scene,
-        str(summary.get("status")),
-        summary.get("error"),
-        float(summary.get("wall_time_s") or 0.0),
-        dict(summary.get("step_times_s") or {}),
-        {k: v for k, v in summary.items() if k not in RECORD_KEYS},
-        list(summary.get("files") or []),
-        list(summary.get("reasons") or []),
-        list(summary.get("warnings") or []),
-    )
+    return _recorded_result(case, summary)
 
 
 class _EngineSession:

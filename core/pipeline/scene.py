@@ -23,13 +23,16 @@ from preform.registry import LazyLoadError, Registry
 from preform.validation import located_errors, unknown_field_message
 from preform.yamlsource import Document, SourceError, YamlSourceError, load_yaml
 
-_STRICT = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+class _Strict(BaseModel):
+    """A scene's model: frozen, unknown keys refused, numbers finite."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
-class PlySection(BaseModel):
+class PlySection(_Strict):
     """The fabric ply: its node spacing and its outline in the flat."""
 
-    model_config = _STRICT
     node_spacing_mm: float | None = Field(
         default=None,
         gt=0,
@@ -65,10 +68,9 @@ class PlySection(BaseModel):
         return v
 
 
-class StartSection(BaseModel):
+class StartSection(_Strict):
     """Where and how the two generator fibre paths start."""
 
-    model_config = _STRICT
     point_mm: tuple[float, float] = Field(
         default=(0.0, 0.0), description="Start point in plan (x, y) [mm], put on the tool."
     )
@@ -98,14 +100,13 @@ class StartSection(BaseModel):
     )
 
 
-class PartSection(BaseModel):
+class PartSection(_Strict):
     """The part: the region of the tool that is made (``preform.drape.engine.part``). The net is
     draped over the tool as far as the ply reaches and clipped to the part; energies and
     extremes are of the part. Several fields together mean their intersection. Without this
     section the part is the tool's own (a bare hemisphere: z ≥ 0; other tools: every cell the
     net puts on them). ``faces`` selects named or numbered faces of a mesh or CAD tool."""
 
-    model_config = _STRICT
     z_min_mm: float | None = Field(
         default=None, description="Height cut: the part is the tool at z ≥ z_min_mm [mm]."
     )
@@ -136,19 +137,17 @@ class PartSection(BaseModel):
         return v
 
 
-class RangeDeg(BaseModel):
+class RangeDeg(_Strict):
     """A closed range of angles [deg] to search."""
 
-    model_config = _STRICT
     min: float
     max: float
     step: float | None = Field(default=None, gt=0, description="Scan step [deg].")
 
 
-class SearchSection(BaseModel):
+class SearchSection(_Strict):
     """The minimum-energy search over generator choices (see ``preform.optimise.search``)."""
 
-    model_config = _STRICT
     generator_angle_deg: RangeDeg | None = Field(
         default=None, description="Range of generator angles to search [deg] (default 30-150)."
     )
@@ -214,10 +213,9 @@ class SearchSection(BaseModel):
     )
 
 
-class NumericsSection(BaseModel):
+class NumericsSection(_Strict):
     """Hand-set numerical knobs; each overrides the fidelity preset (preform.base.fidelity)."""
 
-    model_config = _STRICT
     solver_tolerance: float | None = Field(
         default=None, gt=0, lt=1e-2, description="Solver tolerance relative to the spacing d."
     )
@@ -232,12 +230,11 @@ class NumericsSection(BaseModel):
     )
 
 
-class LimitsSection(BaseModel):
+class LimitsSection(_Strict):
     """Resource limits of one case. Each protects the machine from an input that would take it
     over (a ply of 10^10 nodes, a 2 GB mesh, a case that never ends). Raise one on purpose here;
     the value in force is recorded with the case (``limit_*`` in its summary)."""
 
-    model_config = _STRICT
     case_timeout_s: float | None = Field(
         default=None,
         gt=0,
@@ -258,17 +255,15 @@ class LimitsSection(BaseModel):
     )
 
 
-class ShearSection(BaseModel):
+class ShearSection(_Strict):
     """Angles at which shear curves are tabulated."""
 
-    model_config = _STRICT
     angles_deg: RangeDeg = Field(default_factory=lambda: RangeDeg(min=0, max=60, step=1))
 
 
-class Scene(BaseModel):
+class Scene(_Strict):
     """A validated scene."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     name: str = Field(min_length=1, description="Name of the scene; names the results folder.")
     description: str = ""
     tool: Any = Field(

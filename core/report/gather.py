@@ -9,7 +9,6 @@ missing or unreadable is not an error of the report: the case says what is missi
 from __future__ import annotations
 
 import csv
-import json
 import math
 import re
 from dataclasses import dataclass, field
@@ -19,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from preform.base.status import REUSABLE, CaseStatus
+from preform.pipeline.rundir import read_json
 
 #: The order cases are shown in: what needs reading first (no result, then an incomplete one).
 STATUS_ORDER: tuple[str, ...] = (
@@ -125,13 +125,6 @@ class Run:
 
     def scenes(self) -> list[str]:
         return sorted({c.scene for c in self.cases})
-
-
-def _read_json(path: Path) -> Any:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
 
 
 def read_table(path: Path) -> tuple[list[str], list[dict[str, str]]] | None:
@@ -285,7 +278,7 @@ def read_case(
     case_id = f"{row.get('scene', '')}/{row.get('material', '')}"
     folder = _case_folder(row, manifest_cases, case_id)
     case_dir = _inside(root, folder) if folder else None
-    summary = _read_json(case_dir / "summary.json") if case_dir else None
+    summary = read_json(case_dir / "summary.json") if case_dir else None
     problems = []
     if not isinstance(summary, dict):
         problems.append(f"{folder}/summary.json is missing or unreadable")
@@ -321,7 +314,7 @@ def read_case(
             except OSError:
                 case.problems.append(f"{name} is listed but cannot be read")
         elif name == "shear_curve.json":
-            curve = _read_json(path)
+            curve = read_json(path)
             if isinstance(curve, dict):
                 case.shear_curve = curve
             else:
@@ -366,7 +359,7 @@ def read_run(root: Path) -> Run:
     """Everything the report shows of the run folder ``root``, cases failed first."""
     root = Path(root)
     problems = []
-    manifest = _read_json(root / "manifest.json")
+    manifest = read_json(root / "manifest.json")
     if not isinstance(manifest, dict):
         problems.append("manifest.json is missing or unreadable: the run's settings are unknown")
         manifest = {}

@@ -1,7 +1,7 @@
 """``preform shear`` (curves of a library fabric's law) and ``preform fit`` (test data → law).
 
 The lead adds ``shear_command`` and ``fit_command`` to the ``preform`` click group. The work is
-done by plain functions (``shear_curves``, ``plot_shear_curves``, ``fit_test_data``) that take a
+done by plain functions (``shear_curves``, ``plot_shear_curves``, ``fit_report``) that take a
 ``ShearLaw`` or arrays, so they can be used and tested without a library.
 
 JSON of ``shear --json``::
@@ -303,40 +303,6 @@ def normalise_rows(
     return np.degrees(result.shear_angle), result.force_per_length_N_per_mm
 
 
-def fit_test_data(
-    rows: list[dict[str, str]],
-    test: str,
-    side_mm: float | None = None,
-    height_mm: float | None = None,
-    width_mm: float | None = None,
-    fabric_side_mm: float | None = None,
-    sense: str = "parallel",
-    degree: int | None = 3,
-    step_deg: float = 2.0,
-    through_zero: bool = True,
-) -> tuple[dict[str, Any], list[str]]:
-    """Normalise test rows and fit them; returns (shear_law block, comment lines on quality).
-
-    ``degree=None`` gives a tabulated law. ``sense="both"`` needs a ``sense`` column
-    (parallel/perpendicular) and gives an asymmetric law; one sense gives a symmetric law from
-    the rows of that sense (all rows when there is no ``sense`` column). ``through_zero``:
-    polynomials without a constant term (see ``preform.shear.fit.fit_polynomial``).
-    """
-    report = fit_report(
-        rows,
-        test,
-        side_mm=side_mm,
-        height_mm=height_mm,
-        width_mm=width_mm,
-        fabric_side_mm=fabric_side_mm,
-        sense=sense,
-        degree=degree,
-        step_deg=step_deg,
-        through_zero=through_zero,
-    )
-    return report.block, report.comments
-
-
 def fit_report(
     rows: list[dict[str, str]],
     test: str,
@@ -349,7 +315,13 @@ def fit_report(
     step_deg: float = 2.0,
     through_zero: bool = True,
 ) -> FitReport:
-    """:func:`fit_test_data`, keeping the normalised data and the fits (for the plot)."""
+    """Normalise test rows and fit them (:class:`FitReport`: the block, its quality, the data).
+
+    ``degree=None`` gives a tabulated law. ``sense="both"`` needs a ``sense`` column
+    (parallel/perpendicular) and gives an asymmetric law; one sense gives a symmetric law from
+    the rows of that sense (all rows when there is no ``sense`` column). ``through_zero``:
+    polynomials without a constant term (see ``preform.shear.fit.fit_polynomial``).
+    """
 
     def normalise(selected: list[dict[str, str]]) -> tuple[np.ndarray, np.ndarray]:
         return normalise_rows(

@@ -244,16 +244,16 @@ def _non_negative_parts(
             continue
         begin = a if sliver_start is None else sliver_start
         sliver_start = None
-        shifted = _shift(coef, begin)
+        shifted = shifted_polynomial(coef, begin)
         mid = npoly.polyval(0.5 * (a + b) - begin, shifted)
         parts.append((start + begin, shifted if mid >= 0.0 else np.zeros(1)))
     if not parts:
-        parts.append((start, _shift(coef, 0.0)))
+        parts.append((start, shifted_polynomial(coef, 0.0)))
     return parts
 
 
-def _shift(coef: FloatArray, a: float) -> FloatArray:
-    """Coefficients of q(x) = p(x + a), ascending powers."""
+def shifted_polynomial(coef: FloatArray, a: float) -> FloatArray:
+    """Coefficients of q(x) = p(x + a), ascending powers (p's ``coef`` ascending too)."""
     import numpy as np
     from numpy.polynomial import polynomial as npoly
 

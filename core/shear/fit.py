@@ -15,11 +15,10 @@ from typing import Any
 
 import numpy as np
 import yaml
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from preform.base.arrays import FloatArray
 from preform.shear.laws import PolynomialParams, TabulatedParams
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

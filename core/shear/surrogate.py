@@ -24,9 +24,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.base.arrays import FloatArray
 from preform.shear.law import ShearLaw
-
-FloatArray = NDArray[np.float64]
 
 #: Width [rad] before a law's jamming angle over which the table is eight times finer.
 _JAM_REFINED = math.radians(3.0)

@@ -24,9 +24,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
 
 #: cos γ below this is treated as the 90° singularity of the normalisations.
 _COS_FLOOR = 1e-9

@@ -24,11 +24,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.result import DrapeResult
 from preform.export.fe_mapping import EDGE_TOLERANCE, closest_on_net
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 MM_PER_M = 1e3
 

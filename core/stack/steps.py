@@ -64,7 +64,7 @@ def _thickness_model(ply_ctx: CaseContext) -> Any:
 
 def _layer(ply_ctx: CaseContext, name: str, orientation_deg: float, offset_mm: float) -> PlyLayer:
     """The stack's view of a draped ply (thickness, fraction and wrinkling per cell)."""
-    from preform.drape.judging.verdict import law_range
+    from preform.drape.judging.verdict import fabric_law_range
     from preform.drape.judging.wrinkling import wrinkle_limits
 
     draped = ply_ctx.products["drape"]
@@ -86,11 +86,8 @@ def _layer(ply_ctx: CaseContext, name: str, orientation_deg: float, offset_mm: f
         value = float(built) if isinstance(built, int | float) else np.nan
         fraction = np.where(valid, value, np.nan)
     law = ply_ctx.products["shear_law"]
-    block = getattr(ply_ctx.fabric, "shear_law", None)
-    if block is None and hasattr(ply_ctx.fabric, "default_shear_law"):
-        block = ply_ctx.fabric.default_shear_law()
     wrinkles = np.zeros(shear.shape, dtype=bool)
-    for limit in wrinkle_limits(law_range(law, block)):
+    for limit in wrinkle_limits(fabric_law_range(law, ply_ctx.fabric)):
         wrinkles |= limit.past(shear)
     return PlyLayer(
         name=name,

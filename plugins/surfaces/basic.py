@@ -13,23 +13,20 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from preform.base.arrays import BoolArray, FloatArray, StatusArray
 from preform.drape.engine.compiled_surface import (
     CYLINDER,
     PLANE,
     SPHERE,
     TRIMMED_SPHERE,
+    CompiledTool,
     checked_kind,
     kernel_parameters,
-    query_tool,
 )
 from preform.drape.engine.part import HeightCut
 from preform.drape.engine.result import NodeStatus
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-StatusArray = NDArray[np.int8]
 
 #: Points this fraction of the node spacing outside a trimmed surface still count as on it, so
 #: rounding never turns a node lying exactly on an edge (a hemisphere's rim) into OFF_TOOL.
@@ -65,7 +62,7 @@ def _compiled_place_nodes(
     return np.asarray(points), np.asarray(status, dtype=np.int8)
 
 
-class Plane:
+class Plane(CompiledTool):
     """A flat rectangular plate, horizontal, of plan size ``size_m`` = (Lx, Ly) [m] centred at
     ``centre_m`` [m]; its outward normal is +z."""
 
@@ -93,16 +90,6 @@ class Plane:
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """The plate for the compiled kernels: (PLANE, (centre x, y, z, half size x, y)) [m]."""
         return PLANE, np.array([*self.centre, *self.half], dtype=float)
-
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the plate [m] and distances (n,) [m] to points (n, 3) [m]
-        (compiled: ``preform.drape.kernels.surface_kernels``)."""
-        foot, _, dist = query_tool(self, points)
-        return foot, dist
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3): +z everywhere."""
-        return query_tool(self, points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Plate points over plan positions (n, 2) [m], and which positions are over the plate."""
@@ -140,8 +127,9 @@ class Plane:
         return p, status
 
 
-class Sphere:
-    """A full sphere of radius ``radius_m`` [m] centred at ``centre_m`` [m]."""
+class Sphere(CompiledTool):
+    """A full sphere of radius ``radius_m`` [m] centred at ``centre_m`` [m]; the centre's
+    closest point is the top (+z), any point being closest."""
 
     def __init__(self, radius_m: float, *, centre_m: ArrayLike = (0.0, 0.0, 0.0)) -> None:
         self.radius = float(radius_m)
@@ -172,17 +160,6 @@ class Sphere:
             length[at_centre] = 1.0
         rel /= length[:, None]
         return rel
-
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the tool [m] and distances (n,) [m] to points (n, 3) [m]; a point
-        at the centre gets the top (+z), any point being closest."""
-        foot, _, dist = query_tool(self, points)
-        return foot, dist
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at tool points (n, 3) [m] (for a point off the tool,
-        the normal at its closest tool point)."""
-        return query_tool(self, points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """The top of the sphere over plan positions (n, 2) [m], and which lie over it."""
@@ -300,9 +277,10 @@ class Hemisphere(Sphere):
             return np.asarray(p[..., 2] >= floor - _EDGE_TOLERANCE * spacing)
 
 
-class Cylinder:
+class Cylinder(CompiledTool):
     """The lateral surface of a circular cylinder with a horizontal ``axis`` ("x" or "y"),
-    radius ``radius_m`` [m] and length ``length_m`` [m], centred at ``centre_m`` [m]."""
+    radius ``radius_m`` [m] and length ``length_m`` [m], centred at ``centre_m`` [m]; its
+    normals are radial, and a point on the axis has the top (+z) as its closest point."""
 
     def __init__(
         self,
@@ -350,17 +328,6 @@ class Cylinder:
         on its end circle."""
         half = 0.5 * self.length
         return CYLINDER, np.array([*self.centre, self.radius, half, self._ax], dtype=float)
-
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest points on the lateral surface [m] and distances (n,) [m] (compiled:
-        ``preform.drape.kernels.surface_kernels``); a point on the axis gets the top (+z)."""
-        foot, _, dist = query_tool(self, points)
-        return foot, dist
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward (radial) normals (n, 3) at surface points (n, 3) [m] (for a point off
-        the surface, the normal at its closest surface point)."""
-        return query_tool(self, points)[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """The top of the cylinder over plan positions (n, 2) [m], and which lie over it."""

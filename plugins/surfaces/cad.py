@@ -37,10 +37,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from preform.base.arrays import FloatArray, IntArray
 
 #: File suffixes read as CAD, and the format each means.
 CAD_FORMATS = {".step": "STEP", ".stp": "STEP", ".iges": "IGES", ".igs": "IGES"}

@@ -24,18 +24,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.compiled_surface import (
     CONE,
     ELLIPSOID_DOME,
     FLANGED_HEMISPHERE,
     PARABOLOID_DOME,
-    query_tool,
+    CompiledTool,
 )
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 __all__ = ["Cone", "EllipsoidDome", "FlangedHemisphere", "ParaboloidDome"]
@@ -55,10 +53,20 @@ def _positive_length(name: str, value: float) -> float:
     return length
 
 
+class _Dome(CompiledTool):
+    """A dome's queries take (n, 3) arrays of points and nothing else."""
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return super().closest_point(_as_points(points, 3))
+
+    def normal(self, points: FloatArray) -> FloatArray:
+        return super().normal(_as_points(points, 3))
+
+
 # --- flanged hemisphere ----------------------------------------------------------------------
 
 
-class FlangedHemisphere:
+class FlangedHemisphere(_Dome):
     """A hemisphere of radius ``radius_m`` [m] centred at the origin, standing on the flange
     plane z = 0 and joined to it by a concave toroidal fillet of radius ``fillet_radius_m`` [m].
 
@@ -68,6 +76,11 @@ class FlangedHemisphere:
     at elevation β = asin(ρ / (R + ρ)). The flange extends to ``flange_half_width_m`` [m]: a
     square |x|, |y| ≤ W (default) or a disc r ≤ W (``flange_shape="circle"``). The tool ends at
     the flange edge; ``size`` is the sphere radius.
+
+    A point's closest point is the nearest of the cap's, the fillet's (both in the meridian
+    plane) and the flange's (in plan: clamped into its outline, out of the fillet foot disc);
+    past the flange edge, a point of the edge. Normals: radial on the cap, towards the fillet
+    circle's centre on the fillet (it is concave), +z on the flange.
     """
 
     def __init__(
@@ -118,20 +131,6 @@ class FlangedHemisphere:
             ]
         )
 
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]:
-        the nearest of the cap, the fillet (both in the meridian plane) and the flange (in
-        plan: clamped into its outline, out of the fillet foot disc); points past the flange
-        edge answer a point of the edge."""
-        closest, _, distance = query_tool(self, _as_points(points, 3))
-        return closest, distance
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at surface points (n, 3) [m]; a point off the surface gets
-        the normal at its closest surface point (cap: radial; fillet: towards the fillet
-        circle's centre, it is concave; flange: +z)."""
-        return query_tool(self, _as_points(points, 3))[1]
-
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
         position lies over the tool (inside the flange outline). Off the tool z = 0."""
@@ -156,12 +155,14 @@ class FlangedHemisphere:
 # --- cone ------------------------------------------------------------------------------------
 
 
-class Cone:
+class Cone(_Dome):
     """A cone, apex up, base circle of radius ``base_radius_m`` [m] on z = 0, height
     ``height_m`` [m]; with ``top_radius_m`` > 0 it is truncated by a flat top disc at z = height.
 
     The tool is the lateral surface plus the top disc; it ends at the base circle (no flange).
-    ``size`` is the base radius. At the (sharp) apex the normal is taken as +z.
+    ``size`` is the base radius. At the (sharp) apex the normal is taken as +z, as on the top
+    disc. A point's closest point is the nearer of the lateral segment's and the top disc's in
+    the meridian plane; past the base circle, a point of it.
     """
 
     def __init__(self, base_radius_m: float, height_m: float, *, top_radius_m: float = 0.0) -> None:
@@ -185,18 +186,6 @@ class Cone:
         return CONE, np.array(
             [self.base_radius_m, self.height_m, self.top_radius_m, *self._lateral_normal]
         )
-
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]:
-        the nearer of the lateral segment and the top disc in the meridian plane; points past
-        the base circle answer a point of it."""
-        closest, _, distance = query_tool(self, _as_points(points, 3))
-        return closest, distance
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at surface points (n, 3) [m] (the normal of the closest
-        surface point for points off the surface; +z on the top disc and at the apex)."""
-        return query_tool(self, _as_points(points, 3))[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
@@ -275,7 +264,7 @@ def _ellipsoid_foot(y: FloatArray, semi_axes: FloatArray) -> FloatArray:
     return foot / scale[:, None]
 
 
-class EllipsoidDome:
+class EllipsoidDome(_Dome):
     """The upper half (z ≥ 0) of the ellipsoid (x/a)² + (y/b)² + (z/c)² = 1, semi-axes
     ``semi_axes_m = (a, b, c)`` [m]. The tool ends at the base ellipse on z = 0 (no flange);
     ``size`` is the largest semi-axis.
@@ -283,7 +272,9 @@ class EllipsoidDome:
     Closest points are exact for every query point with z ≥ 0 (the side the fabric is on): the
     nearest point of the whole ellipsoid then lies in the upper half. Below the base plane (under
     the tool, where no fabric goes) the answer is the nearer of the base-rim foot and the foot of
-    the query mirrored in z = 0: always a surface point, not guaranteed to be the nearest.
+    the query mirrored in z = 0: always a surface point, not guaranteed to be the nearest
+    (the root solve is ``preform.drape.kernels.surface_kernels._ellipsoid_foot``). The normal
+    is the gradient of the implicit function at the closest point.
     """
 
     def __init__(self, semi_axes_m: Sequence[float] = (0.1, 0.1, 0.1)) -> None:
@@ -301,17 +292,6 @@ class EllipsoidDome:
         """The dome for the compiled kernels: (ELLIPSOID_DOME, (a, b, c)) [m]."""
         return ELLIPSOID_DOME, np.array(self.semi_axes_m, dtype=float)
 
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]
-        (compiled: ``preform.drape.kernels.surface_kernels._ellipsoid_foot`` has the root solve)."""
-        closest, _, distance = query_tool(self, _as_points(points, 3))
-        return closest, distance
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at surface points (n, 3) [m] (the gradient of the
-        implicit function at the closest surface point)."""
-        return query_tool(self, _as_points(points, 3))[1]
-
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each
         lies over the tool (inside the base ellipse). Off the tool z = 0."""
@@ -325,7 +305,7 @@ class EllipsoidDome:
 # --- paraboloid ------------------------------------------------------------------------------
 
 
-class ParaboloidDome:
+class ParaboloidDome(_Dome):
     """The paraboloid z = h (1 − r²/R²) for r ≤ R: radius ``radius_m`` R [m] at the base,
     height ``height_m`` h [m]. The tool ends at the base circle r = R on z = 0 (no flange);
     ``size`` is the larger of R and h.
@@ -348,17 +328,6 @@ class ParaboloidDome:
     def compiled_queries(self) -> tuple[int, FloatArray]:
         """The dome for the compiled kernels: (PARABOLOID_DOME, (R [m], h [m], h/R² [1/m]))."""
         return PARABOLOID_DOME, np.array([self.radius_m, self.height_m, self._curvature])
-
-    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Closest surface points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]
-        (compiled: ``preform.drape.kernels.surface_kernels``)."""
-        closest, _, distance = query_tool(self, _as_points(points, 3))
-        return closest, distance
-
-    def normal(self, points: FloatArray) -> FloatArray:
-        """Unit outward normals (n, 3) at surface points (n, 3) [m] (at the closest surface
-        point for points off the surface)."""
-        return query_tool(self, _as_points(points, 3))[1]
 
     def point_at_plan(self, xy: FloatArray) -> tuple[FloatArray, BoolArray]:
         """Surface points (n, 3) [m] above plan positions ``xy`` (n, 2) [m] and whether each

@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.base.arrays import BoolArray, FloatArray, IntArray
+from preform.plugins.surfaces.domes import _as_points
 from preform.plugins.surfaces.mesh_hygiene import FOLD_ANGLE_DEG, HygieneReport, check_surface
 
 if TYPE_CHECKING:
@@ -26,9 +28,6 @@ if TYPE_CHECKING:
     from preform.plugins.surfaces.mesh_walk import MeshWalker
     from preform.plugins.surfaces.tool_mesh import ToolMesh
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 __all__ = [
@@ -537,13 +536,6 @@ class TriangleMesh:
         over_tool = np.isfinite(top)
         z = np.where(over_tool, top, self.bounds[0][2])
         return np.column_stack((plan, z)), over_tool
-
-
-def _as_points(points: FloatArray, width: int) -> FloatArray:
-    array = np.asarray(points, dtype=np.float64)
-    if array.ndim != 2 or array.shape[1] != width:
-        raise ValueError(f"expected an (n, {width}) array of positions [m], got {array.shape}")
-    return array
 
 
 def _merge_vertices(

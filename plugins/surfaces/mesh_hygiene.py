@@ -56,8 +56,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from preform.base.arrays import FloatArray, IntArray
 
 #: Weld tolerance when a scene gives none, as a fraction of the mesh's bounding-box diagonal
 #: [-]: the value ``TriangleMesh`` has always merged vertices with (float32 STL coordinates

@@ -12,17 +12,13 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray, IntArray, StatusArray
 from preform.drape.engine.net import FacePlacement, NetLayout
 from preform.plugins.surfaces.mesh_topology import MeshTopology
 
 if TYPE_CHECKING:
     from preform.plugins.surfaces.mesh import TriangleMesh
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-StatusArray = NDArray[np.int8]
 
 
 class MeshWalker:

@@ -29,8 +29,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray, IntArray
 from preform.drape.engine.part import Part
 from preform.plugins.surfaces.mesh import (
     DEFAULT_FEATURE_ANGLE_DEG,
@@ -46,8 +46,6 @@ from preform.plugins.surfaces.mesh_hygiene import (
     repair,
 )
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 MM = 1e-3
 #: Edge segments examined per point for the distance to a face selection's edge.
 EDGE_CANDIDATES = 16

@@ -51,6 +51,8 @@ Problem = tuple[tuple[str | int, ...], str]
 class _Analytic(BaseModel):
     """An analytic tool: building it costs microseconds, so preflight builds it."""
 
+    model_config = _STRICT
+
     def preflight(self, base_dir: str, limits: Any = None) -> tuple[Any, list[Problem]]:
         """The built surface and no problems, or no surface and why it cannot be built."""
         build = next(_BUILDERS[c] for c in type(self).__mro__ if c in _BUILDERS)
@@ -61,7 +63,6 @@ class _Analytic(BaseModel):
 
 
 class PlaneTool(_Analytic):
-    model_config = _STRICT
     surface: Literal["plane"]
     size_mm: tuple[float, float] = Field(
         default=(1000.0, 1000.0), description="Plan size of the flat plate [mm] (x, y)."
@@ -75,7 +76,6 @@ class PlaneTool(_Analytic):
 
 
 class HemisphereTool(_Analytic):
-    model_config = _STRICT
     surface: Literal["hemisphere"]
     radius_mm: float = Field(gt=0, description="Sphere radius [mm]; pole at (0, 0, R).")
     flange_half_width_mm: float | None = Field(
@@ -132,7 +132,6 @@ class HemisphereTool(_Analytic):
 
 
 class CylinderTool(_Analytic):
-    model_config = _STRICT
     surface: Literal["cylinder"]
     radius_mm: float = Field(gt=0, description="Cylinder radius [mm].")
     length_mm: float = Field(gt=0, description="Cylinder length [mm].")
@@ -140,7 +139,6 @@ class CylinderTool(_Analytic):
 
 
 class ConeTool(_Analytic):
-    model_config = _STRICT
     surface: Literal["cone"]
     base_radius_mm: float = Field(gt=0, description="Base radius [mm] (on z = 0).")
     height_mm: float = Field(gt=0, description="Height [mm].")
@@ -157,7 +155,6 @@ class ConeTool(_Analytic):
 
 
 class EllipsoidTool(_Analytic):
-    model_config = _STRICT
     surface: Literal["ellipsoid"]
     semi_axes_mm: tuple[float, float, float] = Field(
         description="Semi-axes (a, b, c) [mm] of the upper half-ellipsoid dome."
@@ -165,7 +162,6 @@ class EllipsoidTool(_Analytic):
 
 
 class ParaboloidTool(_Analytic):
-    model_config = _STRICT
     surface: Literal["paraboloid"]
     radius_mm: float = Field(gt=0, description="Base radius R [mm].")
     height_mm: float = Field(gt=0, description="Height h [mm]: z = h(1 − r²/R²).")

@@ -111,11 +111,6 @@ def needle_distance_from_gauge(gauge_needles_per_inch: float) -> float:
     return INCH_M / gauge_needles_per_inch
 
 
-def gauge_from_needle_distance(needle_distance: float) -> float:
-    """Machine gauge E [needles per inch] of needle distance D [m]: E = 25.4 mm / D."""
-    return INCH_M / needle_distance
-
-
 def thread_diameter(linear_density_tex: float, density_g_cm3: float) -> float:
     """Diameter [m] of a thread taken as a solid round section of its fibre area [C]."""
     return math.sqrt(4.0 * fibre_area_m2(linear_density_tex, density_g_cm3) / math.pi)
@@ -210,13 +205,6 @@ class StitchPath(NamedTuple):
     underlaps: FloatArray
     #: The whole thread as one polyline [m], closing on the next repeat's first point.
     points: FloatArray
-
-    @property
-    def overlap_vectors(self) -> FloatArray:
-        """In-plane vectors from each loop's down-leg to its up-leg (courses, 2) [m]."""
-        import numpy as np
-
-        return np.array([o[-1, :2] - o[0, :2] for o in self.overlaps])
 
     @property
     def underlap_vectors(self) -> FloatArray:

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Self
 from pydantic import BaseModel, Field, model_validator
 
 from preform.material import ParamsModel, Plausible
-from preform.shear.energy import DOMAIN_END, PiecewiseBranch
+from preform.shear.energy import DOMAIN_END, PiecewiseBranch, shifted_polynomial
 from preform.shear.law import ShearLaw
 from preform.shear.laws import (
     EXTREMES_GRID,
@@ -229,17 +229,6 @@ class StitchPolynomialParams(ParamsModel):
         return (force[k], angles[k]) if force[k] < -1e-9 * scale else None
 
 
-def _shifted(coef_rad: np.ndarray, origin: float) -> np.ndarray:
-    """Coefficients of p(x + origin), ascending powers."""
-    import numpy as np
-    from numpy.polynomial import polynomial as npoly
-
-    out = np.zeros(1)
-    for c in coef_rad[::-1]:
-        out = npoly.polyadd(npoly.polymul(out, [origin, 1.0]), [c])
-    return np.asarray(out, dtype=float)
-
-
 def parallel_branch(params: StitchPolynomialParams) -> PiecewiseBranch:
     """The parallel-sense (γ > 0) branch: pre-failure, smoothstep drop, post-failure, tail."""
     import numpy as np
@@ -267,17 +256,20 @@ def parallel_branch(params: StitchPolynomialParams) -> PiecewiseBranch:
         # Each sub-piece is built from P₁, P₂ and s expanded about its own start, never by
         # shifting an expansion of the whole drop (which would carry its cancellation along).
         offset = width * k / DROP_PIECES
-        p1, p2 = _shifted(before, start + offset), _shifted(after, start + offset)
-        s = _shifted(step, offset)
+        p1, p2 = (
+            shifted_polynomial(before, start + offset),
+            shifted_polynomial(after, start + offset),
+        )
+        s = shifted_polynomial(step, offset)
         piece = npoly.polyadd(p1, npoly.polymul(s, npoly.polysub(p2, p1)))
         pieces.append(np.asarray(piece, dtype=float))
         breaks.append(start + offset)
     if params.beyond_range == "extrapolate" or end_fit >= DOMAIN_END:
-        pieces.append(_shifted(after, end_drop))
+        pieces.append(shifted_polynomial(after, end_drop))
         breaks.append(end_drop)
     else:
         if end_fit > end_drop:
-            pieces.append(_shifted(after, end_drop))
+            pieces.append(shifted_polynomial(after, end_drop))
             breaks.append(end_drop)
         value = float(npoly.polyval(end_fit, after))
         slope = float(npoly.polyval(end_fit, npoly.polyder(after)))

@@ -48,17 +48,16 @@ from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from pydantic import BaseModel, Field
 
+from preform.base.arrays import FloatArray
 from preform.geometry.fibres import fibre, fibre_area_m2
 from preform.material import ParamsModel, Plausible
 from preform.plugins.warpknit.model import YARN_FAILURE_STRAIN
 from preform.shear.energy import QuadratureBranch
 from preform.shear.law import ShearLaw
 from preform.shear.laws import SignedShearLaw
-
-FloatArray = NDArray[np.float64]
 
 #: Largest shear-angle magnitude [rad] evaluated (the net is singular at 90°).
 MAX_SHEAR = math.pi / 2 - 1e-9

@@ -406,26 +406,6 @@ class WovenUnitCell:
         n = len(along)
         return sum(along[k] != along[(k + 1) % n] for k in range(n)) if n > 1 else 0
 
-    def crossovers(self) -> list[Crossover]:
-        """Every warp-wise/weft-wise tow pair crossing in the repeat (each pair exactly once)."""
-        self._require_valid()
-        weave = self.weave
-        found: list[Crossover] = []
-        for i, row in enumerate(weave.matrix):
-            for j, entry in enumerate(row):
-                for warp_level in range(1, weave.warp_levels + 1):
-                    for weft_level in range(weave.warp_levels + 1, weave.level_count + 1):
-                        found.append(
-                            Crossover(
-                                i,
-                                j,
-                                warp_level,
-                                weft_level,
-                                entry.index(warp_level) > entry.index(weft_level),
-                            )
-                        )
-        return found
-
     def contacts(self) -> list[Crossover]:
         """Crossovers where the two tows touch: neighbours in the column's stack."""
         self._require_valid()

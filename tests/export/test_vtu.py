@@ -93,13 +93,22 @@ def test_drape_vtu_of_a_net_without_valid_cells_keeps_its_nodes(tmp_path, make_n
     assert not mesh.cell_data
 
 
+def wedge_volumes(points, wedges):
+    """Volume of each wedge (triangular prism, possibly skewed): three tetrahedra."""
+    p = points[wedges]
+    total = np.zeros(len(wedges))
+    for a, b, c, d in ((0, 1, 2, 3), (1, 2, 3, 4), (2, 3, 4, 5)):
+        edges = np.cross(p[:, c] - p[:, a], p[:, d] - p[:, a])
+        total += np.abs(np.einsum("ij,ij->i", p[:, b] - p[:, a], edges))
+    return total / 6.0
+
+
 def test_unit_cell_vtu_tow_volumes_hold_each_straight_tows_section_times_length(tmp_path):
     """The solids block: a straight tow's wedges add up to (π/4)·w·h·L exactly, crimped
     tows to within the chord error, and every wedge carries its tow's data."""
     import math
 
     from preform.api import load_library
-    from preform.export.tow_volumes import wedge_volumes
 
     lib = load_library(env=False)
     for name, gamma in (("E-BX-318", 0.0), ("ncf-0-90-tricot", 0.5), ("plain-weave-600", 0.8)):

@@ -753,7 +753,7 @@ class RangedLaw(BrokenLaw):
 
 def test_a_law_may_state_its_own_data_range(sandbox: PluginSandbox, tmp_path: Path) -> None:
     from preform.drape.engine.fields import energy_field
-    from preform.drape.judging.verdict import law_range, shear_limit_warnings
+    from preform.drape.judging.verdict import law_range, shear_limit_notes
     from preform.plugins.surfaces.basic import Hemisphere
 
     law = RangedLaw(math.inf, "nan")
@@ -766,11 +766,11 @@ def test_a_law_may_state_its_own_data_range(sandbox: PluginSandbox, tmp_path: Pa
     )
     limits = law_range(law, {"max_angle_deg": 80})  # the law's own range wins over the block
     assert (limits.data_negative, limits.data_positive) == law.data_range
-    messages, counts = shear_limit_warnings(result, energy_field(result, law), limits)
+    notes, counts = shear_limit_notes(result, energy_field(result, law), limits)
     gamma = np.where(result.valid, result.shear, 0.0)
     want = np.count_nonzero((gamma > law.data_range[1]) | (gamma < -law.data_range[0]))
     assert counts["cells_outside_law_data"] == want > 0
-    assert "(+20.0° / −10.0°)" in messages[0]
+    assert "(+20.0° / −10.0°)" in notes[0][0]
 
 
 def test_a_warp_knit_past_its_fit_in_the_perpendicular_sense_is_said(

@@ -17,9 +17,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
 
 #: The series is used for |s| up to here; its terms fall like s^k / (k!)².
 _SERIES_LIMIT = 0.05

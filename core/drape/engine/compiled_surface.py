@@ -6,7 +6,7 @@ and a parameter vector; the fill then runs every front of the net, Newton steps 
 one compiled loop instead of calling the surface's vectorised methods once per front. Any other
 surface (a mesh, a plugin's own tool) keeps the vectorised path, which uses the same compiled
 per-node steps. The queries themselves are in ``preform.drape.kernels.surface_kernels``, once: the
-tools' own ``closest_point`` and ``normal`` answer through :func:`query_tool`.
+tools' own ``closest_point`` and ``normal`` answer through :func:`query_tool` (:class:`CompiledTool`).
 
 This module holds only the codes, the protocol and that lazy entry, so the surface plugins can
 name them at import time while numba itself is imported only when a tool is queried.
@@ -17,9 +17,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
 
 #: A full sphere. Parameters: centre x, y, z [m], radius [m].
 SPHERE = 1
@@ -115,3 +114,21 @@ def query_tool(
     )
     shape = p.shape[:-1]
     return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)
+
+
+class CompiledTool:
+    """An analytic tool whose ``Surface`` queries are its compiled ones (:func:`query_tool`):
+    it gives ``compiled_queries``, and answers ``closest_point`` and ``normal`` for any point,
+    a point off the tool with its closest tool point and the normal there."""
+
+    def compiled_queries(self) -> tuple[int, FloatArray]:
+        raise NotImplementedError  # each tool gives its kind and parameters
+
+    def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Closest tool points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
+        closest, _, distance = query_tool(self, points)
+        return closest, distance
+
+    def normal(self, points: FloatArray) -> FloatArray:
+        """Unit outward normals (n, 3) at tool points (n, 3) [m]."""
+        return query_tool(self, points)[1]

@@ -21,12 +21,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.part import Part
 from preform.drape.engine.result import CellStatus, DrapeResult, EnergyField, NodeStatus
 from preform.shear.law import ShearLaw
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 CentroidPredicate = Callable[[FloatArray], BoolArray]
 

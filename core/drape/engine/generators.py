@@ -24,13 +24,10 @@ from typing import Protocol, cast, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from preform.base.arrays import BoolArray, FloatArray, StatusArray
 from preform.drape.engine.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.engine.result import NodeStatus
 from preform.drape.engine.surface import Surface
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-StatusArray = NDArray[np.int8]
 
 
 @runtime_checkable

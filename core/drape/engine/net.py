@@ -36,8 +36,8 @@ import time
 from typing import Any, NamedTuple, Protocol, cast, runtime_checkable
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray, IntArray, StatusArray
 from preform.drape.engine.compiled_surface import CompiledQueries, checked_kind, kernel_parameters
 from preform.drape.engine.fields import cell_fields
 from preform.drape.engine.generators import (
@@ -49,11 +49,6 @@ from preform.drape.engine.generators import (
 from preform.drape.engine.result import DrapeResult, NodeStatus
 from preform.drape.engine.settings import DrapeError, DrapeSettings
 from preform.drape.engine.surface import Surface
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-StatusArray = NDArray[np.int8]
-IntArray = NDArray[np.int64]
 
 _PLACED = np.int8(NodeStatus.PLACED)
 _NOT_REACHED = np.int8(NodeStatus.NOT_REACHED)

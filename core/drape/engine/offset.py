@@ -25,9 +25,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
 
 MM = 1e-3
 #: The two ways a tool is offset, in the words the summaries use.

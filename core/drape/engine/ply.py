@@ -11,10 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+from preform.base.arrays import BoolArray, FloatArray
 
 #: Nodes within this fraction of d of the outline count as inside, so a ply of side 10·d has
 #: 11 nodes along it despite rounding.

@@ -23,7 +23,7 @@ import re
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import FloatArray
 
 #: Pairs of edges tested at once (memory bound of the pair arrays, ~10 arrays of this length).
 _CHUNK_PAIRS = 1 << 20

@@ -21,9 +21,9 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from preform.base.arrays import BoolArray, FloatArray
+
 IntArray = NDArray[np.int8]
-BoolArray = NDArray[np.bool_]
 
 
 class NodeStatus(IntEnum):

@@ -59,6 +59,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.result import DrapeResult, EnergyField, NodeStatus
 from preform.drape.judging.wrinkling import (
     PAST_JAMMING,
@@ -69,9 +70,6 @@ from preform.drape.judging.wrinkling import (
     wrinkling,
 )
 from preform.shear.law import ShearLaw
-
-BoolArray = NDArray[np.bool_]
-FloatArray = NDArray[np.float64]
 
 
 def dependency_shadow(mask: BoolArray, start: tuple[int, int]) -> BoolArray:
@@ -229,35 +227,21 @@ class Coverage:
         if self.complete:
             return ""
         d_mm = self.node_spacing_m * 1e3
-        causes = []
+        why = {
+            "stopped_on_tool": "stopped on the tool (the net could not be continued across a "
+            "crease or corner there, although the tool goes on)",
+            "folded": "folded (the net would turn over there: behind a sharp convex vertex of "
+            "the tool, or at an edge or corner sharper than a net of this spacing can follow)",
+            "no_intersection": "had no intersection (no point of the tool at distance "
+            f"d = {d_mm:.3g} mm from both parent nodes: the curvature is too high for the node "
+            "spacing)",
+            "not_reached_behind_failure": "over the tool were not reached because a node "
+            "between them and the start failed",
+            "not_reached_behind_outline": "over the tool were not reached because the ply "
+            "outline cuts a generator before them",
+        }
         m = self.missing_nodes
-        if m.get("stopped_on_tool"):
-            causes.append(
-                f"{m['stopped_on_tool']} node(s) stopped on the tool (the net could not be "
-                "continued across a crease or corner there, although the tool goes on)"
-            )
-        if m.get("folded"):
-            causes.append(
-                f"{m['folded']} node(s) folded (the net would turn over there: behind a sharp "
-                "convex vertex of the tool, or at an edge or corner sharper than a net of this "
-                "spacing can follow)"
-            )
-        if m.get("no_intersection"):
-            causes.append(
-                f"{m['no_intersection']} node(s) had no intersection (no point of the tool at "
-                f"distance d = {d_mm:.3g} mm from both parent nodes: the curvature is too "
-                "high for the node spacing)"
-            )
-        if m.get("not_reached_behind_failure"):
-            causes.append(
-                f"{m['not_reached_behind_failure']} node(s) over the tool were not reached "
-                "because a node between them and the start failed"
-            )
-        if m.get("not_reached_behind_outline"):
-            causes.append(
-                f"{m['not_reached_behind_outline']} node(s) over the tool were not reached "
-                "because the ply outline cuts a generator before them"
-            )
+        causes = [f"{m[key]} node(s) {words}" for key, words in why.items() if m.get(key)]
         if self.fold_zones:
             causes.append(self.fold_words())
         where = ""
@@ -506,6 +490,15 @@ def _deg_or_none(value: Any) -> float | None:
     return math.radians(out) if math.isfinite(out) else None
 
 
+def fabric_law_range(law: ShearLaw, fabric: Any) -> LawRange:
+    """:func:`law_range` of ``law`` with ``fabric``'s shear-law block, or its architecture's
+    default block when the entry gives none."""
+    block = getattr(fabric, "shear_law", None)
+    if block is None and hasattr(fabric, "default_shear_law"):
+        block = fabric.default_shear_law()
+    return law_range(law, block)
+
+
 def law_range(law: ShearLaw, law_block: Any = None) -> LawRange:
     """The limits of ``law``. Read from the law when it offers them (``packing_angle`` [rad],
     ``data_range`` = (negative end, positive end) [rad], ``wrinkle_limits``); else the data range is read from the
@@ -583,15 +576,6 @@ def _share(mask: BoolArray, area: FloatArray, counted: BoolArray) -> str:
     # Cells sheared to near 90° have almost no area: say how little rather than "0.0 %".
     shown = f"{percent:.1f}" if percent >= 0.1 or percent == 0 else f"{percent:.2g}"
     return f"{int(np.count_nonzero(mask))} cells ({shown} % of the part's draped area)"
-
-
-def shear_limit_warnings(
-    result: DrapeResult, energy: EnergyField, limits: LawRange
-) -> tuple[list[str], dict[str, Any]]:
-    """Sentences about the counted cells past the law's limits, and their counts for the
-    summary (``shear_limit_notes`` without what each is about)."""
-    notes, counts = shear_limit_notes(result, energy, limits)
-    return [message for message, _ in notes], counts
 
 
 def shear_limit_notes(

@@ -37,14 +37,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+
+from preform.base.arrays import BoolArray, FloatArray
 
 if TYPE_CHECKING:
     from preform.drape.engine.result import DrapeResult
     from preform.drape.judging.verdict import LawRange
 
-BoolArray = NDArray[np.bool_]
-FloatArray = NDArray[np.float64]
 
 #: A drape is ``ok`` only when at most this share of its total energy comes from cells past a
 #: wrinkle limit [-] (issue 24: "not mostly energy from cells past jamming or stitch failure").

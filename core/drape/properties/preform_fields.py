@@ -23,14 +23,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import BoolArray, FloatArray
 from preform.drape.engine.result import DrapeResult
 from preform.geometry.permeability import Arrangement, fabric_permeability
 from preform.geometry.sheared_cell import MAX_SHEAR, thickness_per_angle
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: Grid step of the table over |γ| [deg]; the locking and jamming angles are added to it.
 TABLE_STEP_DEG = 0.25

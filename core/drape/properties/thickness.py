@@ -34,12 +34,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from preform.base.arrays import FloatArray
 from preform.drape.engine.result import DrapeResult, EnergyField
 from preform.drape.properties.preform_fields import PreformResponse
-
-FloatArray = NDArray[np.float64]
 
 #: The two thickness models, in the words every output uses.
 SHEARED_CELL = "sheared unit cell"

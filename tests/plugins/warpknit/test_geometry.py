@@ -16,7 +16,6 @@ from preform.plugins.warpknit.geometry import (
     TowType,
     WarpKnitGeometry,
     cell_areal_density_g_m2,
-    gauge_from_needle_distance,
     needle_distance_from_gauge,
 )
 from preform.plugins.warpknit.lapping import parse_lapping
@@ -53,7 +52,6 @@ def fabric(**kw) -> WarpKnitGeometry:
 @pytest.mark.parametrize(("gauge", "d_mm"), [(5, 5.08), (7, 3.628571), (12, 2.116667), (25.4, 1.0)])
 def test_gauge_and_needle_distance(gauge, d_mm):
     assert needle_distance_from_gauge(gauge) == pytest.approx(d_mm * MM, rel=1e-6)
-    assert gauge_from_needle_distance(d_mm * MM) == pytest.approx(gauge, rel=1e-6)
 
 
 def test_gauge_contradicting_needle_distance_is_an_error():

@@ -74,12 +74,6 @@ def test_random_2d_weaves(
 ) -> None:
     cell = build(weave, warp, weft, s_warp, s_weft)
     assert cell.errors() == []
-    # Every warp tow crosses every weft tow exactly once per repeat.
-    pairs = Counter((c.warp_position, c.weft_position) for c in cell.crossovers())
-    assert set(pairs) == {
-        (i, j) for i in range(weave.repeat_warp) for j in range(weave.repeat_weft)
-    }
-    assert set(pairs.values()) == {1}
     # Paths are at least as long as the repeat along them, and crimp is the excess.
     for key in cell.tow_keys():
         assert cell.path_length(key) >= cell.straight_length(key) * (1 - 1e-12)

@@ -134,12 +134,6 @@ def test_angle_interlock_every_level_held(stuffers: int, wefts: int, data: st.Da
     assert all(
         cell.interlacings()[k] > 0 for k in cell.tow_keys() if k.level in weave.binder_levels
     )
-    # Every warp-wise tow crosses every weft-wise tow once per repeat.
-    pairs = {
-        (c.warp_position, c.warp_level, c.weft_position, c.weft_level) for c in cell.crossovers()
-    }
-    warp_tows = weave.repeat_warp * weave.warp_levels
-    assert len(pairs) == len(cell.crossovers()) == warp_tows * weave.repeat_weft * wefts
     # Binders do not open the stack; the outermost ones lie just outside it (all h = 0.2 mm).
     assert cell.thickness() == pytest.approx((stuffers + wefts + 2) * 0.2e-3)
     assert cell.crimp("weft") == pytest.approx(0.0, abs=1e-12)
