@@ -38,6 +38,7 @@ MOVED_MODULES: dict[str, str] = {
     "preform.stack.cases": "preform.pipeline.layup_case",
     "preform.export.compare_vtu": "preform.compare.vtu",
     "preform.export.fig_compare": "preform.compare.figure",
+    "preform.pipeline.export_command": "preform.commands.export",
     # issue 31: numba's cache by content serves every package's kernels; compiling ahead runs
     # a case through the API
     "preform.drape.kernel_cache": "preform.base.kernel_cache",

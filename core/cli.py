@@ -58,7 +58,7 @@ LAZY_COMMANDS: dict[str, tuple[str, str]] = {
         "The bundled scenes and the outputs a scene may ask for.",
     ),
     "export": (
-        "preform.pipeline.export_command:export_command",
+        "preform.commands.export:export_command",
         "Drape fabric NAME as the scene says, or a layup scene's stack, and write TARGETS "
         "(abaqus, calculix, lsdyna, ansys, table, vtu, cut-pattern).",
     ),
