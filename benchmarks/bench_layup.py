@@ -10,8 +10,8 @@ against:
 
 Everything runs once before timing (imports, numba compilation, the fabrics' sheared-cell
 tables); then each is timed (CPU time of this process, pinned to one core: a shared
-machine's other work inflates wall time by more than the differences measured here) best of
-``--repeat``, alternated. What the stack adds on top of
+machine's other work inflates wall time by more than the differences measured here, each
+call with the collection of its own garbage: ``timed``) best of ``--repeat``, alternated. What the stack adds on top of
 its drapes is the offsets and the stack maps: their times are the layup's own ``step_times_s``.
 
     python benchmarks/bench_layup.py [--fidelity draft] [--repeat 3]
@@ -20,6 +20,7 @@ its drapes is the offsets and the stack maps: their times are the layup's own ``
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import tempfile
 import time
@@ -34,7 +35,15 @@ if hasattr(os, "sched_setaffinity"):
 
 def timed(call: Any) -> float:
     """CPU time of ``call`` [s]: this process's own (pinned to one core), so other work on a
-    shared machine does not count; file writes' waits for the disk do not either."""
+    shared machine does not count; file writes' waits for the disk do not either.
+
+    What earlier calls left for the garbage collector is collected before the clock starts:
+    without that, a call paid for the cycles its predecessor left (a stack's five figures, a
+    ply's one) whenever the collector's thresholds fell in it, and the stack measured 0.1-0.18 s
+    more at draft than its steps' times add up to. A call's own garbage is collected as the
+    thresholds fall, as in a run (a full collection after each call, timed, would charge every
+    call ~70 ms for walking every live object, four times the stack's plies alone)."""
+    gc.collect()
     start = time.process_time()
     call()
     return time.process_time() - start
