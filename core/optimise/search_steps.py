@@ -96,7 +96,7 @@ def search_knobs(
     section = scene.search
     if section is None:
         raise ValueError("the angle search needs the scene section 'search'")
-    knobs = knobs or fidelity.resolve(scene, tool_size_m)
+    knobs = fidelity.resolve(scene, tool_size_m) if knobs is None else knobs
     span = section.generator_angle_deg
     return {
         "range_deg": [span.min, span.max] if span is not None else [30.0, 150.0],

@@ -14,6 +14,7 @@ name them at import time while numba itself is imported only when a tool is quer
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -116,13 +117,15 @@ def query_tool(
     return foot.reshape(*shape, 3), normal.reshape(*shape, 3), dist.reshape(shape)
 
 
-class CompiledTool:
+class CompiledTool(ABC):
     """An analytic tool whose ``Surface`` queries are its compiled ones (:func:`query_tool`):
     it gives ``compiled_queries``, and answers ``closest_point`` and ``normal`` for any point,
-    a point off the tool with its closest tool point and the normal there."""
+    a point off the tool with its closest tool point and the normal there. Abstract: a tool
+    that does not give its queries cannot be made (rather than failing at its first query)."""
 
+    @abstractmethod
     def compiled_queries(self) -> tuple[int, FloatArray]:
-        raise NotImplementedError  # each tool gives its kind and parameters
+        """The tool's kind (``surface_kernels``) and kernel parameters."""
 
     def closest_point(self, points: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Closest tool points (n, 3) [m] to ``points`` (n, 3) [m] and distances (n,) [m]."""
